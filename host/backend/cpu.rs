@@ -1,0 +1,126 @@
+//! The CPU emulation: runs the kernel bodies of `gpuwars-kernels`, compiled natively.
+//!
+//! Blocks run in parallel on a rayon pool and the threads of a block run one after another,
+//! in order. Since kernels are barrier-free, this is exactly the GPU's semantics; atomics are
+//! real atomics. A launch returns when the whole grid has run.
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::ptr::NonNull;
+
+use gpuwars_kernels::{Kernel, KernelArgs, Thread};
+use rayon::prelude::*;
+
+use super::{Element, Error};
+
+/// The emulator: a pool of worker threads.
+pub(super) struct Emulator {
+    pool: rayon::ThreadPool,
+}
+
+impl Emulator {
+    pub(super) fn new(threads: Option<usize>) -> Result<Self, Error> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads.unwrap_or(0))
+            .thread_name(|i| format!("gpuwars-emu-{i}"))
+            .build()
+            .map_err(|e| Error::Invalid(format!("cannot start the emulator's threads: {e}")))?;
+        Ok(Emulator { pool })
+    }
+
+    pub(super) fn threads(&self) -> usize {
+        self.pool.current_num_threads()
+    }
+
+    pub(super) fn launch<A: KernelArgs>(
+        &self,
+        kernel: Kernel<A>,
+        grid: u32,
+        block: u32,
+        args: &A,
+    ) -> Result<(), Error> {
+        let run_block = |b: u32| {
+            for t in 0..block {
+                let thread = Thread {
+                    thread: t,
+                    block: b,
+                    block_dim: block,
+                    grid_dim: grid,
+                };
+                (kernel.body)(thread, args);
+            }
+        };
+        // A failed bounds check panics inside a worker; turn it into an error, as a trap is
+        // one on the GPU.
+        catch_unwind(AssertUnwindSafe(|| {
+            self.pool
+                .install(|| (0..grid).into_par_iter().for_each(run_block))
+        }))
+        .map_err(|payload| Error::KernelFault {
+            kernel: kernel.name,
+            message: payload
+                .downcast_ref::<String>()
+                .map(String::as_str)
+                .or_else(|| payload.downcast_ref::<&str>().copied())
+                .unwrap_or("panic")
+                .to_string(),
+        })
+    }
+}
+
+/// Host memory standing in for device memory.
+///
+/// Kernels write through raw addresses while the host holds only a shared borrow, so the
+/// memory is owned through a raw pointer rather than a `Vec` (whose shared borrows promise
+/// that nothing writes).
+pub(super) struct HostBuffer<T> {
+    ptr: NonNull<T>,
+    len: usize,
+}
+
+// SAFETY: the buffer owns its elements like a `Box<[T]>`.
+unsafe impl<T: Send> Send for HostBuffer<T> {}
+// SAFETY: as above; concurrent writes happen only inside launches, under the kernels' contract.
+unsafe impl<T: Sync> Sync for HostBuffer<T> {}
+
+impl<T: Element> HostBuffer<T> {
+    pub(super) fn zeroed(len: usize) -> Self {
+        Self::from_box(vec![T::zeroed(); len].into_boxed_slice())
+    }
+
+    pub(super) fn from_slice(data: &[T]) -> Self {
+        Self::from_box(data.into())
+    }
+
+    fn from_box(data: Box<[T]>) -> Self {
+        let len = data.len();
+        let ptr = NonNull::new(Box::into_raw(data) as *mut T).expect("Box pointers are non-null");
+        HostBuffer { ptr, len }
+    }
+
+    pub(super) fn len(&self) -> usize {
+        self.len
+    }
+
+    pub(super) fn addr(&self) -> u64 {
+        self.ptr.as_ptr() as u64
+    }
+
+    pub(super) fn as_slice(&self) -> &[T] {
+        // SAFETY: `len` initialised elements; launches are synchronous, so no kernel writes
+        // while the host reads.
+        unsafe { std::slice::from_raw_parts(self.ptr.as_ptr(), self.len) }
+    }
+
+    pub(super) fn as_mut_slice(&mut self) -> &mut [T] {
+        // SAFETY: as above, and `&mut self` excludes other host borrows.
+        unsafe { std::slice::from_raw_parts_mut(self.ptr.as_ptr(), self.len) }
+    }
+}
+
+impl<T> Drop for HostBuffer<T> {
+    fn drop(&mut self) {
+        let slice = std::ptr::slice_from_raw_parts_mut(self.ptr.as_ptr(), self.len);
+        // SAFETY: made by `Box::into_raw` of a boxed slice of this length.
+        drop(unsafe { Box::from_raw(slice) });
+    }
+}

@@ -1,0 +1,340 @@
+//! One host interface over two backends: device buffers, upload/download, kernel launches and
+//! synchronisation, on an NVIDIA GPU through the CUDA driver or on the CPU through an emulator
+//! that runs the same kernel bodies.
+//!
+//! [`Device::select`] picks the backend at run time: `auto` takes the GPU when the driver and a
+//! device are there and otherwise says once, on stderr, why it runs on the CPU.
+
+mod cpu;
+mod cuda;
+
+use std::fmt;
+
+use gpuwars_kernels::{DevSlice, Kernel, KernelArgs};
+use serde::Serialize;
+
+pub use cuda::GpuProperties;
+
+/// The largest block the GPU accepts; the emulator enforces it too, so that a launch that runs
+/// on one backend runs on the other.
+pub const MAX_BLOCK: u32 = 1024;
+
+/// What went wrong on the host side of a kernel or a transfer.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// `--backend cuda` was asked for, but no usable GPU is there.
+    #[error("the CUDA backend is not available: {0}")]
+    CudaUnavailable(String),
+    /// A CUDA driver call failed.
+    #[error("CUDA driver error while {during}: {source}")]
+    Driver {
+        /// What the host was doing.
+        during: String,
+        /// The driver's error.
+        source: cudarc::driver::DriverError,
+    },
+    /// A kernel faulted (an out-of-bounds index under the emulator, a trap on the GPU).
+    #[error("kernel `{kernel}` failed: {message}")]
+    KernelFault {
+        /// The kernel's entry-point name.
+        kernel: &'static str,
+        /// What the backend reported.
+        message: String,
+    },
+    /// A launch, buffer or size outside what the backends accept.
+    #[error("invalid request: {0}")]
+    Invalid(String),
+}
+
+/// Which backend runs the kernels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BackendKind {
+    /// An NVIDIA GPU through the CUDA driver API.
+    Cuda,
+    /// The CPU emulation of the kernels.
+    Cpu,
+}
+
+impl fmt::Display for BackendKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            BackendKind::Cuda => "cuda",
+            BackendKind::Cpu => "cpu",
+        })
+    }
+}
+
+/// The backend the user asked for (`--backend`, or the `GPUWARS_BACKEND` variable).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum BackendRequest {
+    /// The GPU when one is usable, otherwise the CPU emulation.
+    #[default]
+    Auto,
+    /// The GPU, or an error.
+    Cuda,
+    /// The CPU emulation.
+    Cpu,
+}
+
+/// Plain-data element types that buffers can hold.
+pub trait Element:
+    bytemuck::Pod + cudarc::driver::DeviceRepr + cudarc::driver::ValidAsZeroBits + Send + Sync
+{
+}
+impl Element for u32 {}
+impl Element for i32 {}
+impl Element for f32 {}
+impl Element for u64 {}
+
+/// An open backend: where buffers live and kernels run.
+pub struct Device {
+    imp: Imp,
+    reason: String,
+}
+
+enum Imp {
+    Cpu(cpu::Emulator),
+    Cuda(cuda::Gpu),
+}
+
+/// A buffer of `T` in the device's memory (host memory under the emulator).
+pub struct Buffer<T: Element> {
+    imp: BufferImp<T>,
+}
+
+enum BufferImp<T: Element> {
+    Cpu(cpu::HostBuffer<T>),
+    Cuda(cudarc::driver::CudaSlice<T>),
+}
+
+impl<T: Element> Buffer<T> {
+    /// Number of elements.
+    pub fn len(&self) -> usize {
+        match &self.imp {
+            BufferImp::Cpu(b) => b.len(),
+            BufferImp::Cuda(s) => s.len(),
+        }
+    }
+
+    /// Whether the buffer holds no element.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The whole buffer as a kernel argument.
+    ///
+    /// The view carries a raw address: passing it to [`Device::launch`] is what is unsafe.
+    pub fn view(&self) -> DevSlice<T> {
+        self.view_prefix(self.len() as u32)
+    }
+
+    /// The first `len` elements as a kernel argument (clamped to the buffer's length).
+    pub fn view_prefix(&self, len: u32) -> DevSlice<T> {
+        let len = len.min(self.len() as u32);
+        let addr = match &self.imp {
+            BufferImp::Cpu(b) => b.addr(),
+            BufferImp::Cuda(s) => cuda::address(s),
+        };
+        // SAFETY: `addr` holds `len` elements of this buffer, which outlives the view's use
+        // in any launch that the borrow of `self` spans (the caller of `launch` promises it).
+        unsafe { DevSlice::from_raw_parts(addr, len) }
+    }
+}
+
+impl Device {
+    /// Opens the backend the request names; `Auto` falls back to the CPU and says why on
+    /// stderr. `cpu_threads` sizes the emulator's pool (`None`: one per core).
+    pub fn select(request: BackendRequest, cpu_threads: Option<usize>) -> Result<Device, Error> {
+        match request {
+            BackendRequest::Cpu => Device::cpu(cpu_threads, "asked for with --backend cpu"),
+            BackendRequest::Cuda => Device::cuda("asked for with --backend cuda"),
+            BackendRequest::Auto => match Device::cuda("a CUDA device was found") {
+                Ok(device) => Ok(device),
+                Err(Error::CudaUnavailable(why)) => {
+                    eprintln!("gpuwars: running the kernels on the CPU emulation: {why}");
+                    Device::cpu(cpu_threads, &why)
+                }
+                Err(other) => Err(other),
+            },
+        }
+    }
+
+    /// The CPU emulation with `threads` workers (`None`: one per core).
+    pub fn cpu(threads: Option<usize>, reason: &str) -> Result<Device, Error> {
+        Ok(Device {
+            imp: Imp::Cpu(cpu::Emulator::new(threads)?),
+            reason: reason.to_string(),
+        })
+    }
+
+    /// The first CUDA device, with the kernels' PTX loaded.
+    pub fn cuda(reason: &str) -> Result<Device, Error> {
+        Ok(Device {
+            imp: Imp::Cuda(cuda::Gpu::open()?),
+            reason: reason.to_string(),
+        })
+    }
+
+    /// Which backend this is.
+    pub fn kind(&self) -> BackendKind {
+        match self.imp {
+            Imp::Cpu(_) => BackendKind::Cpu,
+            Imp::Cuda(_) => BackendKind::Cuda,
+        }
+    }
+
+    /// Why this backend was chosen.
+    pub fn reason(&self) -> &str {
+        &self.reason
+    }
+
+    /// The GPU's name, compute capability, memory and driver; `None` under the emulator.
+    pub fn gpu_properties(&self) -> Option<&GpuProperties> {
+        match &self.imp {
+            Imp::Cuda(gpu) => Some(gpu.properties()),
+            Imp::Cpu(_) => None,
+        }
+    }
+
+    /// Worker threads of the CPU emulation; `None` on the GPU.
+    pub fn cpu_threads(&self) -> Option<usize> {
+        match &self.imp {
+            Imp::Cpu(emu) => Some(emu.threads()),
+            Imp::Cuda(_) => None,
+        }
+    }
+
+    /// A buffer of `len` zeroed elements.
+    pub fn alloc_zeroed<T: Element>(&self, len: usize) -> Result<Buffer<T>, Error> {
+        check_len(len)?;
+        let imp = match &self.imp {
+            Imp::Cpu(_) => BufferImp::Cpu(cpu::HostBuffer::zeroed(len)),
+            Imp::Cuda(gpu) => BufferImp::Cuda(gpu.alloc_zeroed(len)?),
+        };
+        Ok(Buffer { imp })
+    }
+
+    /// A buffer holding a copy of `data`.
+    pub fn upload<T: Element>(&self, data: &[T]) -> Result<Buffer<T>, Error> {
+        check_len(data.len())?;
+        let imp = match &self.imp {
+            Imp::Cpu(_) => BufferImp::Cpu(cpu::HostBuffer::from_slice(data)),
+            Imp::Cuda(gpu) => BufferImp::Cuda(gpu.upload(data)?),
+        };
+        Ok(Buffer { imp })
+    }
+
+    /// Overwrites the start of `buffer` with `data`.
+    pub fn write<T: Element>(&self, buffer: &mut Buffer<T>, data: &[T]) -> Result<(), Error> {
+        if data.len() > buffer.len() {
+            return Err(Error::Invalid(format!(
+                "cannot write {} elements into a buffer of {}",
+                data.len(),
+                buffer.len()
+            )));
+        }
+        match (&self.imp, &mut buffer.imp) {
+            (Imp::Cpu(_), BufferImp::Cpu(b)) => {
+                b.as_mut_slice()[..data.len()].copy_from_slice(data);
+                Ok(())
+            }
+            (Imp::Cuda(gpu), BufferImp::Cuda(s)) => gpu.write(s, data),
+            _ => Err(foreign_buffer()),
+        }
+    }
+
+    /// Copies the whole buffer back to the host (waits for the work queued before).
+    pub fn download<T: Element>(&self, buffer: &Buffer<T>) -> Result<Vec<T>, Error> {
+        match (&self.imp, &buffer.imp) {
+            (Imp::Cpu(_), BufferImp::Cpu(b)) => Ok(b.as_slice().to_vec()),
+            (Imp::Cuda(gpu), BufferImp::Cuda(s)) => gpu.download(s),
+            _ => Err(foreign_buffer()),
+        }
+    }
+
+    /// Sets every element of `buffer` to zero.
+    pub fn zero<T: Element>(&self, buffer: &mut Buffer<T>) -> Result<(), Error> {
+        match (&self.imp, &mut buffer.imp) {
+            (Imp::Cpu(_), BufferImp::Cpu(b)) => {
+                b.as_mut_slice().fill(T::zeroed());
+                Ok(())
+            }
+            (Imp::Cuda(gpu), BufferImp::Cuda(s)) => gpu.zero(s),
+            _ => Err(foreign_buffer()),
+        }
+    }
+
+    /// Copies `src` into the start of `dst`, device to device.
+    pub fn copy<T: Element>(&self, src: &Buffer<T>, dst: &mut Buffer<T>) -> Result<(), Error> {
+        if src.len() > dst.len() {
+            return Err(Error::Invalid(format!(
+                "cannot copy {} elements into a buffer of {}",
+                src.len(),
+                dst.len()
+            )));
+        }
+        match (&self.imp, &src.imp, &mut dst.imp) {
+            (Imp::Cpu(_), BufferImp::Cpu(s), BufferImp::Cpu(d)) => {
+                d.as_mut_slice()[..s.len()].copy_from_slice(s.as_slice());
+                Ok(())
+            }
+            (Imp::Cuda(gpu), BufferImp::Cuda(s), BufferImp::Cuda(d)) => gpu.copy(s, d),
+            _ => Err(foreign_buffer()),
+        }
+    }
+
+    /// Runs `kernel` on `grid` blocks of `block` threads. A grid of zero blocks launches
+    /// nothing. On the GPU the launch is queued; [`Device::synchronize`] waits for it.
+    ///
+    /// # Safety
+    /// Every [`DevSlice`] in `args` must view a live buffer of this device that nothing else
+    /// touches until the launch completes, and the sizes in `args` must be the ones the
+    /// kernel's documentation asks for (its bounds checks turn a mistake into
+    /// [`Error::KernelFault`], not into memory corruption, only where the views are right).
+    pub unsafe fn launch<A: KernelArgs>(
+        &self,
+        kernel: Kernel<A>,
+        grid: u32,
+        block: u32,
+        args: &A,
+    ) -> Result<(), Error> {
+        if block == 0 || block > MAX_BLOCK {
+            return Err(Error::Invalid(format!(
+                "kernel `{}`: block of {block} threads (allowed 1..={MAX_BLOCK})",
+                kernel.name
+            )));
+        }
+        if grid == 0 {
+            return Ok(());
+        }
+        match &self.imp {
+            Imp::Cpu(emu) => emu.launch(kernel, grid, block, args),
+            // SAFETY: forwarded from the caller.
+            Imp::Cuda(gpu) => unsafe { gpu.launch(kernel, grid, block, args) },
+        }
+    }
+
+    /// Waits until every queued launch and copy has finished, and reports a kernel fault.
+    pub fn synchronize(&self) -> Result<(), Error> {
+        match &self.imp {
+            Imp::Cpu(_) => Ok(()),
+            Imp::Cuda(gpu) => gpu.synchronize(),
+        }
+    }
+}
+
+/// Kernels index buffers with `u32`.
+fn check_len(len: usize) -> Result<(), Error> {
+    if len > u32::MAX as usize {
+        return Err(Error::Invalid(format!(
+            "a buffer of {len} elements (at most {} allowed)",
+            u32::MAX
+        )));
+    }
+    Ok(())
+}
+
+fn foreign_buffer() -> Error {
+    Error::Invalid("a buffer of another backend was passed to this device".into())
+}

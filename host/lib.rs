@@ -1,0 +1,14 @@
+//! GpuWars host side: the backends that run the kernels (CUDA, or the CPU emulation of the
+//! very same kernel source), the host halves of the parallel primitives, and the reports the
+//! command line prints.
+//!
+//! The device code itself lives in the `gpuwars-kernels` crate, re-exported as [`kernels`].
+#![warn(missing_docs)]
+
+pub mod backend;
+pub mod info;
+pub mod primitives;
+pub mod ptx;
+
+pub use backend::{BackendKind, BackendRequest, Buffer, Device, Element, Error};
+pub use gpuwars_kernels as kernels;

@@ -1,0 +1,37 @@
+//! The kernels' PTX module, built by `build.rs` and embedded in the binary.
+
+/// The PTX text handed to the CUDA driver.
+pub const PTX: &str = include_str!(concat!(env!("OUT_DIR"), "/gpuwars_kernels.ptx"));
+
+/// Where `build.rs` wrote the same PTX, for inspection.
+pub const PTX_PATH: &str = concat!(env!("OUT_DIR"), "/gpuwars_kernels.ptx");
+
+/// The GPU architecture the PTX targets (the driver JIT-compiles it for newer ones).
+pub const ARCH: &str = env!("GPUWARS_PTX_ARCH");
+
+/// Names of the `.entry` points declared in a PTX module, in order.
+pub fn entry_points(ptx: &str) -> Vec<&str> {
+    ptx.lines()
+        .filter_map(|line| {
+            let rest = line.trim_start();
+            let rest = rest.strip_prefix(".visible ").unwrap_or(rest);
+            let name = rest.strip_prefix(".entry")?.trim_start();
+            let end = name
+                .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '$'))
+                .unwrap_or(name.len());
+            (end > 0).then(|| &name[..end])
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::entry_points;
+
+    #[test]
+    fn finds_entries_with_and_without_visibility() {
+        let ptx =
+            ".version 6.0\n.visible .entry foo(\n\t.param .u64 p\n)\n.entry bar_2 (\n.func baz(\n";
+        assert_eq!(entry_points(ptx), ["foo", "bar_2"]);
+    }
+}

@@ -1,0 +1,212 @@
+//! The execution model shared by the GPU and the CPU emulator.
+//!
+//! A kernel is a [`Kernel<A>`]: the name of its PTX entry point and its body, a function of the
+//! calling [`Thread`] and a reference to the argument struct `A`. On the GPU a thin
+//! `extern "ptx-kernel"` entry point (generated in [`crate::registry`]) calls the body; on the CPU
+//! the emulator calls the same body for every thread of the grid.
+//!
+//! Device memory is reached through [`DevSlice`], a bounds-checked view made of a raw address
+//! and a length. Building one is `unsafe` (the host promises the memory is valid for the whole
+//! launch); using one is not, because every access checks its index. What no type can check
+//! is the kernel's own promise that two threads of one launch never write the same element
+//! (except through atomics): every kernel states how it keeps it.
+
+use core::marker::PhantomData;
+use core::sync::atomic::{AtomicU32, Ordering};
+
+/// Coordinates of the calling thread inside a one-dimensional launch.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Thread {
+    /// Index of the thread inside its block (`threadIdx.x`).
+    pub thread: u32,
+    /// Index of the block inside the grid (`blockIdx.x`).
+    pub block: u32,
+    /// Threads per block (`blockDim.x`).
+    pub block_dim: u32,
+    /// Blocks in the grid (`gridDim.x`).
+    pub grid_dim: u32,
+}
+
+impl Thread {
+    /// Index of this thread in the whole grid.
+    #[inline(always)]
+    pub fn global(&self) -> u32 {
+        self.block * self.block_dim + self.thread
+    }
+
+    /// The calling GPU thread's coordinates, read from the special registers.
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    pub fn current() -> Self {
+        use core::arch::nvptx;
+        // SAFETY: reading the special registers has no preconditions inside a kernel.
+        unsafe {
+            Thread {
+                thread: nvptx::_thread_idx_x() as u32,
+                block: nvptx::_block_idx_x() as u32,
+                block_dim: nvptx::_block_dim_x() as u32,
+                grid_dim: nvptx::_grid_dim_x() as u32,
+            }
+        }
+    }
+}
+
+/// A kernel argument struct: plain data passed by value as the kernel's single parameter.
+///
+/// # Safety
+/// The type must be `#[repr(C)]`, hold no references or host-only pointers (device memory is
+/// passed as [`DevSlice`]), and be valid for any bit pattern the host writes into it.
+pub unsafe trait KernelArgs: Copy + Sync + Send + 'static {}
+
+/// A typed kernel identity: the PTX entry point's name and the body both backends run.
+pub struct Kernel<A> {
+    /// Name of the `.entry` in the PTX module.
+    pub name: &'static str,
+    /// The kernel body, called once per thread.
+    pub body: fn(Thread, &A),
+}
+
+impl<A> Clone for Kernel<A> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<A> Copy for Kernel<A> {}
+
+impl<A> core::fmt::Debug for Kernel<A> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Kernel").field("name", &self.name).finish()
+    }
+}
+
+/// What the host may know about a kernel without its argument type (for listings and checks).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct KernelInfo {
+    /// Name of the `.entry` in the PTX module.
+    pub name: &'static str,
+    /// One line saying what the kernel does.
+    pub summary: &'static str,
+}
+
+/// A bounds-checked view of `len` elements of device memory (host memory under the emulator).
+///
+/// `#[repr(C)]`, 16 bytes: the address and the length travel inside kernel argument structs.
+#[repr(C)]
+pub struct DevSlice<T> {
+    addr: u64,
+    len: u32,
+    _reserved: u32,
+    _element: PhantomData<T>,
+}
+
+impl<T> Clone for DevSlice<T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<T> Copy for DevSlice<T> {}
+
+// SAFETY: a `DevSlice` is an address and a length; the data races it could allow are excluded
+// by each kernel's contract (disjoint writes, atomics for shared counters), stated at launch.
+unsafe impl<T: Send> Send for DevSlice<T> {}
+// SAFETY: as above.
+unsafe impl<T: Sync> Sync for DevSlice<T> {}
+
+impl<T> core::fmt::Debug for DevSlice<T> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("DevSlice")
+            .field("addr", &self.addr)
+            .field("len", &self.len)
+            .finish()
+    }
+}
+
+impl<T: Copy> DevSlice<T> {
+    /// A view of `len` elements starting at device address `addr`.
+    ///
+    /// # Safety
+    /// `addr` must point to `len` initialised, aligned elements of `T` that stay allocated, and
+    /// are accessed by nothing but the launch, for as long as any kernel uses the view.
+    #[inline(always)]
+    pub const unsafe fn from_raw_parts(addr: u64, len: u32) -> Self {
+        DevSlice {
+            addr,
+            len,
+            _reserved: 0,
+            _element: PhantomData,
+        }
+    }
+
+    /// The empty view: every index is out of bounds.
+    pub const EMPTY: Self = DevSlice {
+        addr: 0,
+        len: 0,
+        _reserved: 0,
+        _element: PhantomData,
+    };
+
+    /// Number of elements in view.
+    #[inline(always)]
+    pub fn len(&self) -> u32 {
+        self.len
+    }
+
+    /// Whether the view holds no element.
+    #[inline(always)]
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    #[inline(always)]
+    fn ptr(&self, index: u32) -> *mut T {
+        if index >= self.len {
+            out_of_bounds(index, self.len);
+        }
+        (self.addr as *mut T).wrapping_add(index as usize)
+    }
+
+    /// Reads element `index`; traps (GPU) or panics (CPU) when it is out of bounds.
+    #[inline(always)]
+    pub fn get(&self, index: u32) -> T {
+        // SAFETY: in bounds (checked), and valid per `from_raw_parts`.
+        unsafe { self.ptr(index).read() }
+    }
+
+    /// Writes element `index`; traps (GPU) or panics (CPU) when it is out of bounds.
+    #[inline(always)]
+    pub fn set(&self, index: u32, value: T) {
+        // SAFETY: in bounds (checked), and valid per `from_raw_parts`; the kernel's contract
+        // gives each element at most one writing thread per launch.
+        unsafe { self.ptr(index).write(value) }
+    }
+}
+
+impl DevSlice<u32> {
+    /// Atomically adds `value` to element `index` (wrapping) and returns the previous value.
+    ///
+    /// A real atomic on both targets (`atom.global.add.u32` on the GPU). Only use results whose
+    /// meaning does not depend on the order in which threads arrive (counts, not slots).
+    #[inline(always)]
+    pub fn atomic_add(&self, index: u32, value: u32) -> u32 {
+        let ptr = self.ptr(index);
+        // SAFETY: in bounds and aligned; concurrent accesses to this element in the launch are
+        // all atomic by the kernel's contract.
+        let atomic = unsafe { AtomicU32::from_ptr(ptr) };
+        // The ordering is irrelevant here (and not honoured on nvptx): nothing in the same
+        // launch reads the counter.
+        atomic.fetch_add(value, Ordering::Relaxed)
+    }
+}
+
+#[cold]
+#[inline(never)]
+fn out_of_bounds(index: u32, len: u32) -> ! {
+    #[cfg(target_arch = "nvptx64")]
+    {
+        let _ = (index, len);
+        // SAFETY: `trap` aborts the kernel; it has no preconditions.
+        unsafe { core::arch::nvptx::trap() }
+    }
+    #[cfg(not(target_arch = "nvptx64"))]
+    panic!("device index {index} out of bounds for a buffer of {len} elements")
+}

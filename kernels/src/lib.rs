@@ -1,0 +1,28 @@
+//! GpuWars device code: every kernel of the game loop, in one source for two targets.
+//!
+//! This crate is compiled twice. For `nvptx64-nvidia-cuda` it becomes the PTX module that the
+//! host embeds and hands to the CUDA driver; natively it is an ordinary library whose kernel
+//! bodies the host's CPU emulator calls thread by thread. Nothing here knows about the host.
+//!
+//! The execution model ([`exec`]) is deliberately small: a kernel body is a plain function of
+//! the calling thread's coordinates and a `#[repr(C)]` argument struct, and kernels never wait
+//! for each other's threads (no barriers, no shared memory). A phase boundary is a new launch,
+//! so the emulator's semantics are exactly the GPU's.
+#![cfg_attr(not(test), no_std)]
+#![cfg_attr(target_arch = "nvptx64", feature(abi_ptx, stdarch_nvptx))]
+#![warn(missing_docs)]
+
+pub mod exec;
+pub mod primitives;
+pub mod registry;
+
+pub use exec::{DevSlice, Kernel, KernelArgs, KernelInfo, Thread};
+
+/// On the GPU a panic (only reachable through a failed bounds check) traps the kernel; the host
+/// sees the launch fail.
+#[cfg(target_arch = "nvptx64")]
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    // SAFETY: `trap` aborts the kernel; it has no preconditions.
+    unsafe { core::arch::nvptx::trap() }
+}

@@ -1,0 +1,87 @@
+//! Exclusive prefix sum of `u32` (wrapping, i.e. modulo 2^32), in tiles.
+//!
+//! One pass of the multi-launch scan: [`reduce_tiles`] writes the sum of every tile of
+//! [`TILE`] elements; the host scans those sums (recursively, with the same two kernels) into
+//! per-tile starting offsets; [`scan_tiles`] then walks each tile once more from its offset.
+//! A problem of `n` elements takes `2·⌈log_TILE n⌉ - 1` launches and no barrier.
+
+use crate::{DevSlice, KernelArgs, Thread};
+
+/// Elements per thread. 32 keeps a tile in one 128-byte line and leaves 2^19 threads at n = 2^24.
+pub const TILE: u32 = 32;
+
+/// Number of tiles covering `n` elements.
+#[inline(always)]
+pub const fn tiles(n: u32) -> u32 {
+    n.div_ceil(TILE)
+}
+
+/// Arguments of [`reduce_tiles`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct ReduceArgs {
+    /// The values to sum, `n` of them used.
+    pub input: DevSlice<u32>,
+    /// One sum per tile: `tiles(n)` elements.
+    pub tile_sums: DevSlice<u32>,
+    /// Number of input elements.
+    pub n: u32,
+}
+// SAFETY: repr(C) plain data.
+unsafe impl KernelArgs for ReduceArgs {}
+
+/// Thread `t` writes the wrapping sum of tile `t` of the input. Each thread writes one element.
+#[inline(always)]
+pub fn reduce_tiles(t: Thread, args: &ReduceArgs) {
+    let tile = t.global();
+    if tile >= tiles(args.n) {
+        return;
+    }
+    let start = tile * TILE;
+    let end = args.n.min(start + TILE);
+    let mut sum = 0u32;
+    for i in start..end {
+        sum = sum.wrapping_add(args.input.get(i));
+    }
+    args.tile_sums.set(tile, sum);
+}
+
+/// Arguments of [`scan_tiles`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct ScanArgs {
+    /// The values to scan, `n` of them used.
+    pub input: DevSlice<u32>,
+    /// Exclusive scan of the tile sums (the value each tile starts from), or empty when the
+    /// input is a single tile, which then starts from zero.
+    pub tile_offsets: DevSlice<u32>,
+    /// Receives the exclusive prefix sums; may be the same memory as `input`.
+    pub output: DevSlice<u32>,
+    /// Number of elements.
+    pub n: u32,
+}
+// SAFETY: repr(C) plain data.
+unsafe impl KernelArgs for ScanArgs {}
+
+/// Thread `t` writes the exclusive prefix sums of tile `t`, starting from its tile offset.
+/// Each thread reads an element before writing it and touches only its own tile, so scanning
+/// in place is safe.
+#[inline(always)]
+pub fn scan_tiles(t: Thread, args: &ScanArgs) {
+    let tile = t.global();
+    if tile >= tiles(args.n) {
+        return;
+    }
+    let start = tile * TILE;
+    let end = args.n.min(start + TILE);
+    let mut running = if args.tile_offsets.is_empty() {
+        0
+    } else {
+        args.tile_offsets.get(tile)
+    };
+    for i in start..end {
+        let value = args.input.get(i);
+        args.output.set(i, running);
+        running = running.wrapping_add(value);
+    }
+}

@@ -1,0 +1,51 @@
+//! Every kernel entry point, listed once.
+//!
+//! [`kernels!`] turns each line into a typed [`Kernel`] constant for the host, an entry in
+//! [`ALL`], and, on nvptx, the `extern "ptx-kernel"` entry point that calls the body. Because
+//! the entry's name and the constant's `name` come from the same identifier, they cannot drift.
+
+use crate::primitives::{histogram, scan, sort};
+use crate::{Kernel, KernelInfo};
+
+macro_rules! kernels {
+    ($(
+        $(#[doc = $doc:literal])+
+        $konst:ident = $entry:ident($args:ty) => $body:path;
+    )*) => {
+        $(
+            $(#[doc = $doc])+
+            pub const $konst: Kernel<$args> = Kernel { name: stringify!($entry), body: $body };
+        )*
+
+        /// Every kernel of the module, in declaration order.
+        pub const ALL: &[KernelInfo] = &[
+            $(KernelInfo { name: stringify!($entry), summary: concat!($($doc),+) }),*
+        ];
+
+        /// The PTX entry points: one per kernel, each a call of its body.
+        #[cfg(target_arch = "nvptx64")]
+        mod entries {
+            use super::*;
+            $(
+                #[unsafe(no_mangle)]
+                /// Entry point (see the constant of the same name in upper case).
+                pub unsafe extern "ptx-kernel" fn $entry(args: $args) {
+                    $body(crate::Thread::current(), &args)
+                }
+            )*
+        }
+    };
+}
+
+kernels! {
+    /// Sums each tile of a u32 array (first half of a prefix-sum pass).
+    SCAN_REDUCE = scan_reduce(scan::ReduceArgs) => scan::reduce_tiles;
+    /// Exclusive prefix sums inside each tile, from the tile's offset.
+    SCAN_TILES = scan_tiles(scan::ScanArgs) => scan::scan_tiles;
+    /// Counts keys per bin with atomic adds.
+    HISTOGRAM = histogram(histogram::HistogramArgs) => histogram::count_keys;
+    /// Counts the digits of each tile of keys (one counting-sort pass).
+    SORT_COUNT = sort_count(sort::CountArgs) => sort::count_digits;
+    /// Moves each tile's (key, index) pairs to their sorted slots (one counting-sort pass).
+    SORT_SCATTER = sort_scatter(sort::ScatterArgs) => sort::scatter_digits;
+}
