@@ -213,7 +213,7 @@ impl CountingSort {
         let mut indices_in = DevSlice::EMPTY;
         for pass in 0..passes {
             // Alternate so that the last pass lands in the caller's buffers.
-            let (k_out, i_out) = if (passes - 1 - pass) % 2 == 0 {
+            let (k_out, i_out) = if (passes - 1 - pass).is_multiple_of(2) {
                 (keys_out.view_prefix(n), indices_out.view_prefix(n))
             } else {
                 (

@@ -1,0 +1,94 @@
+//! The execution model: launch validation on both backends, faults as errors, and results
+//! that do not depend on the emulator's thread count.
+
+mod common;
+
+use common::{random_below, rng_for};
+use gpuwars::kernels::primitives::histogram::HistogramArgs;
+use gpuwars::kernels::registry;
+use gpuwars::primitives::CountingSort;
+use gpuwars::{Device, Error};
+
+fn launches_outside_the_block_limits_are_refused(device: &Device) {
+    let keys = device.upload(&[0u32]).unwrap();
+    let counts = device.alloc_zeroed::<u32>(1).unwrap();
+    let args = HistogramArgs {
+        keys: keys.view(),
+        counts: counts.view(),
+        n: 1,
+    };
+    for block in [0, 1025] {
+        // SAFETY: live buffers; the launch is refused before anything runs.
+        let err = unsafe { device.launch(registry::HISTOGRAM, 1, block, &args) }.unwrap_err();
+        assert!(matches!(err, Error::Invalid(_)), "{err}");
+        assert!(err.to_string().contains("1..=1024"), "{err}");
+    }
+    // A grid of zero blocks runs nothing.
+    // SAFETY: as above.
+    unsafe { device.launch(registry::HISTOGRAM, 0, 32, &args) }.unwrap();
+    assert_eq!(device.download(&counts).unwrap(), [0]);
+}
+
+fn every_thread_of_the_grid_runs_once(device: &Device) {
+    // Keys 0..n, one per thread, with a grid that overshoots n: each bin counts exactly one.
+    let n = 1000;
+    let keys = device.upload(&(0..n).collect::<Vec<u32>>()).unwrap();
+    let mut counts = device.alloc_zeroed::<u32>(n as usize).unwrap();
+    device.zero(&mut counts).unwrap();
+    let args = HistogramArgs {
+        keys: keys.view(),
+        counts: counts.view(),
+        n,
+    };
+    // SAFETY: live buffers of n elements.
+    unsafe { device.launch(registry::HISTOGRAM, 9, 128, &args) }.unwrap();
+    device.synchronize().unwrap();
+    assert_eq!(device.download(&counts).unwrap(), vec![1; n as usize]);
+}
+
+on_both_backends!(
+    launches_outside_the_block_limits_are_refused,
+    every_thread_of_the_grid_runs_once,
+);
+
+/// An out-of-bounds index is an error, not a crash of the host. (CPU only: on the GPU the same
+/// fault traps and leaves the CUDA context unusable for the rest of the process.)
+#[test]
+fn an_out_of_bounds_kernel_is_an_error() {
+    let device = common::cpu();
+    let keys = device.upload(&[0u32; 4]).unwrap();
+    let counts = device.alloc_zeroed::<u32>(1).unwrap();
+    // `n` claims more keys than the view holds.
+    let args = HistogramArgs {
+        keys: keys.view(),
+        counts: counts.view(),
+        n: 5,
+    };
+    // SAFETY: the views are right; only `n` is wrong, which the bounds checks catch.
+    let err = unsafe { device.launch(registry::HISTOGRAM, 1, 8, &args) }.unwrap_err();
+    match err {
+        Error::KernelFault { kernel, message } => {
+            assert_eq!(kernel, "histogram");
+            assert!(message.contains("index 4 out of bounds"), "{message}");
+        }
+        other => panic!("expected a kernel fault, got {other}"),
+    }
+}
+
+#[test]
+fn sort_is_identical_for_any_thread_count() {
+    let n = 200_003;
+    let keys = random_below(&mut rng_for("threads", n), n, 64);
+    let run = |threads| {
+        let device = Device::cpu(Some(threads), "test").unwrap();
+        let mut sort = CountingSort::new(&device, n).unwrap();
+        let src = device.upload(&keys).unwrap();
+        let mut k = device.alloc_zeroed(n).unwrap();
+        let mut i = device.alloc_zeroed(n).unwrap();
+        sort.run(&device, &src, n, 64, &mut k, &mut i).unwrap();
+        (device.download(&k).unwrap(), device.download(&i).unwrap())
+    };
+    let one = run(1);
+    assert_eq!(one, run(2));
+    assert_eq!(one, run(7));
+}
