@@ -15,7 +15,7 @@ fn gpuwars(args: &[&str]) -> std::process::Output {
 }
 
 fn gpu_present() -> bool {
-    matches!(gpuwars::Device::cuda("probe"), Ok(_))
+    gpuwars::Device::cuda("probe").is_ok()
 }
 
 fn info_json(args: &[&str]) -> Value {
