@@ -179,6 +179,46 @@ impl<T: Copy> DevSlice<T> {
         // gives each element at most one writing thread per launch.
         unsafe { self.ptr(index).write(value) }
     }
+
+    /// Pointer to `N` elements from `start`, after one bounds check for all of them.
+    #[inline(always)]
+    fn run_ptr<const N: usize>(&self, start: u32) -> *mut [T; N] {
+        if start as u64 + N as u64 > self.len as u64 {
+            out_of_bounds(start.saturating_add(N as u32 - 1), self.len);
+        }
+        (self.addr as *mut T).wrapping_add(start as usize).cast()
+    }
+
+    /// Reads the `N` elements from `start` with a single bounds check: independent loads the
+    /// GPU can keep in flight together, where a loop of [`DevSlice::get`] waits on each check.
+    #[inline(always)]
+    pub fn get_run<const N: usize>(&self, start: u32) -> [T; N] {
+        // SAFETY: in bounds (checked); `[T; N]` has the alignment of `T`.
+        unsafe { self.run_ptr::<N>(start).read() }
+    }
+
+    /// Calls `f(i, element i)` for each `i` in `start..end`, in order. A range of exactly `N`
+    /// elements (a full tile) is read with [`DevSlice::get_run`].
+    #[inline(always)]
+    pub fn for_each_in<const N: usize>(&self, start: u32, end: u32, mut f: impl FnMut(u32, T)) {
+        if end.wrapping_sub(start) == N as u32 {
+            let values: [T; N] = self.get_run(start);
+            for (k, value) in values.into_iter().enumerate() {
+                f(start + k as u32, value);
+            }
+        } else {
+            for i in start..end {
+                f(i, self.get(i));
+            }
+        }
+    }
+
+    /// Writes `N` elements from `start` with a single bounds check.
+    #[inline(always)]
+    pub fn set_run<const N: usize>(&self, start: u32, values: [T; N]) {
+        // SAFETY: as in `get_run`, and the kernel's contract on writers.
+        unsafe { self.run_ptr::<N>(start).write(values) }
+    }
 }
 
 impl DevSlice<u32> {

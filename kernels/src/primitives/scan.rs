@@ -40,9 +40,8 @@ pub fn reduce_tiles(t: Thread, args: &ReduceArgs) {
     let start = tile * TILE;
     let end = args.n.min(start + TILE);
     let mut sum = 0u32;
-    for i in start..end {
-        sum = sum.wrapping_add(args.input.get(i));
-    }
+    args.input
+        .for_each_in::<{ TILE as usize }>(start, end, |_, v| sum = sum.wrapping_add(v));
     args.tile_sums.set(tile, sum);
 }
 
@@ -79,9 +78,17 @@ pub fn scan_tiles(t: Thread, args: &ScanArgs) {
     } else {
         args.tile_offsets.get(tile)
     };
-    for i in start..end {
-        let value = args.input.get(i);
-        args.output.set(i, running);
-        running = running.wrapping_add(value);
+    if end - start == TILE {
+        let mut values: [u32; TILE as usize] = args.input.get_run(start);
+        for value in &mut values {
+            (*value, running) = (running, running.wrapping_add(*value));
+        }
+        args.output.set_run(start, values);
+    } else {
+        for i in start..end {
+            let value = args.input.get(i);
+            args.output.set(i, running);
+            running = running.wrapping_add(value);
+        }
     }
 }

@@ -72,9 +72,10 @@ pub fn count_digits(t: Thread, args: &CountArgs) {
     let start = tile * TILE;
     let end = args.n.min(start + TILE);
     let mut counts = [0u32; RADIX as usize];
-    for i in start..end {
-        counts[digit(args.keys.get(i), args.shift) as usize] += 1;
-    }
+    args.keys
+        .for_each_in::<{ TILE as usize }>(start, end, |_, key| {
+            counts[digit(key, args.shift) as usize] += 1;
+        });
     for (d, &count) in counts.iter().enumerate() {
         args.counts.set(d as u32 * tile_count + tile, count);
     }
@@ -118,18 +119,18 @@ pub fn scatter_digits(t: Thread, args: &ScatterArgs) {
     }
     let start = tile * TILE;
     let end = args.n.min(start + TILE);
-    for i in start..end {
-        let key = args.keys_in.get(i);
-        let index = if args.indices_in.is_empty() {
-            i
-        } else {
-            args.indices_in.get(i)
-        };
-        let slot = &mut next[digit(key, args.shift) as usize];
-        args.keys_out.set(*slot, key);
-        args.indices_out.set(*slot, index);
-        *slot += 1;
-    }
+    args.keys_in
+        .for_each_in::<{ TILE as usize }>(start, end, |i, key| {
+            let index = if args.indices_in.is_empty() {
+                i
+            } else {
+                args.indices_in.get(i)
+            };
+            let slot = &mut next[digit(key, args.shift) as usize];
+            args.keys_out.set(*slot, key);
+            args.indices_out.set(*slot, index);
+            *slot += 1;
+        });
 }
 
 #[cfg(test)]
