@@ -70,22 +70,23 @@ impl Gpu {
                 "the NVIDIA driver reports no CUDA device".into(),
             ));
         }
-        let ctx = CudaContext::new(0).map_err(unavailable("opening CUDA device 0"))?;
+        // From here on a GPU is present: a failure is an error to report, not an absence.
+        let ctx = CudaContext::new(0).map_err(driver("opening CUDA device 0"))?;
         // One stream orders every launch and copy; the per-buffer events cudarc keeps for
         // multi-stream use would only cost time.
         // SAFETY: this backend never uses a second stream.
         unsafe { ctx.disable_event_tracking() };
         let module = ctx
             .load_module(Ptx::from_src(ptx::PTX))
-            .map_err(unavailable("loading the kernels' PTX"))?;
+            .map_err(driver("loading the kernels' PTX"))?;
         let mut functions = HashMap::new();
         for info in registry::ALL {
             let function = module
                 .load_function(info.name)
-                .map_err(unavailable("finding a kernel in the PTX"))?;
+                .map_err(driver("finding a kernel in the PTX"))?;
             functions.insert(info.name, function);
         }
-        let properties = properties(&ctx).map_err(unavailable("querying device 0"))?;
+        let properties = properties(&ctx).map_err(driver("querying device 0"))?;
         Ok(Gpu {
             stream: ctx.default_stream(),
             functions,

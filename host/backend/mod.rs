@@ -151,11 +151,14 @@ impl Device {
             BackendRequest::Cuda => Device::cuda("asked for with --backend cuda"),
             BackendRequest::Auto => match Device::cuda("a CUDA device was found") {
                 Ok(device) => Ok(device),
-                Err(Error::CudaUnavailable(why)) => {
+                Err(e) => {
+                    let why = match e {
+                        Error::CudaUnavailable(why) => why,
+                        other => format!("the GPU could not be used ({other})"),
+                    };
                     eprintln!("gpuwars: running the kernels on the CPU emulation: {why}");
                     Device::cpu(cpu_threads, &why)
                 }
-                Err(other) => Err(other),
             },
         }
     }
