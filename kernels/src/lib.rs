@@ -15,6 +15,7 @@
 pub mod exec;
 pub mod primitives;
 pub mod registry;
+pub mod rng;
 
 pub use exec::{DevSlice, Kernel, KernelArgs, KernelInfo, Thread};
 

@@ -1,0 +1,15 @@
+//! Mersenne Twister family.
+//!
+//! - [`Mt19937`]: the reference generator of Matsumoto & Nishimura (1998),
+//!   seeded like `mt19937ar.c`. dcmt also uses it internally.
+//! - [`dcmt::Creator`]: the "Dynamic Creator" parameter search (dcmt 0.6.x),
+//!   restricted to the Mersenne exponent 607 with 32-bit words.
+//! - [`Mt607`]: the small 19-word generator that runs one per GPU thread, as
+//!   in V. Podlozhnyuk's "Parallel Mersenne Twister" (NVIDIA, 2007).
+
+pub mod dcmt;
+pub mod mt19937;
+pub mod mt607;
+
+pub use mt607::{Mt607, Mt607Params};
+pub use mt19937::Mt19937;
