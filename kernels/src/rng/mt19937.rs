@@ -27,18 +27,10 @@ impl Mt19937 {
     /// Seeds like `init_genrand(seed)`; `new(5489)` equals a default
     /// constructed C++ `std::mt19937`.
     pub const fn new(seed: u32) -> Self {
-        let mut state = [0u32; N];
-        state[0] = seed;
-        let mut i = 1;
-        while i < N {
-            let prev = state[i - 1];
-            // Knuth's multiplier; `+ i` keeps equal high bits from repeating.
-            state[i] = 1_812_433_253u32
-                .wrapping_mul(prev ^ (prev >> 30))
-                .wrapping_add(i as u32);
-            i += 1;
+        Self {
+            state: init_genrand(seed),
+            index: N,
         }
-        Self { state, index: N }
     }
 
     /// Seeds like `init_by_array(key, key.len())`.
@@ -108,4 +100,21 @@ impl Mt19937 {
         }
         self.index = 0;
     }
+}
+
+/// `init_genrand`'s seeding of `W` state words, shared by MT19937 and MT607 (whose sample cuts
+/// it down to 19 words).
+pub const fn init_genrand<const W: usize>(seed: u32) -> [u32; W] {
+    let mut state = [0u32; W];
+    state[0] = seed;
+    let mut i = 1;
+    while i < W {
+        let prev = state[i - 1];
+        // Knuth's multiplier; `+ i` keeps equal high bits from repeating.
+        state[i] = 1_812_433_253u32
+            .wrapping_mul(prev ^ (prev >> 30))
+            .wrapping_add(i as u32);
+        i += 1;
+    }
+    state
 }

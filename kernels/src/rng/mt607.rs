@@ -50,17 +50,7 @@ impl Mt607Params {
 /// Initial state for `seed`, as the sample (and dcmt's `sgenrand_mt`) do:
 /// `init_genrand` cut down to 19 words.
 pub const fn seed_state(seed: u32) -> [u32; N] {
-    let mut state = [0u32; N];
-    state[0] = seed;
-    let mut i = 1;
-    while i < N {
-        let prev = state[i - 1];
-        state[i] = 1_812_433_253u32
-            .wrapping_mul(prev ^ (prev >> 30))
-            .wrapping_add(i as u32);
-        i += 1;
-    }
-    state
+    super::mt19937::init_genrand(seed)
 }
 
 /// Advances the recurrence by one word and returns the new, untempered word.
