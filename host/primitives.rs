@@ -16,14 +16,14 @@ fn grid(threads: u32) -> u32 {
     threads.div_ceil(BLOCK)
 }
 
-/// `n` as a kernel size, after checking it fits the buffers and the scratch capacity.
+/// `n` as a kernel size, after checking it fits the buffers and the scratch capacity (if any).
 fn checked_n(
     what: &str,
     n: usize,
-    capacity: usize,
+    capacity: Option<usize>,
     buffers: &[(&str, usize)],
 ) -> Result<u32, Error> {
-    if n > capacity {
+    if let Some(capacity) = capacity.filter(|&c| n > c) {
         return Err(Error::Invalid(format!(
             "{what} of {n} elements exceeds the capacity {capacity} it was created for"
         )));
@@ -74,7 +74,7 @@ impl PrefixSum {
         let n = checked_n(
             "a prefix sum",
             n,
-            self.capacity,
+            Some(self.capacity),
             &[("input", input.len()), ("output", output.len())],
         )?;
         // SAFETY: the views are of live buffers of `device`, `n` within each (checked).
@@ -88,7 +88,12 @@ impl PrefixSum {
         data: &mut Buffer<u32>,
         n: usize,
     ) -> Result<(), Error> {
-        let n = checked_n("a prefix sum", n, self.capacity, &[("data", data.len())])?;
+        let n = checked_n(
+            "a prefix sum",
+            n,
+            Some(self.capacity),
+            &[("data", data.len())],
+        )?;
         let view = data.view_prefix(n);
         // SAFETY: as in `run`; `scan_tiles` supports input == output.
         unsafe { self.scan(device, view, view, 0) }
@@ -141,7 +146,7 @@ pub fn histogram(
     n: usize,
     counts: &mut Buffer<u32>,
 ) -> Result<(), Error> {
-    let n = checked_n("a histogram", n, keys.len(), &[])?;
+    let n = checked_n("a histogram", n, None, &[("keys", keys.len())])?;
     device.zero(counts)?;
     let args = hist::HistogramArgs {
         keys: keys.view_prefix(n),
@@ -199,7 +204,7 @@ impl CountingSort {
         let n = checked_n(
             "a sort",
             n,
-            self.capacity,
+            Some(self.capacity),
             &[
                 ("keys", keys.len()),
                 ("keys_out", keys_out.len()),
