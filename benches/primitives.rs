@@ -49,56 +49,47 @@ fn primitives(c: &mut Criterion) {
         let mut dst = device.alloc_zeroed::<u32>(n).unwrap();
         let id = BenchmarkId::new(backend.to_string(), n);
 
-        let mut group = c.benchmark_group("copy_dtod");
-        group.sample_size(20);
+        let elements = Throughput::Elements(n as u64);
         // Bytes read plus bytes written.
-        group.throughput(Throughput::Bytes(2 * 4 * n as u64));
-        group.bench_function(id.clone(), |b| {
-            b.iter(|| {
-                device.copy(&src, &mut dst).unwrap();
-                device.synchronize().unwrap();
-            })
+        let copy_bytes = Throughput::Bytes(2 * 4 * n as u64);
+        time_calls(c, &device, "copy_dtod", &id, copy_bytes, 20, || {
+            device.copy(&src, &mut dst)
         });
-        group.finish();
-
-        let mut group = c.benchmark_group("prefix_sum");
-        group.sample_size(20);
-        group.throughput(Throughput::Elements(n as u64));
         let mut scan = PrefixSum::new(&device, n).unwrap();
-        group.bench_function(id.clone(), |b| {
-            b.iter(|| {
-                scan.run(&device, &src, &mut dst, black_box(n)).unwrap();
-                device.synchronize().unwrap();
-            })
+        time_calls(c, &device, "prefix_sum", &id, elements.clone(), 20, || {
+            scan.run(&device, &src, &mut dst, black_box(n))
         });
-        group.finish();
-
-        let mut group = c.benchmark_group("histogram");
-        group.sample_size(20);
-        group.throughput(Throughput::Elements(n as u64));
         let mut counts = device.alloc_zeroed::<u32>(CELLS as usize).unwrap();
-        group.bench_function(id.clone(), |b| {
-            b.iter(|| {
-                histogram(&device, &src, black_box(n), &mut counts).unwrap();
-                device.synchronize().unwrap();
-            })
+        time_calls(c, &device, "histogram", &id, elements.clone(), 20, || {
+            histogram(&device, &src, black_box(n), &mut counts)
         });
-        group.finish();
-
-        let mut group = c.benchmark_group("counting_sort");
-        group.sample_size(10);
-        group.throughput(Throughput::Elements(n as u64));
         let mut sort = CountingSort::new(&device, n).unwrap();
         let mut indices = device.alloc_zeroed::<u32>(n).unwrap();
-        group.bench_function(id, |b| {
-            b.iter(|| {
-                sort.run(&device, &src, black_box(n), CELLS, &mut dst, &mut indices)
-                    .unwrap();
-                device.synchronize().unwrap();
-            })
+        time_calls(c, &device, "counting_sort", &id, elements, 10, || {
+            sort.run(&device, &src, black_box(n), CELLS, &mut dst, &mut indices)
         });
-        group.finish();
     }
+}
+
+/// Times `call` followed by a synchronise, so that GPU times are whole calls, not queueing.
+fn time_calls(
+    c: &mut Criterion,
+    device: &Device,
+    group: &str,
+    id: &BenchmarkId,
+    throughput: Throughput,
+    samples: usize,
+    mut call: impl FnMut() -> Result<(), gpuwars::Error>,
+) {
+    let mut group = c.benchmark_group(group);
+    group.sample_size(samples).throughput(throughput);
+    group.bench_function(id.clone(), |b| {
+        b.iter(|| {
+            call().unwrap();
+            device.synchronize().unwrap();
+        })
+    });
+    group.finish();
 }
 
 criterion_group!(benches, primitives);
