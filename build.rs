@@ -5,6 +5,10 @@
 //! dependency into the one module, so the PTX has no `.extern` and loads on its own. The result
 //! is written to `$OUT_DIR/gpuwars_kernels.ptx` (for inspection) and embedded by `host/ptx.rs`.
 //! Baseline `sm_70`: the driver JIT-compiles it for any Volta-or-newer card.
+//!
+//! It also turns the committed table of MT607 parameter sets (`data/mt607_params.txt`, made by
+//! `examples/mt607_table.rs`) into a Rust array, `$OUT_DIR/mt607_params.rs`, so that a damaged
+//! table stops the build with its line number instead of failing at run time.
 
 use std::env;
 use std::fs;
@@ -24,6 +28,7 @@ fn main() {
         kernels.join("Cargo.toml").display()
     );
     println!("cargo::rustc-env=GPUWARS_PTX_ARCH={ARCH}");
+    embed_rng_table(&root.join("data").join("mt607_params.txt"), &out_dir);
 
     let rustc = env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
     check_rust_src(&rustc);
@@ -117,4 +122,54 @@ fn newest_asm(deps: &Path) -> Option<PathBuf> {
 fn fail(message: &str) -> ! {
     println!("cargo::error={message}");
     exit(1)
+}
+
+/// Writes `$OUT_DIR/mt607_params.rs`: the table's `(matrix_a, mask_b, mask_c)` rows as an array
+/// expression. Rows are `id matrix_a mask_b mask_c` (hex with `0x`), ids 0, 1, 2, … in order;
+/// lines starting with `#` are comments.
+fn embed_rng_table(table: &Path, out_dir: &Path) {
+    println!("cargo::rerun-if-changed={}", table.display());
+    let text = fs::read_to_string(table).unwrap_or_else(|e| {
+        println!("cargo::error=cannot read {}: {e}", table.display());
+        exit(1)
+    });
+    let mut rows = String::from("[\n");
+    let mut next_id = 0u32;
+    for (number, line) in text.lines().enumerate() {
+        if line.starts_with('#') || line.trim().is_empty() {
+            continue;
+        }
+        let fields: Vec<&str> = line.split_whitespace().collect();
+        let parsed = match fields.as_slice() {
+            [id, a, b, c] => id.parse::<u32>().ok().zip(
+                [a, b, c]
+                    .iter()
+                    .map(|f| {
+                        f.strip_prefix("0x")
+                            .and_then(|h| u32::from_str_radix(h, 16).ok())
+                    })
+                    .collect::<Option<Vec<u32>>>(),
+            ),
+            _ => None,
+        };
+        match parsed {
+            Some((id, words)) if id == next_id => {
+                rows += &format!(
+                    "    [{:#010x}, {:#010x}, {:#010x}],\n",
+                    words[0], words[1], words[2]
+                );
+                next_id += 1;
+            }
+            _ => {
+                println!(
+                    "cargo::error={}:{}: expected `{next_id} 0x<matrix_a> 0x<mask_b> 0x<mask_c>`, found `{line}`",
+                    table.display(),
+                    number + 1
+                );
+                exit(1)
+            }
+        }
+    }
+    rows += "]\n";
+    fs::write(out_dir.join("mt607_params.rs"), rows).expect("OUT_DIR is writable");
 }

@@ -9,6 +9,7 @@ pub mod backend;
 pub mod info;
 pub mod primitives;
 pub mod ptx;
+pub mod sim;
 
 pub use backend::{BackendKind, BackendRequest, Buffer, Device, Element, Error};
 pub use gpuwars_kernels as kernels;

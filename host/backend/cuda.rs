@@ -98,46 +98,48 @@ impl Gpu {
         &self.properties
     }
 
-    pub(super) fn alloc_zeroed<T: Element>(&self, len: usize) -> Result<CudaSlice<T>, Error> {
+    // Buffers are untyped bytes here, so that any plain-data element type (including the
+    // kernels' own structs) can live in device memory without cudarc's marker traits.
+
+    pub(super) fn alloc_zeroed(&self, bytes: usize) -> Result<CudaSlice<u8>, Error> {
         self.stream
-            .alloc_zeros(len)
+            .alloc_zeros(bytes)
             .map_err(driver("allocating device memory"))
     }
 
-    pub(super) fn upload<T: Element>(&self, data: &[T]) -> Result<CudaSlice<T>, Error> {
+    pub(super) fn upload<T: Element>(&self, data: &[T]) -> Result<CudaSlice<u8>, Error> {
         self.stream
-            .clone_htod(data)
+            .clone_htod(bytemuck::cast_slice::<T, u8>(data))
             .map_err(driver("copying to the device"))
     }
 
     pub(super) fn write<T: Element>(
         &self,
-        dst: &mut CudaSlice<T>,
+        dst: &mut CudaSlice<u8>,
         data: &[T],
     ) -> Result<(), Error> {
-        let mut prefix = dst.slice_mut(..data.len());
+        let bytes = bytemuck::cast_slice::<T, u8>(data);
+        let mut prefix = dst.slice_mut(..bytes.len());
         self.stream
-            .memcpy_htod(data, &mut prefix)
+            .memcpy_htod(bytes, &mut prefix)
             .map_err(driver("copying to the device"))
     }
 
-    pub(super) fn download<T: Element>(&self, src: &CudaSlice<T>) -> Result<Vec<T>, Error> {
+    pub(super) fn download<T: Element>(&self, src: &CudaSlice<u8>) -> Result<Vec<T>, Error> {
+        let mut out = vec![T::zeroed(); src.len() / size_of::<T>()];
         self.stream
-            .clone_dtoh(src)
-            .map_err(driver("copying from the device"))
+            .memcpy_dtoh(src, bytemuck::cast_slice_mut::<T, u8>(&mut out))
+            .map_err(driver("copying from the device"))?;
+        Ok(out)
     }
 
-    pub(super) fn zero<T: Element>(&self, dst: &mut CudaSlice<T>) -> Result<(), Error> {
+    pub(super) fn zero(&self, dst: &mut CudaSlice<u8>) -> Result<(), Error> {
         self.stream
             .memset_zeros(dst)
             .map_err(driver("clearing device memory"))
     }
 
-    pub(super) fn copy<T: Element>(
-        &self,
-        src: &CudaSlice<T>,
-        dst: &mut CudaSlice<T>,
-    ) -> Result<(), Error> {
+    pub(super) fn copy(&self, src: &CudaSlice<u8>, dst: &mut CudaSlice<u8>) -> Result<(), Error> {
         let mut prefix = dst.slice_mut(..src.len());
         self.stream
             .memcpy_dtod(src, &mut prefix)

@@ -9,6 +9,7 @@ mod cpu;
 mod cuda;
 
 use std::fmt;
+use std::marker::PhantomData;
 
 use gpuwars_kernels::{DevSlice, Kernel, KernelArgs};
 use serde::Serialize;
@@ -44,6 +45,9 @@ pub enum Error {
     /// A launch, buffer or size outside what the backends accept.
     #[error("invalid request: {0}")]
     Invalid(String),
+    /// A world description that breaks a rule.
+    #[error("invalid world: {0}")]
+    Spec(#[from] crate::sim::SpecError),
 }
 
 /// Which backend runs the kernels.
@@ -77,15 +81,10 @@ pub enum BackendRequest {
     Cpu,
 }
 
-/// Plain-data element types that buffers can hold.
-pub trait Element:
-    bytemuck::Pod + cudarc::driver::DeviceRepr + cudarc::driver::ValidAsZeroBits + Send + Sync
-{
-}
-impl Element for u32 {}
-impl Element for i32 {}
-impl Element for f32 {}
-impl Element for u64 {}
+/// Plain-data element types that buffers can hold: any `bytemuck::Pod` type that is not
+/// zero-sized (numbers, `glam::Vec2`, the kernels' `#[repr(C)]` structs).
+pub trait Element: bytemuck::Pod + Send + Sync {}
+impl<T: bytemuck::Pod + Send + Sync> Element for T {}
 
 /// An open backend: where buffers live and kernels run.
 pub struct Device {
@@ -105,7 +104,8 @@ pub struct Buffer<T: Element> {
 
 enum BufferImp<T: Element> {
     Cpu(cpu::HostBuffer<T>),
-    Cuda(cudarc::driver::CudaSlice<T>),
+    /// Bytes on the GPU; `T` is the type the bytes hold.
+    Cuda(cudarc::driver::CudaSlice<u8>, PhantomData<T>),
 }
 
 impl<T: Element> Buffer<T> {
@@ -113,7 +113,7 @@ impl<T: Element> Buffer<T> {
     pub fn len(&self) -> usize {
         match &self.imp {
             BufferImp::Cpu(b) => b.len(),
-            BufferImp::Cuda(s) => s.len(),
+            BufferImp::Cuda(s, _) => s.len() / size_of::<T>(),
         }
     }
 
@@ -134,7 +134,7 @@ impl<T: Element> Buffer<T> {
         let len = len.min(self.len() as u32);
         let addr = match &self.imp {
             BufferImp::Cpu(b) => b.addr(),
-            BufferImp::Cuda(s) => cuda::address(s),
+            BufferImp::Cuda(s, _) => cuda::address(s),
         };
         // SAFETY: `addr` holds `len` elements of this buffer, which outlives the view's use
         // in any launch that the borrow of `self` spans (the caller of `launch` promises it).
@@ -210,20 +210,20 @@ impl Device {
 
     /// A buffer of `len` zeroed elements.
     pub fn alloc_zeroed<T: Element>(&self, len: usize) -> Result<Buffer<T>, Error> {
-        check_len(len)?;
+        check_len::<T>(len)?;
         let imp = match &self.imp {
             Imp::Cpu(_) => BufferImp::Cpu(cpu::HostBuffer::zeroed(len)),
-            Imp::Cuda(gpu) => BufferImp::Cuda(gpu.alloc_zeroed(len)?),
+            Imp::Cuda(gpu) => BufferImp::Cuda(gpu.alloc_zeroed(len * size_of::<T>())?, PhantomData),
         };
         Ok(Buffer { imp })
     }
 
     /// A buffer holding a copy of `data`.
     pub fn upload<T: Element>(&self, data: &[T]) -> Result<Buffer<T>, Error> {
-        check_len(data.len())?;
+        check_len::<T>(data.len())?;
         let imp = match &self.imp {
             Imp::Cpu(_) => BufferImp::Cpu(cpu::HostBuffer::from_slice(data)),
-            Imp::Cuda(gpu) => BufferImp::Cuda(gpu.upload(data)?),
+            Imp::Cuda(gpu) => BufferImp::Cuda(gpu.upload(data)?, PhantomData),
         };
         Ok(Buffer { imp })
     }
@@ -242,7 +242,7 @@ impl Device {
                 b.as_mut_slice()[..data.len()].copy_from_slice(data);
                 Ok(())
             }
-            (Imp::Cuda(gpu), BufferImp::Cuda(s)) => gpu.write(s, data),
+            (Imp::Cuda(gpu), BufferImp::Cuda(s, _)) => gpu.write(s, data),
             _ => Err(foreign_buffer()),
         }
     }
@@ -251,7 +251,7 @@ impl Device {
     pub fn download<T: Element>(&self, buffer: &Buffer<T>) -> Result<Vec<T>, Error> {
         match (&self.imp, &buffer.imp) {
             (Imp::Cpu(_), BufferImp::Cpu(b)) => Ok(b.as_slice().to_vec()),
-            (Imp::Cuda(gpu), BufferImp::Cuda(s)) => gpu.download(s),
+            (Imp::Cuda(gpu), BufferImp::Cuda(s, _)) => gpu.download(s),
             _ => Err(foreign_buffer()),
         }
     }
@@ -263,7 +263,7 @@ impl Device {
                 b.as_mut_slice().fill(T::zeroed());
                 Ok(())
             }
-            (Imp::Cuda(gpu), BufferImp::Cuda(s)) => gpu.zero(s),
+            (Imp::Cuda(gpu), BufferImp::Cuda(s, _)) => gpu.zero(s),
             _ => Err(foreign_buffer()),
         }
     }
@@ -282,7 +282,7 @@ impl Device {
                 d.as_mut_slice()[..s.len()].copy_from_slice(s.as_slice());
                 Ok(())
             }
-            (Imp::Cuda(gpu), BufferImp::Cuda(s), BufferImp::Cuda(d)) => gpu.copy(s, d),
+            (Imp::Cuda(gpu), BufferImp::Cuda(s, _), BufferImp::Cuda(d, _)) => gpu.copy(s, d),
             _ => Err(foreign_buffer()),
         }
     }
@@ -327,8 +327,14 @@ impl Device {
     }
 }
 
-/// Kernels index buffers with `u32`.
-fn check_len(len: usize) -> Result<(), Error> {
+/// Kernels index buffers with `u32`, and an element must take up memory.
+fn check_len<T>(len: usize) -> Result<(), Error> {
+    if size_of::<T>() == 0 {
+        return Err(Error::Invalid(format!(
+            "a buffer of the zero-sized type {}",
+            std::any::type_name::<T>()
+        )));
+    }
     if len > u32::MAX as usize {
         return Err(Error::Invalid(format!(
             "a buffer of {len} elements (at most {} allowed)",

@@ -165,6 +165,21 @@ impl<T: Copy> DevSlice<T> {
         (self.addr as *mut T).wrapping_add(index as usize)
     }
 
+    /// The `len` elements from `start`; traps (GPU) or panics (CPU) unless they are all in
+    /// view.
+    #[inline(always)]
+    pub fn range(&self, start: u32, len: u32) -> Self {
+        if start as u64 + len as u64 > self.len as u64 {
+            out_of_bounds(start.saturating_add(len), self.len);
+        }
+        DevSlice {
+            addr: self.addr + start as u64 * size_of::<T>() as u64,
+            len,
+            _reserved: 0,
+            _element: PhantomData,
+        }
+    }
+
     /// Reads element `index`; traps (GPU) or panics (CPU) when it is out of bounds.
     #[inline(always)]
     pub fn get(&self, index: u32) -> T {

@@ -16,6 +16,7 @@ pub mod exec;
 pub mod primitives;
 pub mod registry;
 pub mod rng;
+pub mod sim;
 
 pub use exec::{DevSlice, Kernel, KernelArgs, KernelInfo, Thread};
 

@@ -5,6 +5,7 @@
 //! the entry's name and the constant's `name` come from the same identifier, they cannot drift.
 
 use crate::primitives::{histogram, scan, sort};
+use crate::sim::{broad, free_list, integrate, narrow, scatter};
 use crate::{Kernel, KernelInfo};
 
 macro_rules! kernels {
@@ -48,4 +49,18 @@ kernels! {
     SORT_COUNT = sort_count(sort::CountArgs) => sort::count_digits;
     /// Moves each tile's (key, index) pairs to their sorted slots (one counting-sort pass).
     SORT_SCATTER = sort_scatter(sort::ScatterArgs) => sort::scatter_digits;
+    /// Keys every slot by the grid cell of its body (free slots past the last cell).
+    ASSIGN_CELLS = assign_cells(broad::AssignArgs) => broad::assign_cells;
+    /// Records where each cell's run starts and ends in the sorted order.
+    CELL_BOUNDS = cell_bounds(broad::BoundsArgs) => broad::cell_bounds;
+    /// Narrow phase: each body's collision response to its neighbours, and energy losses.
+    COLLIDE = collide(narrow::CollideArgs) => narrow::collide;
+    /// Euler integration, the boundary rule, and deaths.
+    INTEGRATE = integrate(integrate::IntegrateArgs) => integrate::integrate;
+    /// Flags the free usable slots (first step of rebuilding the free lists).
+    MARK_FREE = mark_free(free_list::MarkArgs) => free_list::mark_free;
+    /// Writes each kind's free slots in order, and their counts.
+    GATHER_FREE = gather_free(free_list::GatherArgs) => free_list::gather_free;
+    /// Brings bodies to life at random places from their slots' generators.
+    SCATTER = scatter(scatter::ScatterArgs) => scatter::scatter;
 }

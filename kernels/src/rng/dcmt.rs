@@ -68,13 +68,15 @@ impl Creator {
     /// Like [`Creator::parameters`], but `None` where dcmt returns NULL. The
     /// draws are consumed either way, as in dcmt.
     pub fn try_parameters(&mut self, id: u16) -> Option<Mt607Params> {
-        let matrix_a = self.find_matrix_a(id)?;
-        Some(tempering_parameters(matrix_a))
+        self.matrix_a(id).map(tempering_parameters)
     }
 
-    /// dcmt's `get_irred_param`: random `matrix_a` with the top bit and the id
-    /// set, cheap sieve first, then the exact period check.
-    fn find_matrix_a(&mut self, id: u16) -> Option<u32> {
+    /// The first half of [`Creator::try_parameters`] (dcmt's `get_irred_param`):
+    /// the next full-period `matrix_a` with the top bit and `id` set, or `None`
+    /// after 10 000 candidates. Random candidates go through a cheap sieve, then
+    /// the exact period check. Only this half consumes draws, so a table can be
+    /// built by searching in sequence and tempering in parallel.
+    pub fn matrix_a(&mut self, id: u16) -> Option<u32> {
         for _ in 0..MAX_SEARCH {
             let a = (self.mt.next_u32() & (u32::MAX << ID_BITS)) | (1 << (W - 1)) | u32::from(id);
             if passes_sieve(a) && self.has_full_period(a) {

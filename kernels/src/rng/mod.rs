@@ -6,10 +6,13 @@
 //!   restricted to the Mersenne exponent 607 with 32-bit words.
 //! - [`Mt607`]: the small 19-word generator that runs one per GPU thread, as
 //!   in V. Podlozhnyuk's "Parallel Mersenne Twister" (NVIDIA, 2007).
+//! - [`RngStreams`]: one MT607 per body slot in device memory, drawn by kernels.
 
 pub mod dcmt;
 pub mod mt19937;
 pub mod mt607;
+pub mod streams;
 
 pub use mt607::{Mt607, Mt607Params};
 pub use mt19937::Mt19937;
+pub use streams::{RngStreams, SlotRng};

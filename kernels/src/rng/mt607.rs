@@ -26,7 +26,7 @@ pub const SHIFT_L: u32 = 18;
 /// One dcmt parameter set; same layout as the first three words of the
 /// CUDA sample's `mt_struct_stripped` records.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct Mt607Params {
     /// Last row of the twist matrix; dcmt puts the id in the low 16 bits.
     pub matrix_a: u32,
@@ -53,6 +53,32 @@ pub const fn seed_state(seed: u32) -> [u32; N] {
     super::mt19937::init_genrand(seed)
 }
 
+/// The recurrence: the word that replaces `oldest`, from it, the word after it and the
+/// word `M` places after it.
+#[inline(always)]
+pub const fn twist(oldest: u32, next: u32, middle: u32, matrix_a: u32) -> u32 {
+    let y = (oldest & UPPER_MASK) | (next & LOWER_MASK);
+    middle ^ (y >> 1) ^ (matrix_a & (y & 1).wrapping_neg())
+}
+
+/// Positions of the word after `index` and of the word `M` after it, in a circular state.
+#[inline(always)]
+pub const fn neighbours(index: u32) -> (u32, u32) {
+    // Conditional wrap instead of `%`: integer division is slow on the GPU.
+    let n = N as u32;
+    let next = if index + 1 >= n {
+        index + 1 - n
+    } else {
+        index + 1
+    };
+    let middle = if index + M as u32 >= n {
+        index + M as u32 - n
+    } else {
+        index + M as u32
+    };
+    (next, middle)
+}
+
 /// Advances the recurrence by one word and returns the new, untempered word.
 ///
 /// `index` (< [`N`]) names the oldest word, which is overwritten. The
@@ -60,14 +86,16 @@ pub const fn seed_state(seed: u32) -> [u32; N] {
 /// words at once, without a refill branch.
 #[inline]
 pub fn step(state: &mut [u32; N], index: &mut u32, matrix_a: u32) -> u32 {
+    let (next, middle) = neighbours(*index);
     let i = *index as usize;
-    // Conditional wrap instead of `%`: integer division is slow on the GPU.
-    let i1 = if i + 1 >= N { i + 1 - N } else { i + 1 };
-    let im = if i + M >= N { i + M - N } else { i + M };
-    let y = (state[i] & UPPER_MASK) | (state[i1] & LOWER_MASK);
-    let x = state[im] ^ (y >> 1) ^ (matrix_a & (y & 1).wrapping_neg());
+    let x = twist(
+        state[i],
+        state[next as usize],
+        state[middle as usize],
+        matrix_a,
+    );
     state[i] = x;
-    *index = i1 as u32;
+    *index = next;
     x
 }
 

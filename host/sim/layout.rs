@@ -1,0 +1,116 @@
+//! Where things go: each kind's slot range (grouped warps) and the grid over the world.
+
+use gpuwars_kernels::sim::{KindInfo, SlotRange, Space, kinds};
+
+use super::spec::{Boundary, Shape, WorldSpec};
+
+/// Slots per warp: each kind's range starts on a multiple of it.
+pub const WARP: u32 = 32;
+/// Most grid cells: a world of tiny bodies gets coarser cells rather than a huge grid.
+pub const MAX_CELLS: u32 = 1 << 22;
+/// Cells are made this much larger than the largest reach, so that rounding in the cell
+/// arithmetic can never separate two touching bodies by more than one cell.
+const CELL_MARGIN: f32 = 1.0 + 1.0 / 1024.0;
+
+/// The slot ranges of a world, one per kind, in the spec's order.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Layout {
+    /// Range of each kind.
+    pub ranges: Vec<SlotRange>,
+    /// Total slots, padding included.
+    pub slots: u32,
+}
+
+impl Layout {
+    /// Ranges for the spec's capacities, each aligned to [`WARP`].
+    pub fn new(spec: &WorldSpec) -> Self {
+        let mut start = 0;
+        let ranges = spec
+            .kinds
+            .iter()
+            .map(|kind| {
+                let range = SlotRange {
+                    start,
+                    capacity: kind.capacity,
+                };
+                start += kind.capacity.next_multiple_of(WARP);
+                range
+            })
+            .collect();
+        Layout {
+            ranges,
+            slots: start,
+        }
+    }
+
+    /// The kind of every slot (padding belongs to the range before it).
+    pub fn slot_kinds(&self) -> Vec<u32> {
+        let mut kinds = vec![0; self.slots as usize];
+        for (k, range) in self.ranges.iter().enumerate() {
+            let end = range.start + range.capacity.next_multiple_of(WARP);
+            kinds[range.start as usize..end as usize].fill(k as u32);
+        }
+        kinds
+    }
+}
+
+/// The kernels' table of kinds.
+pub fn kind_table(spec: &WorldSpec) -> Vec<KindInfo> {
+    spec.kinds
+        .iter()
+        .zip(spec.collision_masks())
+        .map(|(kind, collides_with)| {
+            let (shape, half) = match kind.shape {
+                Shape::Circle { radius } => (kinds::SHAPE_CIRCLE, glam::Vec2::splat(radius)),
+                Shape::Rect { half } => (kinds::SHAPE_RECT, half),
+            };
+            KindInfo {
+                half,
+                radius: kind.shape.reach(),
+                shape,
+                collides_with,
+                damage: kind.damage,
+                restitution: kind.restitution,
+                max_speed: kind.max_speed,
+            }
+        })
+        .collect()
+}
+
+/// The world and its grid: cells no smaller than the largest distance at which two bodies
+/// can touch or a body can see, as many as fit (up to [`MAX_CELLS`]).
+pub fn space(spec: &WorldSpec) -> Space {
+    let masks = spec.collision_masks();
+    // Two bodies touch only if their centres are closer than the sum of their reaches.
+    let touch = spec
+        .kinds
+        .iter()
+        .zip(&masks)
+        .filter(|(_, mask)| **mask != 0)
+        .map(|(kind, _)| 2.0 * kind.shape.reach())
+        .fold(0.0f32, f32::max);
+    let cell = touch.max(spec.vision) * CELL_MARGIN;
+    let fit = |side: f32| {
+        if cell > 0.0 {
+            ((side / cell) as u32).clamp(1, MAX_CELLS)
+        } else {
+            1
+        }
+    };
+    let (mut cols, mut rows) = (fit(spec.size.x), fit(spec.size.y));
+    while u64::from(cols) * u64::from(rows) > u64::from(MAX_CELLS) {
+        if cols >= rows {
+            cols = cols.div_ceil(2);
+        } else {
+            rows = rows.div_ceil(2);
+        }
+    }
+    Space {
+        size: spec.size,
+        inv_cell: glam::Vec2::new(cols as f32 / spec.size.x, rows as f32 / spec.size.y),
+        cols,
+        rows,
+        wrap: u32::from(spec.boundary == Boundary::Wrap),
+        reserved: 0,
+    }
+}

@@ -1,0 +1,233 @@
+//! What a world is made of, as the host describes it: size, time step, boundary rule, and the
+//! kinds of body with their bounds, masses, capacities and contacts. Scene files (TOML) are
+//! read into this; [`WorldSpec::validate`] says precisely what is wrong with one.
+
+use std::fmt;
+
+use glam::Vec2;
+
+/// Most kinds a world may have: collision masks are 32-bit.
+pub const MAX_KINDS: usize = 32;
+/// Most slots a world may have, all kinds together (after aligning each range to 32).
+pub const MAX_SLOTS: u32 = 1 << 24;
+/// Largest world side: beyond it, f32 positions are too coarse for small bodies.
+pub const MAX_SIDE: f32 = 1.0e6;
+
+/// How the world treats bodies that leave it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Boundary {
+    /// They come back on the opposite side (a torus); contacts reach across the seams.
+    Wrap,
+    /// They stop at the edge, losing the velocity that points outwards.
+    Clamp,
+}
+
+/// The narrow-phase bound of a kind.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Shape {
+    /// A circle of this radius.
+    Circle {
+        /// Radius.
+        radius: f32,
+    },
+    /// An axis-aligned rectangle of these half extents.
+    Rect {
+        /// Half the width and half the height.
+        half: Vec2,
+    },
+}
+
+impl Shape {
+    /// Radius of the smallest circle around the bound, centred on the body.
+    pub fn reach(&self) -> f32 {
+        match *self {
+            Shape::Circle { radius } => radius,
+            Shape::Rect { half } => half.length(),
+        }
+    }
+}
+
+/// One kind of body.
+#[derive(Clone, Debug, PartialEq)]
+pub struct KindSpec {
+    /// Unique name (used by `collides_with`).
+    pub name: String,
+    /// Bound used by the narrow phase.
+    pub shape: Shape,
+    /// Mass of each body (> 0; `f32::INFINITY` for immovable bodies).
+    pub mass: f32,
+    /// Slots reserved for this kind: the most bodies of it alive at once.
+    pub capacity: u32,
+    /// Energy at birth (≥ 1).
+    pub energy: i32,
+    /// Energy a body touching one of this kind loses per step of contact (≥ 0).
+    pub damage: i32,
+    /// Coefficient of restitution, 0 (no bounce) to 1 (elastic).
+    pub restitution: f32,
+    /// Speed limit (> 0; `f32::INFINITY` for none).
+    pub max_speed: f32,
+    /// Names of the kinds this one collides with (the relation is made symmetric).
+    pub collides_with: Vec<String>,
+}
+
+/// A whole world, before validation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorldSpec {
+    /// Width and height; the world is `[0, size.x) × [0, size.y)`.
+    pub size: Vec2,
+    /// Fixed time step in seconds.
+    pub dt: f32,
+    /// What happens at the edges.
+    pub boundary: Boundary,
+    /// The largest vision radius of any body (0 if nothing looks around); the grid cells are
+    /// made at least this large.
+    pub vision: f32,
+    /// The kinds of body, in slot order.
+    pub kinds: Vec<KindSpec>,
+}
+
+/// A value that breaks a rule, named by its path in the spec.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{field}: {problem}")]
+pub struct SpecError {
+    /// Where: `dt`, `kinds[2].radius`, …
+    pub field: String,
+    /// What is wrong and what is allowed.
+    pub problem: String,
+}
+
+fn error(field: impl fmt::Display, problem: impl fmt::Display) -> SpecError {
+    SpecError {
+        field: field.to_string(),
+        problem: problem.to_string(),
+    }
+}
+
+/// `value` must be finite and in `(low, high]` (or `[low, high]` if `low_inclusive`).
+fn check_range(
+    field: impl fmt::Display,
+    value: f32,
+    (low, low_inclusive): (f32, bool),
+    high: f32,
+) -> Result<(), SpecError> {
+    let above = if low_inclusive {
+        value >= low
+    } else {
+        value > low
+    };
+    if above && value <= high {
+        Ok(())
+    } else {
+        let open = if low_inclusive { '[' } else { '(' };
+        Err(error(
+            field,
+            format!("{value} is out of range (allowed {open}{low}, {high}])"),
+        ))
+    }
+}
+
+impl WorldSpec {
+    /// Checks every rule; the first broken one is the error.
+    pub fn validate(&self) -> Result<(), SpecError> {
+        check_range("size.x", self.size.x, (0.0, false), MAX_SIDE)?;
+        check_range("size.y", self.size.y, (0.0, false), MAX_SIDE)?;
+        check_range("dt", self.dt, (0.0, false), 1.0)?;
+        check_range("vision", self.vision, (0.0, true), MAX_SIDE)?;
+        if self.kinds.is_empty() || self.kinds.len() > MAX_KINDS {
+            return Err(error(
+                "kinds",
+                format!("{} kinds (allowed 1 to {MAX_KINDS})", self.kinds.len()),
+            ));
+        }
+        let mut slots = 0u64;
+        for (k, kind) in self.kinds.iter().enumerate() {
+            let at = |field: &str| format!("kinds[{k}] ({}).{field}", kind.name);
+            if kind.name.trim().is_empty() {
+                return Err(error(format!("kinds[{k}].name"), "must not be empty"));
+            }
+            if self.kinds[..k].iter().any(|other| other.name == kind.name) {
+                return Err(error(at("name"), "is used by an earlier kind"));
+            }
+            match kind.shape {
+                Shape::Circle { radius } => {
+                    check_range(at("radius"), radius, (0.0, false), MAX_SIDE)?
+                }
+                Shape::Rect { half } => {
+                    check_range(at("half.x"), half.x, (0.0, false), MAX_SIDE)?;
+                    check_range(at("half.y"), half.y, (0.0, false), MAX_SIDE)?;
+                }
+            }
+            if !(kind.mass > 0.0) {
+                return Err(error(
+                    at("mass"),
+                    format!(
+                        "{} is out of range (allowed > 0, or inf for immovable)",
+                        kind.mass
+                    ),
+                ));
+            }
+            if kind.capacity == 0 {
+                return Err(error(
+                    at("capacity"),
+                    "0 is out of range (allowed at least 1)",
+                ));
+            }
+            if kind.energy < 1 {
+                return Err(error(
+                    at("energy"),
+                    format!("{} is out of range (allowed at least 1)", kind.energy),
+                ));
+            }
+            if kind.damage < 0 {
+                return Err(error(
+                    at("damage"),
+                    format!("{} is out of range (allowed at least 0)", kind.damage),
+                ));
+            }
+            check_range(at("restitution"), kind.restitution, (0.0, true), 1.0)?;
+            if !(kind.max_speed > 0.0) {
+                return Err(error(
+                    at("max_speed"),
+                    format!(
+                        "{} is out of range (allowed > 0, or inf for no limit)",
+                        kind.max_speed
+                    ),
+                ));
+            }
+            for (c, other) in kind.collides_with.iter().enumerate() {
+                if !self.kinds.iter().any(|k| &k.name == other) {
+                    return Err(error(
+                        at(&format!("collides_with[{c}]")),
+                        format!("no kind is named `{other}`"),
+                    ));
+                }
+            }
+            slots += u64::from(kind.capacity).next_multiple_of(32);
+        }
+        if slots > u64::from(MAX_SLOTS) {
+            return Err(error(
+                "kinds",
+                format!("{slots} slots in all (allowed at most {MAX_SLOTS})"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Index of the kind called `name`.
+    pub fn kind_index(&self, name: &str) -> Option<usize> {
+        self.kinds.iter().position(|k| k.name == name)
+    }
+
+    /// Collision masks (bit `j` of entry `i`: kinds `i` and `j` collide), made symmetric.
+    /// Assumes a valid spec.
+    pub fn collision_masks(&self) -> Vec<u32> {
+        let mut masks = vec![0u32; self.kinds.len()];
+        for (i, kind) in self.kinds.iter().enumerate() {
+            for j in kind.collides_with.iter().filter_map(|n| self.kind_index(n)) {
+                masks[i] |= 1 << j;
+                masks[j] |= 1 << i;
+            }
+        }
+        masks
+    }
+}

@@ -1,0 +1,88 @@
+//! One MT607 generator per body slot, stored as a structure of arrays in device memory.
+//!
+//! A body's random numbers come from the generator of its slot, whichever thread runs it,
+//! so they do not depend on the launch shape or the backend. The 19 state words are stored
+//! word-major (word `k` of slot `s` at `k · slots + s`): when neighbouring threads draw, their
+//! loads and stores fall on neighbouring addresses. A draw touches three words, not the
+//! whole state.
+
+use super::mt607::{self, Mt607Params};
+use crate::DevSlice;
+
+/// The generators of every slot: parameters, state words and positions.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct RngStreams {
+    /// dcmt parameters, one set per slot.
+    pub params: DevSlice<Mt607Params>,
+    /// State words, word-major: `mt607::N · slots` elements.
+    pub words: DevSlice<u32>,
+    /// Position of each slot's oldest word (< 19).
+    pub index: DevSlice<u32>,
+}
+
+impl RngStreams {
+    /// The generator of `slot`. Its position is written back when the handle is dropped, so
+    /// at most one handle per slot may be open at a time (one thread owns a slot).
+    #[inline(always)]
+    pub fn open(&self, slot: u32) -> SlotRng<'_> {
+        SlotRng {
+            streams: self,
+            slot,
+            params: self.params.get(slot),
+            index: self.index.get(slot),
+        }
+    }
+}
+
+/// A slot's generator, open for drawing.
+pub struct SlotRng<'a> {
+    streams: &'a RngStreams,
+    slot: u32,
+    params: Mt607Params,
+    index: u32,
+}
+
+impl SlotRng<'_> {
+    #[inline(always)]
+    fn word(&self, k: u32) -> u32 {
+        k * self.streams.index.len() + self.slot
+    }
+
+    /// Next 32-bit output: the same sequence as [`mt607::Mt607::next_u32`].
+    #[inline(always)]
+    pub fn next_u32(&mut self) -> u32 {
+        let words = &self.streams.words;
+        let (next, middle) = mt607::neighbours(self.index);
+        let x = mt607::twist(
+            words.get(self.word(self.index)),
+            words.get(self.word(next)),
+            words.get(self.word(middle)),
+            self.params.matrix_a,
+        );
+        words.set(self.word(self.index), x);
+        self.index = next;
+        mt607::temper(x, &self.params)
+    }
+
+    /// Next uniform float in (0, 1] (see [`mt607::to_unit_f32`]).
+    #[inline(always)]
+    pub fn next_f32(&mut self) -> f32 {
+        mt607::to_unit_f32(self.next_u32())
+    }
+
+    /// Two standard normals from the next two uniforms (see [`mt607::box_muller`]).
+    #[inline(always)]
+    pub fn next_normal_pair(&mut self) -> (f32, f32) {
+        let u1 = self.next_f32();
+        let u2 = self.next_f32();
+        mt607::box_muller(u1, u2)
+    }
+}
+
+impl Drop for SlotRng<'_> {
+    #[inline(always)]
+    fn drop(&mut self) {
+        self.streams.index.set(self.slot, self.index);
+    }
+}

@@ -1,0 +1,78 @@
+//! What every body of a kind shares: its bound, whom it collides with, what a contact does.
+
+use glam::Vec2;
+
+/// [`KindInfo::shape`] of a kind bounded by a circle.
+pub const SHAPE_CIRCLE: u32 = 0;
+/// [`KindInfo::shape`] of a kind bounded by an axis-aligned rectangle.
+pub const SHAPE_RECT: u32 = 1;
+
+/// The narrow-phase bound of a body (paper 6.2): a circle wherever possible, else an
+/// axis-aligned rectangle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Bound {
+    /// A circle of this radius around the position.
+    Circle(f32),
+    /// A rectangle with these half extents, centred on the position.
+    Rect(Vec2),
+}
+
+/// One kind of body, as the kernels see it (one entry per kind, indexed by [`Bodies::kind`]).
+///
+/// [`Bodies::kind`]: crate::sim::Bodies::kind
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct KindInfo {
+    /// Half extents of a rectangle; `(radius, radius)` for a circle.
+    pub half: Vec2,
+    /// Radius of a circle; for a rectangle, the radius of the circle around it.
+    pub radius: f32,
+    /// [`SHAPE_CIRCLE`] or [`SHAPE_RECT`].
+    pub shape: u32,
+    /// Bit `k` set: bodies of this kind collide with bodies of kind `k` (symmetric).
+    pub collides_with: u32,
+    /// Energy a body touching one of this kind loses per step of contact.
+    pub damage: i32,
+    /// Coefficient of restitution in `[0, 1]`; a pair uses the larger of its two.
+    pub restitution: f32,
+    /// Speed limit (`f32::INFINITY` for none).
+    pub max_speed: f32,
+}
+
+impl KindInfo {
+    /// The narrow-phase bound of this kind's bodies.
+    #[inline(always)]
+    pub fn bound(&self) -> Bound {
+        if self.shape == SHAPE_RECT {
+            Bound::Rect(self.half)
+        } else {
+            Bound::Circle(self.radius)
+        }
+    }
+
+    /// Whether bodies of this kind collide with bodies of kind `other`.
+    #[inline(always)]
+    pub fn collides_with(&self, other: u32) -> bool {
+        other < u32::BITS && self.collides_with & (1 << other) != 0
+    }
+}
+
+/// The slots of one kind: `capacity` slots from `start`, which is a multiple of 32 so that
+/// a warp runs one kind's code (the paper's grouped warps). The slots between
+/// `start + capacity` and the next range's start are padding and never live.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SlotRange {
+    /// First slot.
+    pub start: u32,
+    /// Number of usable slots.
+    pub capacity: u32,
+}
+
+impl SlotRange {
+    /// One past the last usable slot.
+    #[inline(always)]
+    pub fn end(&self) -> u32 {
+        self.start + self.capacity
+    }
+}

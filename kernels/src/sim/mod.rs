@@ -1,0 +1,32 @@
+//! The simulation core (paper sections 5 and 6): bodies as a structure of arrays, the
+//! uniform-grid broad phase, the narrow phase with collision response, and the Euler
+//! integrator. A step runs, in order:
+//!
+//! 1. [`broad::assign_cells`]: the grid cell of every live body (dead slots get a key past
+//!    the last cell);
+//! 2. the counting sort of (cell, slot) pairs (`crate::primitives::sort`), which keeps slot
+//!    order inside a cell;
+//! 3. [`broad::cell_bounds`]: where each cell's run starts and ends in the sorted order;
+//! 4. [`narrow::collide`]: each body tests the bodies of its 3×3 cell neighbourhood and sums
+//!    its own response (position push, velocity kick, energy loss);
+//! 5. [`integrate::integrate`]: explicit Euler and the world's boundary rule; bodies out of
+//!    energy die;
+//! 6. [`free_list::mark_free`], a prefix sum, [`free_list::gather_free`]: the free slots of
+//!    each kind's range, in slot order, for the master thread to hand out.
+//!
+//! Every kernel writes only its own slot's elements, and reads what others write only in a
+//! later launch: no barriers, no float atomics, the same bits on every backend.
+
+pub mod bodies;
+pub mod broad;
+pub mod contact;
+pub mod free_list;
+pub mod integrate;
+pub mod kinds;
+pub mod narrow;
+pub mod scatter;
+pub mod space;
+
+pub use bodies::{Bodies, Contacts};
+pub use kinds::{KindInfo, SlotRange};
+pub use space::Space;

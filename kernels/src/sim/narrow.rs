@@ -1,0 +1,130 @@
+//! The narrow phase and collision response (paper 6.2).
+//!
+//! Each live body tests the bodies its grid neighbourhood holds and sums its own side of every
+//! contact: a push that separates the pair in proportion to the inverse masses, an impulse
+//! that removes (1 + restitution) of the approaching normal velocity, and the energy the
+//! other body's kind takes per step of contact. Both threads of a pair see the same contact
+//! (see [`super::contact`]) and the same pre-step state, so their responses are equal and
+//! opposite without either writing the other's slot.
+
+use glam::Vec2;
+
+use super::bodies::{Bodies, Contacts};
+use super::broad::CellIndex;
+use super::contact::{contact, tie_break};
+use super::kinds::KindInfo;
+use super::space::Space;
+use crate::{DevSlice, KernelArgs, Thread};
+
+/// Arguments of [`collide`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CollideArgs {
+    /// The bodies; energy is updated in place, the rest is read.
+    pub bodies: Bodies,
+    /// Kind table.
+    pub kinds: DevSlice<KindInfo>,
+    /// The world and its grid.
+    pub space: Space,
+    /// The sorted grid of this step.
+    pub grid: CellIndex,
+    /// Output: each slot's response (zero for free slots).
+    pub contacts: Contacts,
+}
+// SAFETY: repr(C) plain data.
+unsafe impl KernelArgs for CollideArgs {}
+
+/// `1 / mass`; zero for an immovable (infinitely heavy) body.
+#[inline(always)]
+pub fn inverse_mass(mass: f32) -> f32 {
+    1.0 / mass
+}
+
+/// The response of body `a` to one contact with body `b`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Response {
+    /// Displacement of `a`.
+    pub push: Vec2,
+    /// Velocity change of `a`.
+    pub kick: Vec2,
+}
+
+/// Body `a`'s share of resolving a contact whose `normal` points from `a` to `b`: inverse
+/// masses `inv_a`, `inv_b`, velocities `vel_a`, `vel_b`, restitution `e`.
+#[inline(always)]
+pub fn respond(
+    normal: Vec2,
+    depth: f32,
+    (inv_a, inv_b): (f32, f32),
+    (vel_a, vel_b): (Vec2, Vec2),
+    e: f32,
+) -> Response {
+    let weight = inv_a + inv_b;
+    if !(weight > 0.0) {
+        // Two immovable bodies: nothing gives way.
+        return Response::default();
+    }
+    let share = inv_a / weight;
+    let push = normal * (-depth * share);
+    // Normal component of b's velocity relative to a: negative while they approach.
+    let approach = (vel_b - vel_a).dot(normal);
+    let kick = if approach < 0.0 {
+        let impulse = -(1.0 + e) * approach / weight;
+        normal * (-impulse * inv_a)
+    } else {
+        Vec2::ZERO
+    };
+    Response { push, kick }
+}
+
+/// Thread `i` sums the responses of slot `i` to every body it overlaps and applies the
+/// energy losses to slot `i` only.
+#[inline(always)]
+pub fn collide(t: Thread, args: &CollideArgs) {
+    let bodies = &args.bodies;
+    let out = &args.contacts;
+    let slot = t.global();
+    if slot >= bodies.slots() {
+        return;
+    }
+    let mut push = Vec2::ZERO;
+    let mut kick = Vec2::ZERO;
+    let mut count = 0u32;
+    if bodies.is_alive(slot) {
+        let kind = bodies.kind.get(slot);
+        let info = args.kinds.get(kind);
+        let pos = bodies.pos.get(slot);
+        let vel = bodies.vel.get(slot);
+        let inv = inverse_mass(bodies.mass.get(slot));
+        let mut damage = 0i32;
+        args.grid.for_each_near(&args.space, pos, |other| {
+            let other_kind = bodies.kind.get(other);
+            if other == slot || !info.collides_with(other_kind) {
+                return;
+            }
+            let other_info = args.kinds.get(other_kind);
+            let d = args.space.offset(pos, bodies.pos.get(other));
+            let tie = tie_break(slot, other);
+            if let Some(c) = contact(info.bound(), other_info.bound(), d, tie) {
+                let r = respond(
+                    c.normal,
+                    c.depth,
+                    (inv, inverse_mass(bodies.mass.get(other))),
+                    (vel, bodies.vel.get(other)),
+                    info.restitution.max(other_info.restitution),
+                );
+                push += r.push;
+                kick += r.kick;
+                count += 1;
+                damage = damage.saturating_add(other_info.damage);
+            }
+        });
+        if damage != 0 {
+            let energy = bodies.energy.get(slot);
+            bodies.energy.set(slot, energy.saturating_sub(damage));
+        }
+    }
+    out.push.set(slot, push);
+    out.kick.set(slot, kick);
+    out.count.set(slot, count);
+}

@@ -1,0 +1,52 @@
+//! Bringing bodies to life at random places, drawn from each slot's own generator.
+
+use glam::Vec2;
+
+use super::bodies::Bodies;
+use super::space::Space;
+use crate::{DevSlice, KernelArgs, Thread};
+
+/// Arguments of [`scatter`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct ScatterArgs {
+    /// The bodies; the chosen slots are (re)initialised.
+    pub bodies: Bodies,
+    /// The slots to fill: `count` distinct free slots (a prefix of a free list).
+    pub slots: DevSlice<u32>,
+    /// The world (size and boundary rule).
+    pub space: Space,
+    /// Standard deviation of each velocity component.
+    pub speed: f32,
+    /// Initial energy.
+    pub energy: i32,
+}
+// SAFETY: repr(C) plain data.
+unsafe impl KernelArgs for ScatterArgs {}
+
+/// Thread `t` brings slot `slots[t]` to life: position uniform over the world (two draws),
+/// velocity normal with deviation `speed` per axis (two more, Box–Muller), no force, the
+/// given energy, the machine's initial state, facing its velocity (or `+x` at rest).
+#[inline(always)]
+pub fn scatter(t: Thread, args: &ScatterArgs) {
+    let i = t.global();
+    if i >= args.slots.len() {
+        return;
+    }
+    let b = &args.bodies;
+    let slot = args.slots.get(i);
+    let (pos, vel) = {
+        let mut rng = b.rng.open(slot);
+        let u = Vec2::new(rng.next_f32(), rng.next_f32());
+        let (nx, ny) = rng.next_normal_pair();
+        (u * args.space.size, Vec2::new(nx, ny) * args.speed)
+    };
+    let (pos, vel) = args.space.confine(pos, vel);
+    b.pos.set(slot, pos);
+    b.vel.set(slot, vel);
+    b.force.set(slot, Vec2::ZERO);
+    b.dir.set(slot, vel.try_normalize().unwrap_or(Vec2::X));
+    b.energy.set(slot, args.energy);
+    b.state.set(slot, 0);
+    b.alive.set(slot, 1);
+}

@@ -1,0 +1,169 @@
+//! The world's geometry: its size, its boundary rule and the uniform grid over it.
+
+use glam::Vec2;
+
+/// The world `[0, size.x) × [0, size.y)`, its boundary rule, and the uniform grid that
+/// serves the broad phase and the enemies' vision.
+///
+/// The grid has `cols × rows` equal cells that tile the world exactly; the host picks the
+/// cell at least as large as the largest collision diameter and the largest vision radius, so
+/// anything a body can touch or see lies in its own cell or one of the eight around it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Space {
+    /// Width and height of the world.
+    pub size: Vec2,
+    /// Cells per unit length along each axis (`cols / size.x`, `rows / size.y`).
+    pub inv_cell: Vec2,
+    /// Grid columns (at least 1).
+    pub cols: u32,
+    /// Grid rows (at least 1).
+    pub rows: u32,
+    /// Non-zero: the world wraps around (a torus); zero: bodies are clamped to its edges.
+    pub wrap: u32,
+    /// Keeps the struct free of implicit padding.
+    pub reserved: u32,
+}
+
+impl Space {
+    /// Number of grid cells.
+    #[inline(always)]
+    pub fn cells(&self) -> u32 {
+        self.cols * self.rows
+    }
+
+    /// Whether the world wraps around.
+    #[inline(always)]
+    pub fn wraps(&self) -> bool {
+        self.wrap != 0
+    }
+
+    /// Column and row of the cell holding `pos`. Positions outside the world (and NaN, which
+    /// the float-to-integer conversion maps to 0) land in the nearest border cell.
+    #[inline(always)]
+    pub fn cell_coords(&self, pos: Vec2) -> (u32, u32) {
+        // `as` saturates on both targets: negative and NaN become 0.
+        let col = ((pos.x * self.inv_cell.x) as u32).min(self.cols - 1);
+        let row = ((pos.y * self.inv_cell.y) as u32).min(self.rows - 1);
+        (col, row)
+    }
+
+    /// Index of the cell holding `pos`, row-major.
+    #[inline(always)]
+    pub fn cell_of(&self, pos: Vec2) -> u32 {
+        let (col, row) = self.cell_coords(pos);
+        row * self.cols + col
+    }
+
+    /// The displacement from `from` to `to`: on a wrapping world the shortest one, across
+    /// the seams if that is shorter (both points inside the world).
+    #[inline(always)]
+    pub fn offset(&self, from: Vec2, to: Vec2) -> Vec2 {
+        let d = to - from;
+        if self.wraps() {
+            Vec2::new(shortest(d.x, self.size.x), shortest(d.y, self.size.y))
+        } else {
+            d
+        }
+    }
+
+    /// Brings a position back into the world by the boundary rule: wrapped around, or clamped
+    /// to the edges with the velocity component that points out of the world removed.
+    #[inline(always)]
+    pub fn confine(&self, pos: Vec2, vel: Vec2) -> (Vec2, Vec2) {
+        if self.wraps() {
+            (
+                Vec2::new(wrap(pos.x, self.size.x), wrap(pos.y, self.size.y)),
+                vel,
+            )
+        } else {
+            let (x, vx) = clamp(pos.x, vel.x, self.size.x);
+            let (y, vy) = clamp(pos.y, vel.y, self.size.y);
+            (Vec2::new(x, y), Vec2::new(vx, vy))
+        }
+    }
+
+    /// Calls `visit(cell)` once for each distinct cell of the 3×3 block around the cell of
+    /// `pos`, row by row: on a wrapping world the block wraps around (and a grid narrower
+    /// than three cells is visited once per cell), otherwise it stops at the edges.
+    #[inline(always)]
+    pub fn for_each_neighbour_cell(&self, pos: Vec2, mut visit: impl FnMut(u32)) {
+        let (col, row) = self.cell_coords(pos);
+        let (rows, row_count) = around(row, self.rows, self.wraps());
+        let (cols, col_count) = around(col, self.cols, self.wraps());
+        for &r in &rows[..row_count] {
+            for &c in &cols[..col_count] {
+                visit(r * self.cols + c);
+            }
+        }
+    }
+}
+
+/// The distinct indices among `i - 1, i, i + 1` in `0..n`, wrapped or cut at the ends, in
+/// increasing order of offset.
+#[inline(always)]
+fn around(i: u32, n: u32, wraps: bool) -> ([u32; 3], usize) {
+    if wraps && n < 3 {
+        // Every index is a neighbour; list each once.
+        return ([0, 1, 2], n as usize);
+    }
+    let mut out = [0; 3];
+    let mut len = 0;
+    if i > 0 {
+        out[len] = i - 1;
+        len += 1;
+    } else if wraps {
+        out[len] = n - 1;
+        len += 1;
+    }
+    out[len] = i;
+    len += 1;
+    if i + 1 < n {
+        out[len] = i + 1;
+        len += 1;
+    } else if wraps {
+        out[len] = 0;
+        len += 1;
+    }
+    (out, len)
+}
+
+/// `d` moved by a whole period towards zero when that makes it shorter.
+#[inline(always)]
+fn shortest(d: f32, period: f32) -> f32 {
+    let half = 0.5 * period;
+    if d > half {
+        d - period
+    } else if d < -half {
+        d + period
+    } else {
+        d
+    }
+}
+
+/// `x` wrapped into `[0, period)`. A non-finite `x` becomes 0, so no NaN reaches the grid.
+#[inline(always)]
+fn wrap(x: f32, period: f32) -> f32 {
+    let x = if x >= 0.0 && x < period {
+        x
+    } else {
+        x - period * libm::floorf(x / period)
+    };
+    // The subtraction can round up to `period` itself.
+    if x >= 0.0 && x < period { x } else { 0.0 }
+}
+
+/// `x` clamped to `[0, limit]`, and `v` without the part that pushes further out.
+#[inline(always)]
+fn clamp(x: f32, v: f32, limit: f32) -> (f32, f32) {
+    if x < 0.0 {
+        (0.0, v.max(0.0))
+    } else if x > limit {
+        (limit, v.min(0.0))
+    } else if x >= 0.0 {
+        (x, v)
+    } else {
+        // NaN: back to the origin, at rest along this axis.
+        (0.0, 0.0)
+    }
+}
