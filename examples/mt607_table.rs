@@ -4,7 +4,7 @@
 //! reads a table made once by this program:
 //!
 //! ```text
-//! cargo run --release --example mt607_table -- --seed 4172 --count 16384 --out data/mt607_params.txt
+//! cargo run --release --example mt607_table -- --seed 4172 --count 4096 --out data/mt607_params.txt
 //! ```
 //!
 //! It does what dcmt's `init_dc(seed)` followed by `get_mt_parameter_id(32, 607, id)` for

@@ -7,8 +7,9 @@ use gpuwars_kernels::rng::mt607::{self, Mt607Params};
 pub const TABLE_SEED: u32 = 4172;
 
 /// The committed MT607 parameter sets (`data/mt607_params.txt`, made by
-/// `cargo run --release --example mt607_table -- --seed 4172 --count 16384 --out …`): entry
-/// `id` is dcmt's `get_mt_parameter_id(32, 607, id)` after `init_dc(4172)`.
+/// `cargo run --release --example mt607_table -- --seed 4172 --count 4096 --out …`): entry
+/// `id` is dcmt's `get_mt_parameter_id(32, 607, id)` after `init_dc(4172)`. 4096 sets, as
+/// many as Podlozhnyuk's sample runs generators (`MT_RNG_COUNT`).
 pub const TABLE: &[[u32; 3]] = &include!(concat!(env!("OUT_DIR"), "/mt607_params.rs"));
 
 /// Parameter set `id` of the table.

@@ -157,15 +157,8 @@ impl WorldSpec {
                     check_range(at("half.y"), half.y, (0.0, false), MAX_SIDE)?;
                 }
             }
-            if !(kind.mass > 0.0) {
-                return Err(error(
-                    at("mass"),
-                    format!(
-                        "{} is out of range (allowed > 0, or inf for immovable)",
-                        kind.mass
-                    ),
-                ));
-            }
+            // inf: an immovable body.
+            check_range(at("mass"), kind.mass, (0.0, false), f32::INFINITY)?;
             if kind.capacity == 0 {
                 return Err(error(
                     at("capacity"),
@@ -185,15 +178,8 @@ impl WorldSpec {
                 ));
             }
             check_range(at("restitution"), kind.restitution, (0.0, true), 1.0)?;
-            if !(kind.max_speed > 0.0) {
-                return Err(error(
-                    at("max_speed"),
-                    format!(
-                        "{} is out of range (allowed > 0, or inf for no limit)",
-                        kind.max_speed
-                    ),
-                ));
-            }
+            // inf: no speed limit.
+            check_range(at("max_speed"), kind.max_speed, (0.0, false), f32::INFINITY)?;
             for (c, other) in kind.collides_with.iter().enumerate() {
                 if !self.kinds.iter().any(|k| &k.name == other) {
                     return Err(error(

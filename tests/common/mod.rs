@@ -2,6 +2,8 @@
 //! each test, and plain host references that the kernels are checked against.
 #![allow(dead_code)] // each test binary uses its own part of this module
 
+pub mod sim;
+
 use std::io::Write;
 use std::sync::OnceLock;
 

@@ -51,14 +51,14 @@ fn flip(c: Contact) -> Contact {
 #[inline(always)]
 fn circle_circle(reach: f32, d: Vec2, tie: Vec2) -> Option<Contact> {
     let dist2 = d.length_squared();
-    if !(dist2 < reach * reach) {
-        return None;
-    }
-    let dist = libm::sqrtf(dist2);
-    let normal = if dist > 0.0 { d / dist } else { tie };
-    Some(Contact {
-        normal,
-        depth: reach - dist,
+    // Written so that NaN fails the test.
+    (dist2 < reach * reach).then(|| {
+        let dist = libm::sqrtf(dist2);
+        let normal = if dist > 0.0 { d / dist } else { tie };
+        Contact {
+            normal,
+            depth: reach - dist,
+        }
     })
 }
 
@@ -85,13 +85,12 @@ fn circle_rect(r: f32, half: Vec2, d: Vec2, tie: Vec2) -> Option<Contact> {
     }
     let towards = closest - p;
     let dist2 = towards.length_squared();
-    if !(dist2 < r * r) {
-        return None;
-    }
-    let dist = libm::sqrtf(dist2);
-    Some(Contact {
-        normal: towards / dist,
-        depth: r - dist,
+    (dist2 < r * r).then(|| {
+        let dist = libm::sqrtf(dist2);
+        Contact {
+            normal: towards / dist,
+            depth: r - dist,
+        }
     })
 }
 

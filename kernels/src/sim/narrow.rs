@@ -60,7 +60,7 @@ pub fn respond(
     e: f32,
 ) -> Response {
     let weight = inv_a + inv_b;
-    if !(weight > 0.0) {
+    if weight <= 0.0 || weight.is_nan() {
         // Two immovable bodies: nothing gives way.
         return Response::default();
     }
