@@ -23,70 +23,55 @@ fn valid() -> WorldSpec {
 
 #[test]
 fn invalid_worlds_are_refused_with_the_field_and_the_allowed_range() {
-    let cases: Vec<(Box<dyn Fn(&mut WorldSpec)>, &str)> = vec![
+    let cases: Vec<(fn(&mut WorldSpec), &str)> = vec![
         (
-            Box::new(|w| w.dt = f32::NAN),
+            |w| w.dt = f32::NAN,
             "dt: NaN is out of range (allowed (0, 1])",
         ),
-        (Box::new(|w| w.size.x = -3.0), "size.x: -3 is out of range"),
+        (|w| w.size.x = -3.0, "size.x: -3 is out of range"),
+        (|w| w.size.y = f32::INFINITY, "size.y: inf is out of range"),
         (
-            Box::new(|w| w.size.y = f32::INFINITY),
-            "size.y: inf is out of range",
-        ),
-        (
-            Box::new(|w| w.vision = -1.0),
+            |w| w.vision = -1.0,
             "vision: -1 is out of range (allowed [0,",
         ),
+        (|w| w.kinds.clear(), "kinds: 0 kinds (allowed 1 to 32)"),
         (
-            Box::new(|w| w.kinds.clear()),
-            "kinds: 0 kinds (allowed 1 to 32)",
-        ),
-        (
-            Box::new(|w| w.kinds[0].shape = circle(0.0)),
+            |w| w.kinds[0].shape = circle(0.0),
             "kinds[0] (ship).radius: 0 is out of range",
         ),
         (
-            Box::new(|w| w.kinds[1].shape = rect(1.0, f32::NAN)),
+            |w| w.kinds[1].shape = rect(1.0, f32::NAN),
             "kinds[1] (enemy).half.y: NaN",
         ),
         (
-            Box::new(|w| w.kinds[2].mass = 0.0),
+            |w| w.kinds[2].mass = 0.0,
             "kinds[2] (shot).mass: 0 is out of range",
         ),
+        (|w| w.kinds[2].capacity = 0, "kinds[2] (shot).capacity: 0"),
+        (|w| w.kinds[2].energy = 0, "kinds[2] (shot).energy: 0"),
+        (|w| w.kinds[2].damage = -1, "kinds[2] (shot).damage: -1"),
         (
-            Box::new(|w| w.kinds[2].capacity = 0),
-            "kinds[2] (shot).capacity: 0",
-        ),
-        (
-            Box::new(|w| w.kinds[2].energy = 0),
-            "kinds[2] (shot).energy: 0",
-        ),
-        (
-            Box::new(|w| w.kinds[2].damage = -1),
-            "kinds[2] (shot).damage: -1",
-        ),
-        (
-            Box::new(|w| w.kinds[1].restitution = 1.5),
+            |w| w.kinds[1].restitution = 1.5,
             "kinds[1] (enemy).restitution: 1.5",
         ),
         (
-            Box::new(|w| w.kinds[1].max_speed = 0.0),
+            |w| w.kinds[1].max_speed = 0.0,
             "kinds[1] (enemy).max_speed: 0",
         ),
         (
-            Box::new(|w| w.kinds[2].name = "ship".into()),
+            |w| w.kinds[2].name = "ship".into(),
             "kinds[2] (ship).name: is used",
         ),
         (
-            Box::new(|w| w.kinds[0].name = " ".into()),
+            |w| w.kinds[0].name = " ".into(),
             "kinds[0].name: must not be empty",
         ),
         (
-            Box::new(|w| w.kinds[0].collides_with.push("ghost".into())),
+            |w| w.kinds[0].collides_with.push("ghost".into()),
             "kinds[0] (ship).collides_with[1]: no kind is named `ghost`",
         ),
         (
-            Box::new(|w| w.kinds[1].capacity = 1 << 24),
+            |w| w.kinds[1].capacity = 1 << 24,
             "kinds: 16777312 slots in all (allowed at most 16777216)",
         ),
     ];
