@@ -21,9 +21,12 @@ fn valid() -> WorldSpec {
     )
 }
 
+/// A change that makes a valid world invalid.
+type Breaks = fn(&mut WorldSpec);
+
 #[test]
 fn invalid_worlds_are_refused_with_the_field_and_the_allowed_range() {
-    let cases: Vec<(fn(&mut WorldSpec), &str)> = vec![
+    let cases: Vec<(Breaks, &str)> = vec![
         (
             |w| w.dt = f32::NAN,
             "dt: NaN is out of range (allowed (0, 1])",
