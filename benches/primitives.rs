@@ -10,24 +10,18 @@
 use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use gpuwars::Device;
 use gpuwars::primitives::{CountingSort, PrefixSum, histogram};
-use gpuwars::{BackendRequest, Device};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
+
+mod common;
+use common::device;
 
 /// 2^20 and the 2^24 of the recorded GPU figures.
 const SIZES: &[usize] = &[1 << 20, 1 << 24];
 /// Bins of the histogram and key bound of the sort: a 64×64 grid of cells (three sort passes).
 const CELLS: u32 = 4096;
-
-fn device() -> Device {
-    let request = match std::env::var("GPUWARS_BACKEND").as_deref() {
-        Ok("cpu") => BackendRequest::Cpu,
-        Ok("cuda") => BackendRequest::Cuda,
-        _ => BackendRequest::Auto,
-    };
-    Device::select(request, None).expect("the backend opens")
-}
 
 fn random_keys(n: usize, bound: u32) -> Vec<u32> {
     let mut rng = StdRng::seed_from_u64(n as u64);

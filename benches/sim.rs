@@ -9,20 +9,13 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use gpuwars::sim::Simulation;
-use gpuwars::{BackendRequest, Device};
+
+mod common;
+use common::device;
 
 #[path = "../tests/common/sim.rs"]
 #[allow(dead_code)]
 mod worlds;
-
-fn device() -> Device {
-    let request = match std::env::var("GPUWARS_BACKEND").as_deref() {
-        Ok("cpu") => BackendRequest::Cpu,
-        Ok("cuda") => BackendRequest::Cuda,
-        _ => BackendRequest::Auto,
-    };
-    Device::select(request, None).expect("the backend opens")
-}
 
 fn step(c: &mut Criterion) {
     let device = device();
