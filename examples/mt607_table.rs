@@ -88,6 +88,13 @@ fn main() -> anyhow::Result<()> {
             p.matrix_a, p.mask_b, p.mask_c
         )?;
     }
+    // A temporary file is private (0600); the table is ordinary data.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        file.as_file()
+            .set_permissions(std::fs::Permissions::from_mode(0o644))?;
+    }
     file.persist(&args.out)
         .with_context(|| format!("writing {}", args.out.display()))?;
     eprintln!(
