@@ -62,32 +62,23 @@ impl Snapshot {
     pub fn state_hash(&self) -> u64 {
         let mut h = Xxh3::new();
         h.update(&self.steps.to_le_bytes());
-        let words = |h: &mut Xxh3, values: &[u32]| {
-            for v in values {
-                h.update(&v.to_le_bytes());
-            }
-        };
+        let mut word = |w: u32| h.update(&w.to_le_bytes());
         for s in self.live() {
-            let v = [self.pos[s], self.vel[s], self.force[s], self.dir[s]];
-            let floats: Vec<u32> = v
-                .iter()
-                .flat_map(|v| [v.x.to_bits(), v.y.to_bits()])
-                .collect();
-            words(&mut h, &[s as u32, self.kind[s]]);
-            words(&mut h, &floats);
-            words(
-                &mut h,
-                &[
-                    self.energy[s] as u32,
-                    self.mass[s].to_bits(),
-                    self.state[s],
-                    self.rng_index[s],
-                ],
-            );
-            let rng: Vec<u32> = (0..mt607::N).map(|k| self.rng_word(s, k)).collect();
-            words(&mut h, &rng);
+            word(s as u32);
+            word(self.kind[s]);
+            for v in [self.pos[s], self.vel[s], self.force[s], self.dir[s]] {
+                word(v.x.to_bits());
+                word(v.y.to_bits());
+            }
+            word(self.energy[s] as u32);
+            word(self.mass[s].to_bits());
+            word(self.state[s]);
+            word(self.rng_index[s]);
+            for k in 0..mt607::N {
+                word(self.rng_word(s, k));
+            }
         }
-        words(&mut h, &self.free_counts);
+        self.free_counts.iter().for_each(|&c| word(c));
         h.digest()
     }
 }

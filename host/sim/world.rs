@@ -67,6 +67,23 @@ impl BodyBuffers {
     }
 }
 
+/// The narrow phase's per-slot response.
+struct ContactBuffers {
+    push: Buffer<Vec2>,
+    kick: Buffer<Vec2>,
+    count: Buffer<u32>,
+}
+
+impl ContactBuffers {
+    fn view(&self) -> Contacts {
+        Contacts {
+            push: self.push.view(),
+            kick: self.kick.view(),
+            count: self.count.view(),
+        }
+    }
+}
+
 /// The sorted grid of the broad phase.
 struct BroadPhase {
     keys: Buffer<u32>,
@@ -107,8 +124,7 @@ pub struct Simulation<'d> {
     kinds: Buffer<KindInfo>,
     ranges: Buffer<SlotRange>,
     bodies: BodyBuffers,
-    contacts: [Buffer<Vec2>; 2],
-    contact_count: Buffer<u32>,
+    contacts: ContactBuffers,
     broad: BroadPhase,
     free: FreeLists,
     steps: u64,
@@ -156,8 +172,11 @@ impl<'d> Simulation<'d> {
             kinds: device.upload(&layout::kind_table(spec))?,
             ranges: device.upload(&layout.ranges)?,
             bodies,
-            contacts: [device.alloc_zeroed(n)?, device.alloc_zeroed(n)?],
-            contact_count: device.alloc_zeroed(n)?,
+            contacts: ContactBuffers {
+                push: device.alloc_zeroed(n)?,
+                kick: device.alloc_zeroed(n)?,
+                count: device.alloc_zeroed(n)?,
+            },
             broad: BroadPhase {
                 keys: device.alloc_zeroed(n)?,
                 sorted_keys: device.alloc_zeroed(n)?,
@@ -248,11 +267,7 @@ impl<'d> Simulation<'d> {
     pub fn step(&mut self) -> Result<(), Error> {
         let bodies = self.bodies.view();
         let slots = self.layout.slots;
-        let contacts = Contacts {
-            push: self.contacts[0].view(),
-            kick: self.contacts[1].view(),
-            count: self.contact_count.view(),
-        };
+        let contacts = self.contacts.view();
         if self.collisions {
             self.build_grid()?;
             let collide = CollideArgs {
@@ -296,7 +311,7 @@ impl<'d> Simulation<'d> {
             &mut broad.sorted_keys,
             &mut broad.sorted_slots,
         )?;
-        self.device.zero(&mut broad.start)?;
+        // An empty cell needs only `end` = 0: its run `start..0` is empty whatever `start`.
         self.device.zero(&mut broad.end)?;
         let bounds = BoundsArgs {
             grid: broad.index(),
@@ -355,7 +370,7 @@ impl<'d> Simulation<'d> {
             state: d.download(&b.state)?,
             rng_words: d.download(&b.rng_words)?,
             rng_index: d.download(&b.rng_index)?,
-            contacts: d.download(&self.contact_count)?,
+            contacts: d.download(&self.contacts.count)?,
             free_counts: d.download(&self.free.count)?,
             free_list: d.download(&self.free.list)?,
         })

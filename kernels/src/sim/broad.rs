@@ -51,9 +51,9 @@ pub struct CellIndex {
     pub slots: DevSlice<u32>,
     /// The cell of each entry of `slots` (the sorted keys).
     pub keys: DevSlice<u32>,
-    /// First entry of each cell in `slots` (0 for an empty cell).
+    /// First entry of each cell in `slots` (stale for an empty cell).
     pub start: DevSlice<u32>,
-    /// One past the last entry of each cell (0 for an empty cell).
+    /// One past the last entry of each cell (0 for an empty cell, so its run is empty).
     pub end: DevSlice<u32>,
 }
 
@@ -75,7 +75,7 @@ impl CellIndex {
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct BoundsArgs {
-    /// The sorted grid; `start` and `end` are the outputs and must be zeroed before.
+    /// The sorted grid; `start` and `end` are the outputs, and `end` must be zeroed before.
     pub grid: CellIndex,
     /// Number of cells; keys not below it (free slots) are skipped.
     pub cells: u32,
