@@ -72,6 +72,10 @@ pub fn kind_table(spec: &WorldSpec) -> Vec<KindInfo> {
                 damage: kind.damage,
                 restitution: kind.restitution,
                 max_speed: kind.max_speed,
+                energy: kind.energy,
+                lifetime: steps(kind.lifetime, spec.dt),
+                machine: kind.behaviour.map_or(0, |b| b.machine as u32),
+                reserved: 0,
             }
         })
         .collect()
@@ -89,7 +93,7 @@ pub fn space(spec: &WorldSpec) -> Space {
         .filter(|(_, mask)| **mask != 0)
         .map(|(kind, _)| 2.0 * kind.shape.reach())
         .fold(0.0f32, f32::max);
-    let cell = touch.max(spec.vision) * CELL_MARGIN;
+    let cell = touch.max(spec.max_vision()) * CELL_MARGIN;
     let fit = |side: f32| {
         if cell > 0.0 {
             ((side / cell) as u32).clamp(1, MAX_CELLS)
@@ -112,5 +116,15 @@ pub fn space(spec: &WorldSpec) -> Space {
         rows,
         wrap: u32::from(spec.boundary == Boundary::Wrap),
         reserved: 0,
+    }
+}
+
+/// Whole steps of `dt` in `seconds`, at least 1; 0 for an infinite time (no limit).
+pub fn steps(seconds: f32, dt: f32) -> u32 {
+    if seconds.is_finite() {
+        // `as` saturates: absurdly long times become the longest representable.
+        ((seconds / dt).round() as u32).max(1)
+    } else {
+        0
     }
 }

@@ -13,6 +13,7 @@
 #![warn(missing_docs)]
 
 pub mod exec;
+pub mod game;
 pub mod primitives;
 pub mod registry;
 pub mod rng;

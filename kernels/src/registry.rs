@@ -4,6 +4,7 @@
 //! [`ALL`], and, on nvptx, the `extern "ptx-kernel"` entry point that calls the body. Because
 //! the entry's name and the constant's `name` come from the same identifier, they cannot drift.
 
+use crate::game::{ai, autopilot, master};
 use crate::primitives::{histogram, scan, sort};
 use crate::sim::{broad, free_list, integrate, narrow, scatter};
 use crate::{Kernel, KernelInfo};
@@ -55,6 +56,8 @@ kernels! {
     CELL_BOUNDS = cell_bounds(broad::BoundsArgs) => broad::cell_bounds;
     /// Narrow phase: each body's collision response to its neighbours, and energy losses.
     COLLIDE = collide(narrow::CollideArgs) => narrow::collide;
+    /// The narrow phase for worlds of circles only (no rectangle tests).
+    COLLIDE_CIRCLES = collide_circles(narrow::CollideArgs) => narrow::collide_circles;
     /// Euler integration, the boundary rule, and deaths.
     INTEGRATE = integrate(integrate::IntegrateArgs) => integrate::integrate;
     /// Flags the free usable slots (first step of rebuilding the free lists).
@@ -63,4 +66,16 @@ kernels! {
     GATHER_FREE = gather_free(free_list::GatherArgs) => free_list::gather_free;
     /// Brings bodies to life at random places from their slots' generators.
     SCATTER = scatter(scatter::ScatterArgs) => scatter::scatter;
+    /// The master thread: ship, shots, score, FPS meter, game over, spawn counts (one thread).
+    MASTER = master(master::MasterArgs) => master::master;
+    /// Brings the enemies the master thread ordered to life at random places.
+    BIRTHS = births(master::BirthArgs) => master::births;
+    /// The kamikaze machine for one kind's slots: perceive, transition, steer.
+    THINK_KAMIKAZE = think_kamikaze(ai::ThinkArgs) => ai::think_kamikaze;
+    /// The group machine for one kind's slots: perceive, transition, steer.
+    THINK_GROUP = think_group(ai::ThinkArgs) => ai::think_group;
+    /// The tricky machine for one kind's slots: perceive, transition, steer, recover.
+    THINK_TRICKY = think_tricky(ai::ThinkArgs) => ai::think_tricky;
+    /// The autopilot: the ship's input from what lies around it (one thread).
+    AUTOPILOT = autopilot(autopilot::AutopilotArgs) => autopilot::autopilot;
 }

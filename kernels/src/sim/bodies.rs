@@ -28,6 +28,8 @@ pub struct Bodies {
     pub alive: DevSlice<u32>,
     /// State of the body's finite-state machine (0 at birth).
     pub state: DevSlice<u32>,
+    /// Steps lived since birth (bodies of kinds with a lifetime die when it is reached).
+    pub age: DevSlice<u32>,
     /// The slot's random number generator.
     pub rng: RngStreams,
 }
@@ -56,4 +58,6 @@ pub struct Contacts {
     pub kick: DevSlice<Vec2>,
     /// Number of bodies it touched this step.
     pub count: DevSlice<u32>,
+    /// Energy it lost to those contacts this step.
+    pub damage: DevSlice<i32>,
 }

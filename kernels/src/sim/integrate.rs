@@ -50,9 +50,10 @@ pub fn limit_speed(vel: Vec2, max_speed: f32) -> Vec2 {
     }
 }
 
-/// Thread `i` advances slot `i`: a body left without energy by the narrow phase dies;
-/// otherwise the collision kick and the force change its velocity, its velocity and the
-/// collision push move it, and the boundary rule keeps it in the world.
+/// Thread `i` advances slot `i`: a body dies if the narrow phase left it without energy (for
+/// kinds without a machine, see [`KindInfo::dies_at_zero_energy`]) or it reaches its kind's
+/// lifetime; otherwise the collision kick and the force change its velocity, its velocity and
+/// the collision push move it, and the boundary rule keeps it in the world.
 #[inline(always)]
 pub fn integrate(t: Thread, args: &IntegrateArgs) {
     let bodies = &args.bodies;
@@ -60,11 +61,13 @@ pub fn integrate(t: Thread, args: &IntegrateArgs) {
     if slot >= bodies.slots() || !bodies.is_alive(slot) {
         return;
     }
-    if bodies.energy.get(slot) <= 0 {
+    let info = args.kinds.get(bodies.kind.get(slot));
+    let age = bodies.age.get(slot).saturating_add(1);
+    if (bodies.energy.get(slot) <= 0 && info.dies_at_zero_energy()) || info.expired(age) {
         bodies.alive.set(slot, 0);
         return;
     }
-    let info = args.kinds.get(bodies.kind.get(slot));
+    bodies.age.set(slot, age);
     let accel = bodies.force.get(slot) * inverse_mass(bodies.mass.get(slot));
     let (pos, vel) = euler(
         bodies.pos.get(slot),

@@ -37,6 +37,16 @@ pub struct KindInfo {
     pub restitution: f32,
     /// Speed limit (`f32::INFINITY` for none).
     pub max_speed: f32,
+    /// Energy at birth.
+    pub energy: i32,
+    /// Steps a body lives (0: no limit).
+    pub lifetime: u32,
+    /// The finite-state machine that drives this kind (`crate::game::fsm::Machine` as u32;
+    /// 0: none). A body with a machine dies when its machine says so, not when its energy
+    /// runs out, so that the machine's "checking energy" and "dead" states see it happen.
+    pub machine: u32,
+    /// Keeps the struct free of implicit padding.
+    pub reserved: u32,
 }
 
 impl KindInfo {
@@ -48,6 +58,18 @@ impl KindInfo {
         } else {
             Bound::Circle(self.radius)
         }
+    }
+
+    /// Whether this kind's bodies die as soon as their energy runs out (no machine decides).
+    #[inline(always)]
+    pub fn dies_at_zero_energy(&self) -> bool {
+        self.machine == 0
+    }
+
+    /// Whether a body of this kind that has lived `age` steps has reached its lifetime.
+    #[inline(always)]
+    pub fn expired(&self, age: u32) -> bool {
+        self.lifetime != 0 && age >= self.lifetime
     }
 
     /// Whether bodies of this kind collide with bodies of kind `other`.

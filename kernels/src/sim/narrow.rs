@@ -12,7 +12,7 @@ use glam::Vec2;
 use super::bodies::{Bodies, Contacts};
 use super::broad::CellIndex;
 use super::contact::{contact, tie_break};
-use super::kinds::KindInfo;
+use super::kinds::{Bound, KindInfo};
 use super::space::Space;
 use crate::{DevSlice, KernelArgs, Thread};
 
@@ -78,9 +78,31 @@ pub fn respond(
 }
 
 /// Thread `i` sums the responses of slot `i` to every body it overlaps and applies the
-/// energy losses to slot `i` only.
+/// energy losses to slot `i` only. Any mix of circles and rectangles.
 #[inline(always)]
 pub fn collide(t: Thread, args: &CollideArgs) {
+    collide_bounds::<true>(t, args);
+}
+
+/// [`collide`] for worlds without rectangles: the rectangle tests are compiled out.
+#[inline(always)]
+pub fn collide_circles(t: Thread, args: &CollideArgs) {
+    collide_bounds::<false>(t, args);
+}
+
+/// The bound of a kind; with `RECTS` false every kind is taken as its circle, which is exact
+/// when the world has no rectangles and lets the compiler drop the rectangle tests.
+#[inline(always)]
+fn bound<const RECTS: bool>(info: &KindInfo) -> Bound {
+    if RECTS {
+        info.bound()
+    } else {
+        Bound::Circle(info.radius)
+    }
+}
+
+#[inline(always)]
+fn collide_bounds<const RECTS: bool>(t: Thread, args: &CollideArgs) {
     let bodies = &args.bodies;
     let out = &args.contacts;
     let slot = t.global();
@@ -90,13 +112,13 @@ pub fn collide(t: Thread, args: &CollideArgs) {
     let mut push = Vec2::ZERO;
     let mut kick = Vec2::ZERO;
     let mut count = 0u32;
+    let mut damage = 0i32;
     if bodies.is_alive(slot) {
         let kind = bodies.kind.get(slot);
         let info = args.kinds.get(kind);
         let pos = bodies.pos.get(slot);
         let vel = bodies.vel.get(slot);
         let inv = inverse_mass(bodies.mass.get(slot));
-        let mut damage = 0i32;
         args.grid.for_each_near(&args.space, pos, |other| {
             let other_kind = bodies.kind.get(other);
             if other == slot || !info.collides_with(other_kind) {
@@ -105,7 +127,7 @@ pub fn collide(t: Thread, args: &CollideArgs) {
             let other_info = args.kinds.get(other_kind);
             let d = args.space.offset(pos, bodies.pos.get(other));
             let tie = tie_break(slot, other);
-            if let Some(c) = contact(info.bound(), other_info.bound(), d, tie) {
+            if let Some(c) = contact(bound::<RECTS>(&info), bound::<RECTS>(&other_info), d, tie) {
                 let r = respond(
                     c.normal,
                     c.depth,
@@ -127,4 +149,5 @@ pub fn collide(t: Thread, args: &CollideArgs) {
     out.push.set(slot, push);
     out.kick.set(slot, kick);
     out.count.set(slot, count);
+    out.damage.set(slot, damage);
 }

@@ -24,9 +24,8 @@ pub struct ScatterArgs {
 // SAFETY: repr(C) plain data.
 unsafe impl KernelArgs for ScatterArgs {}
 
-/// Thread `t` brings slot `slots[t]` to life: position uniform over the world (two draws),
-/// velocity normal with deviation `speed` per axis (two more, Box–Muller), no force, the
-/// given energy, the machine's initial state, facing its velocity (or `+x` at rest).
+/// Thread `t` brings slot `slots[t]` to life at a uniformly random place (see
+/// [`random_place`]), velocity normal with deviation `speed` per axis, with the given energy.
 #[inline(always)]
 pub fn scatter(t: Thread, args: &ScatterArgs) {
     let i = t.global();
@@ -35,18 +34,31 @@ pub fn scatter(t: Thread, args: &ScatterArgs) {
     }
     let b = &args.bodies;
     let slot = args.slots.get(i);
-    let (pos, vel) = {
-        let mut rng = b.rng.open(slot);
-        let u = Vec2::new(rng.next_f32(), rng.next_f32());
-        let (nx, ny) = rng.next_normal_pair();
-        (u * args.space.size, Vec2::new(nx, ny) * args.speed)
-    };
-    let (pos, vel) = args.space.confine(pos, vel);
+    let (pos, vel) = random_place(b, slot, &args.space, args.speed);
+    birth(b, &args.space, slot, (pos, vel), args.energy);
+}
+
+/// A uniformly random position in the world (two draws) and a normal velocity of deviation
+/// `speed` per axis (two more, Box–Muller), from `slot`'s own generator.
+#[inline(always)]
+pub fn random_place(b: &Bodies, slot: u32, space: &Space, speed: f32) -> (Vec2, Vec2) {
+    let mut rng = b.rng.open(slot);
+    let u = Vec2::new(rng.next_f32(), rng.next_f32());
+    let (nx, ny) = rng.next_normal_pair();
+    (u * space.size, Vec2::new(nx, ny) * speed)
+}
+
+/// Brings `slot` to life at `place` = (position, velocity), kept inside the world: no force,
+/// `energy`, age 0, its machine's initial state, facing its velocity (or `+x` at rest).
+#[inline(always)]
+pub fn birth(b: &Bodies, space: &Space, slot: u32, place: (Vec2, Vec2), energy: i32) {
+    let (pos, vel) = space.confine(place.0, place.1);
     b.pos.set(slot, pos);
     b.vel.set(slot, vel);
     b.force.set(slot, Vec2::ZERO);
     b.dir.set(slot, vel.try_normalize().unwrap_or(Vec2::X));
-    b.energy.set(slot, args.energy);
+    b.energy.set(slot, energy);
     b.state.set(slot, 0);
+    b.age.set(slot, 0);
     b.alive.set(slot, 1);
 }

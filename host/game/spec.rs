@@ -1,0 +1,84 @@
+//! A scene's game rules, as the host describes them: the ship and its gun, the FPS meter and
+//! the spawn schedule. With a [`WorldSpec`] they make a [`Scene`].
+
+use crate::sim::WorldSpec;
+
+/// The ship and its gun.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShipSpec {
+    /// Name of the ship's kind (capacity 1, no behaviour).
+    pub kind: String,
+    /// Speed at full stick (> 0).
+    pub speed: f32,
+    /// Shots per second (> 0).
+    pub fire_rate: f32,
+    /// Name of the shots' kind (no behaviour).
+    pub shot: String,
+    /// Speed of a shot (> 0).
+    pub shot_speed: f32,
+    /// How far the autopilot looks (> 0); the grid cells are made at least this large.
+    pub autopilot_sight: f32,
+}
+
+/// The FPS meter: the paper's measure of the ship's health.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FpsSpec {
+    /// The meter at full energy (> 0).
+    pub start: f32,
+    /// Game over below this (0 to `start`).
+    pub min: f32,
+    /// FPS recovered per second (≥ 0).
+    pub recovery: f32,
+}
+
+/// One entry of the spawn schedule.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WaveSpec {
+    /// Name of the kind spawned (not the ship's nor the shots').
+    pub kind: String,
+    /// Seconds from the start of the first spawn (≥ 0).
+    pub at: f32,
+    /// Bodies per spawn (≥ 1; fewer if the kind has fewer free slots).
+    pub count: u32,
+    /// Seconds between spawns (> 0), if it repeats.
+    pub every: Option<f32>,
+    /// Number of spawns (≥ 1; exactly 1 if it does not repeat).
+    pub times: u32,
+    /// Standard deviation of each velocity component at birth (≥ 0).
+    pub speed: f32,
+}
+
+/// When and how enemies appear.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpawnSpec {
+    /// Enemies appear at least this far from the ship when a few random tries allow (≥ 0).
+    pub distance: f32,
+    /// The schedule.
+    pub waves: Vec<WaveSpec>,
+}
+
+/// The rules on top of the world.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GameSpec {
+    /// The ship.
+    pub ship: ShipSpec,
+    /// The FPS meter.
+    pub fps: FpsSpec,
+    /// The spawn schedule.
+    pub spawn: SpawnSpec,
+}
+
+/// A playable scene: the world, its rules, and where it came from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// Short name (`paper`, …).
+    pub name: String,
+    /// One line saying what it shows.
+    pub description: String,
+    /// The world and its kinds of body.
+    pub world: WorldSpec,
+    /// The game's rules.
+    pub game: GameSpec,
+    /// The TOML text it was read from (replays carry it).
+    pub source: String,
+}

@@ -1,0 +1,225 @@
+//! The AI step (paper section 7): each enemy looks around through the broad-phase grid,
+//! moves its finite-state machine ([`super::fsm`]) one step, and acts: a steering force for
+//! the integrator, and, for the tricky kind, energy recovered while escaping.
+//!
+//! One launch per enemy kind over that kind's slot range, so a warp runs one kind's code and
+//! a scene without tricky enemies never runs the tricky machine. It runs after the narrow
+//! phase, so that a hit is seen in the step it happens.
+
+use glam::Vec2;
+
+use super::fsm::{Machine, Percept, State, next_state};
+use super::rules::Brain;
+use crate::sim::broad::CellIndex;
+use crate::sim::{Bodies, Contacts, KindInfo, SlotRange, Space};
+use crate::{DevSlice, KernelArgs, Thread};
+
+/// Seconds a steering force takes to bring the velocity to the wanted one.
+pub const STEER_TIME: f32 = 0.25;
+/// A shot is a threat if it will pass closer than this many of the body's radii.
+pub const DANGER_RADII: f32 = 3.0;
+/// ... within this many seconds.
+pub const DANGER_TIME: f32 = 1.0;
+/// Wandering bodies cruise at this fraction of their speed.
+pub const WANDER_SPEED: f32 = 0.5;
+/// Standard deviation of a wandering body's turn, in radians per step.
+pub const WANDER_TURN: f32 = 0.2;
+/// Bodies of a group keep this many radii apart.
+pub const PERSONAL_SPACE_RADII: f32 = 3.0;
+
+/// Arguments of [`think`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct ThinkArgs {
+    /// The bodies (force, state, energy and liveness of the kind's slots are written).
+    pub bodies: Bodies,
+    /// Kind table.
+    pub kinds: DevSlice<KindInfo>,
+    /// The world and its grid.
+    pub space: Space,
+    /// This step's grid.
+    pub grid: CellIndex,
+    /// This step's narrow-phase results (the hits).
+    pub contacts: Contacts,
+    /// The slots of the kind.
+    pub range: SlotRange,
+    /// The kind's brain.
+    pub brain: Brain,
+    /// The ship's slot.
+    pub ship: u32,
+    /// The kind of the ship's shots.
+    pub shot_kind: u32,
+}
+// SAFETY: repr(C) plain data.
+unsafe impl KernelArgs for ThinkArgs {}
+
+/// What a body sees within its vision radius.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Sight {
+    /// Offset to the ship, if seen.
+    pub ship: Option<Vec2>,
+    /// Mean offset to the visible bodies of its own kind, if any.
+    pub group: Option<Vec2>,
+    /// Sum of unit offsets away from own-kind bodies inside its personal space.
+    pub crowd: Vec2,
+    /// Which way to step out of the most imminent shot's path, if one is coming.
+    pub dodge: Option<Vec2>,
+}
+
+/// Where a shot at offset `d` with velocity `rel` relative to a body of radius `radius` will
+/// pass: the unit direction to step away from its path, if it comes within
+/// [`DANGER_RADII`] radii in less than [`DANGER_TIME`], with the time it takes.
+#[inline(always)]
+pub fn threat(d: Vec2, rel: Vec2, radius: f32) -> Option<(f32, Vec2)> {
+    let closing = d.dot(rel);
+    let speed2 = rel.length_squared();
+    if closing >= 0.0 || speed2 <= 0.0 {
+        return None;
+    }
+    let time = -closing / speed2;
+    let miss = d + rel * time;
+    let danger = DANGER_RADII * radius;
+    if time >= DANGER_TIME || miss.length_squared() >= danger * danger {
+        return None;
+    }
+    // Step away from the point of closest approach; dead-on, step to the shot's left.
+    let away = (-miss).try_normalize().unwrap_or(rel.perp().normalize_or_zero());
+    Some((time, away))
+}
+
+/// What slot `slot` of a `machine` body sees: only bodies within `brain.vision`, found
+/// through the grid's 3×3 neighbourhood. A kamikaze looks only for the ship.
+#[inline(always)]
+pub fn look(args: &ThinkArgs, machine: Machine, slot: u32) -> Sight {
+    let b = &args.bodies;
+    let pos = b.pos.get(slot);
+    let vel = b.vel.get(slot);
+    let radius = args.kinds.get(args.brain.kind).radius;
+    let vision2 = args.brain.vision * args.brain.vision;
+    let personal = PERSONAL_SPACE_RADII * radius;
+    let social = machine != Machine::Kamikaze;
+    let dodges = social && args.brain.avoid_bullets != 0;
+    let mut sight = Sight::default();
+    let (mut sum, mut similar) = (Vec2::ZERO, 0u32);
+    let mut soonest = f32::INFINITY;
+    args.grid.for_each_near(&args.space, pos, |other| {
+        if other == slot {
+            return;
+        }
+        let d = args.space.offset(pos, b.pos.get(other));
+        let dist2 = d.length_squared();
+        if dist2 > vision2 {
+            return;
+        }
+        let kind = b.kind.get(other);
+        if other == args.ship {
+            sight.ship = Some(d);
+        } else if social && kind == args.brain.kind {
+            sum += d;
+            similar += 1;
+            if dist2 < personal * personal {
+                sight.crowd -= d.normalize_or_zero();
+            }
+        } else if dodges && kind == args.shot_kind {
+            if let Some((time, away)) = threat(d, b.vel.get(other) - vel, radius) {
+                if time < soonest {
+                    soonest = time;
+                    sight.dodge = Some(away);
+                }
+            }
+        }
+    });
+    if similar > 0 {
+        sight.group = Some(sum / similar as f32);
+    }
+    sight
+}
+
+/// The velocity a body in `state` wants, and the wandering heading it keeps.
+#[inline(always)]
+fn wanted_velocity(args: &ThinkArgs, slot: u32, state: State, sight: &Sight) -> Vec2 {
+    let b = &args.bodies;
+    let speed = args.brain.speed;
+    let toward = |d: Option<Vec2>| d.and_then(Vec2::try_normalize);
+    match state {
+        State::Attacking => toward(sight.ship).unwrap_or(Vec2::ZERO) * speed,
+        State::AvoidingBullets => sight.dodge.unwrap_or(Vec2::ZERO) * speed,
+        State::Grouping => {
+            let to_group = toward(sight.group).unwrap_or(Vec2::ZERO);
+            (to_group + sight.crowd).normalize_or_zero() * (WANDER_SPEED * speed)
+        }
+        State::Escaping => {
+            let away = toward(sight.ship.map(|d| -d)).unwrap_or(b.dir.get(slot));
+            away * speed
+        }
+        State::CheckingEnergy | State::Dead => b.vel.get(slot),
+        State::Wandering => {
+            let (turn, _) = b.rng.open(slot).next_normal_pair();
+            let angle = turn * WANDER_TURN;
+            let rotation = Vec2::new(libm::cosf(angle), libm::sinf(angle));
+            let heading = rotation.rotate(b.dir.get(slot));
+            heading * (WANDER_SPEED * speed)
+        }
+    }
+}
+
+/// Thread `i` runs slot `range.start + i` of the kind: perceive, transition, act.
+#[inline(always)]
+pub fn think<const MACHINE: u32>(t: Thread, args: &ThinkArgs) {
+    let i = t.global();
+    if i >= args.range.capacity {
+        return;
+    }
+    let slot = args.range.start + i;
+    let b = &args.bodies;
+    if !b.is_alive(slot) {
+        return;
+    }
+    let machine = Machine::from_u32(MACHINE);
+    let brain = &args.brain;
+    let sight = look(args, machine, slot);
+    let energy = b.energy.get(slot);
+    let full = args.kinds.get(brain.kind).energy;
+    let percept = Percept {
+        hit: args.contacts.damage.get(slot) > 0,
+        out_of_energy: energy <= 0,
+        low_energy: energy <= brain.low_energy,
+        full_energy: energy >= full,
+        sees_ship: sight.ship.is_some(),
+        sees_similar: sight.group.is_some(),
+        sees_bullet: sight.dodge.is_some(),
+    };
+    let state = next_state(machine, State::from_u32(b.state.get(slot)), &percept);
+    b.state.set(slot, state as u32);
+    if state == State::Dead {
+        b.alive.set(slot, 0);
+        return;
+    }
+    if state == State::Escaping
+        && brain.recover_every != 0
+        && b.age.get(slot) % brain.recover_every == 0
+    {
+        b.energy.set(slot, (energy + 1).min(full));
+    }
+    let want = wanted_velocity(args, slot, state, &sight);
+    let force = (want - b.vel.get(slot)) * (b.mass.get(slot) / STEER_TIME);
+    b.force.set(slot, force);
+}
+
+/// [`think`] for kamikaze kinds.
+#[inline(always)]
+pub fn think_kamikaze(t: Thread, args: &ThinkArgs) {
+    think::<{ Machine::Kamikaze as u32 }>(t, args);
+}
+
+/// [`think`] for group kinds.
+#[inline(always)]
+pub fn think_group(t: Thread, args: &ThinkArgs) {
+    think::<{ Machine::Group as u32 }>(t, args);
+}
+
+/// [`think`] for tricky kinds.
+#[inline(always)]
+pub fn think_tricky(t: Thread, args: &ThinkArgs) {
+    think::<{ Machine::Tricky as u32 }>(t, args);
+}

@@ -1,0 +1,246 @@
+//! The master thread (paper section 5): the game's sequential logic, run by one dedicated
+//! thread in its own one-thread launch at the start of each step, and the parallel births
+//! it orders.
+//!
+//! Why its own launch: everything it decides (slot allocation, spawn counts, score, game
+//! over) must be made in one fixed order to stay deterministic, and every other kernel of the
+//! step reads what it wrote. A launch boundary is the only barrier the design allows, so the
+//! master thread gets a launch of its own, before the broad phase, rather than being thread 0
+//! of a block whose other threads would have to wait for it.
+//!
+//! Its work is small on purpose: it moves the ship, fires at most one shot, counts, and
+//! writes how many enemies of each kind to spawn; [`births`] then brings them to life in
+//! parallel, each from its own slot's generator.
+
+use glam::Vec2;
+
+use super::control::{DESTROYED, Events, Input, PLAYING, Status, TOO_SLOW};
+use super::rules::{Rules, Wave};
+use crate::sim::scatter::{birth, random_place};
+use crate::sim::{Bodies, Contacts, KindInfo, SlotRange, Space};
+use crate::{DevSlice, KernelArgs, Thread};
+
+/// Each kind's free slots, as the free-list rebuild leaves them.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct FreeSlots {
+    /// Kind `k`'s free slots in order, from its range's start.
+    pub list: DevSlice<u32>,
+    /// Free slots per kind.
+    pub count: DevSlice<u32>,
+}
+
+/// Arguments of [`master`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct MasterArgs {
+    /// The bodies (the ship and new shots are written).
+    pub bodies: Bodies,
+    /// Kind table.
+    pub kinds: DevSlice<KindInfo>,
+    /// Slot range of each kind.
+    pub ranges: DevSlice<SlotRange>,
+    /// Free slots after the previous step.
+    pub free: FreeSlots,
+    /// The previous step's contacts (the ship's hits).
+    pub contacts: Contacts,
+    /// The game's state: read, advanced, written back (one element).
+    pub status: DevSlice<Status>,
+    /// This step's input (one element).
+    pub input: DevSlice<Input>,
+    /// Enemies spawned so far, per kind.
+    pub spawned: DevSlice<u32>,
+    /// Output: enemies to spawn this step, per kind (for [`births`]).
+    pub births: DevSlice<u32>,
+    /// The spawn schedule.
+    pub waves: DevSlice<Wave>,
+    /// The world.
+    pub space: Space,
+    /// The scene's rules.
+    pub rules: Rules,
+}
+// SAFETY: repr(C) plain data.
+unsafe impl KernelArgs for MasterArgs {}
+
+/// The master thread's step (thread 0 only):
+/// 1. at step 0, the ship is born in the middle of the world;
+/// 2. the ship takes the input's movement as its velocity, and recovers energy;
+/// 3. a shot leaves the ship along the aim if the fire key is held and the gun is ready,
+///    in the shot kind's first free slot;
+/// 4. score and counts: an enemy kind's dead are those spawned minus those alive;
+/// 5. the schedule's due waves claim free slots, in wave order;
+/// 6. the FPS meter from the ship's energy; game over below the minimum, or without a ship.
+///
+/// After game over the state stays as it is and nothing is spawned.
+#[inline(always)]
+pub fn master(t: Thread, args: &MasterArgs) {
+    if t.global() != 0 {
+        return;
+    }
+    let (b, rules) = (&args.bodies, &args.rules);
+    let mut st = args.status.get(0);
+    let input = args.input.get(0);
+    for k in 0..args.births.len() {
+        args.births.set(k, 0);
+    }
+    st.events = Events::default();
+    st.input = input;
+    if st.is_over() {
+        args.status.set(0, st);
+        return;
+    }
+    let step = st.step;
+    let ship = rules.ship.start;
+    if step == 0 {
+        let place = (args.space.size * 0.5, Vec2::ZERO);
+        birth(b, &args.space, ship, place, rules.ship_energy);
+    }
+    let ship_alive = b.is_alive(ship);
+    if ship_alive {
+        fly_ship(args, &input, step);
+        st.events.ship_hits = args.contacts.count.get(ship);
+    }
+
+    // The gun.
+    st.cooldown = st.cooldown.saturating_sub(1);
+    let shot_free = args.free.count.get(rules.shot_kind);
+    let fired = ship_alive && input.firing() && st.cooldown == 0 && shot_free > 0;
+    if fired {
+        fire(args, &input);
+        st.cooldown = rules.fire_period;
+        st.events.shots_fired = 1;
+    }
+    let shot_range = args.ranges.get(rules.shot_kind);
+    st.shots_alive = shot_range.capacity - shot_free + u32::from(fired);
+
+    // Score and counts, from the free lists.
+    let (mut alive, mut killed, mut score) = (0u32, 0u32, 0u32);
+    for k in 0..args.kinds.len() {
+        let info = args.kinds.get(k);
+        if info.dies_at_zero_energy() {
+            continue;
+        }
+        let now = args.ranges.get(k).capacity - args.free.count.get(k);
+        let dead = args.spawned.get(k).saturating_sub(now);
+        alive += now;
+        killed += dead;
+        score = score.wrapping_add(dead.wrapping_mul(info.energy as u32));
+    }
+    st.events.kills = killed.saturating_sub(st.enemies_killed);
+    st.enemies_killed = killed;
+    st.score = score;
+
+    // Spawns: each due wave takes what its kind has left.
+    for w in 0..args.waves.len() {
+        let wave = args.waves.get(w);
+        if wave.due(step) {
+            let k = wave.kind;
+            let asked = args.births.get(k);
+            let room = args.free.count.get(k) - asked;
+            args.births.set(k, asked + wave.count.min(room));
+        }
+    }
+    for k in 0..args.births.len() {
+        let n = args.births.get(k);
+        args.spawned.set(k, args.spawned.get(k) + n);
+        st.events.spawned += n;
+    }
+    st.enemies_alive = alive + st.events.spawned;
+
+    let energy = if ship_alive { b.energy.get(ship) } else { 0 };
+    st.fps_meter = rules.fps_meter(energy);
+    st.game_over = if !ship_alive {
+        DESTROYED
+    } else if st.fps_meter < rules.fps_min {
+        TOO_SLOW
+    } else {
+        PLAYING
+    };
+    st.step = step + 1;
+    args.status.set(0, st);
+}
+
+/// The ship goes where the stick points, at the scene's speed, and recovers energy.
+#[inline(always)]
+fn fly_ship(args: &MasterArgs, input: &Input, step: u32) {
+    let (b, rules) = (&args.bodies, &args.rules);
+    let ship = rules.ship.start;
+    b.vel.set(ship, input.movement() * rules.ship_speed);
+    b.force.set(ship, Vec2::ZERO);
+    if rules.recover_every != 0 && step % rules.recover_every == 0 {
+        let energy = b.energy.get(ship);
+        b.energy.set(ship, (energy + 1).min(rules.ship_energy));
+    }
+}
+
+/// A shot in the first free slot of the shot kind, just outside the ship along the aim.
+#[inline(always)]
+fn fire(args: &MasterArgs, input: &Input) {
+    let (b, rules) = (&args.bodies, &args.rules);
+    let ship = rules.ship.start;
+    let shot = args.kinds.get(rules.shot_kind);
+    let slot = args.free.list.get(args.ranges.get(rules.shot_kind).start);
+    let aim = input.aim_dir();
+    let gap = args.kinds.get(rules.ship_kind).radius + shot.radius;
+    let pos = b.pos.get(ship) + aim * (gap * 1.01);
+    birth(b, &args.space, slot, (pos, aim * rules.shot_speed), shot.energy);
+}
+
+/// Arguments of [`births`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct BirthArgs {
+    /// The bodies.
+    pub bodies: Bodies,
+    /// Kind table (birth energies).
+    pub kinds: DevSlice<KindInfo>,
+    /// Slot range of each kind.
+    pub ranges: DevSlice<SlotRange>,
+    /// The free lists the master thread counted from.
+    pub free: FreeSlots,
+    /// Bodies to spawn per kind (from [`master`]).
+    pub births: DevSlice<u32>,
+    /// Birth velocity deviation per kind.
+    pub speed: DevSlice<f32>,
+    /// The world.
+    pub space: Space,
+    /// The ship's slot and the spawn distance.
+    pub rules: Rules,
+}
+// SAFETY: repr(C) plain data.
+unsafe impl KernelArgs for BirthArgs {}
+
+/// Tries at a position far enough from the ship before the last one is taken as it is.
+pub const PLACE_TRIES: u32 = 8;
+
+/// Thread `j` looks at free-list entry `j`: it lies in some kind's range, and if it is among
+/// the first `births[kind]` entries there, that slot comes alive at a random place at least
+/// the spawn distance from the ship (up to [`PLACE_TRIES`] draws from the slot's generator).
+#[inline(always)]
+pub fn births(t: Thread, args: &BirthArgs) {
+    let b = &args.bodies;
+    let j = t.global();
+    if j >= b.slots() {
+        return;
+    }
+    let kind = b.kind.get(j);
+    let range = args.ranges.get(kind);
+    if j < range.start || j - range.start >= args.births.get(kind) {
+        return;
+    }
+    let slot = args.free.list.get(j);
+    let ship = args.rules.ship.start;
+    let ship_pos = b.pos.get(ship);
+    let far = args.rules.spawn_distance * args.rules.spawn_distance;
+    let speed = args.speed.get(kind);
+    let mut place = random_place(b, slot, &args.space, speed);
+    let mut tries = 1;
+    while tries < PLACE_TRIES
+        && b.is_alive(ship)
+        && args.space.offset(ship_pos, place.0).length_squared() < far
+    {
+        place = random_place(b, slot, &args.space, speed);
+        tries += 1;
+    }
+    birth(b, &args.space, slot, place, args.kinds.get(kind).energy);
+}
