@@ -28,6 +28,8 @@ pub struct Snapshot {
     pub alive: Vec<u32>,
     /// Finite-state-machine states.
     pub state: Vec<u32>,
+    /// Steps lived.
+    pub age: Vec<u32>,
     /// Generator state words, word-major (`mt607::N` rows of one word per slot).
     pub rng_words: Vec<u32>,
     /// Generator positions.
@@ -73,6 +75,7 @@ impl Snapshot {
             word(self.energy[s] as u32);
             word(self.mass[s].to_bits());
             word(self.state[s]);
+            word(self.age[s]);
             word(self.rng_index[s]);
             for k in 0..mt607::N {
                 word(self.rng_word(s, k));

@@ -21,7 +21,8 @@ use gpuwars_kernels::sim::integrate::IntegrateArgs;
 use gpuwars_kernels::sim::narrow::CollideArgs;
 use gpuwars_kernels::sim::scatter::ScatterArgs;
 use gpuwars_kernels::sim::{Bodies, Contacts, KindInfo, SlotRange, Space};
-use gpuwars_kernels::{Kernel, KernelArgs, registry};
+use gpuwars_kernels::game::master::FreeSlots;
+use gpuwars_kernels::{DevSlice, Kernel, KernelArgs, registry};
 
 use super::layout::{self, Layout};
 use super::rng;
@@ -41,6 +42,7 @@ struct BodyBuffers {
     mass: Buffer<f32>,
     alive: Buffer<u32>,
     state: Buffer<u32>,
+    age: Buffer<u32>,
     rng_params: Buffer<Mt607Params>,
     rng_words: Buffer<u32>,
     rng_index: Buffer<u32>,
@@ -58,6 +60,7 @@ impl BodyBuffers {
             mass: self.mass.view(),
             alive: self.alive.view(),
             state: self.state.view(),
+            age: self.age.view(),
             rng: RngStreams {
                 params: self.rng_params.view(),
                 words: self.rng_words.view(),
@@ -72,6 +75,7 @@ struct ContactBuffers {
     push: Buffer<Vec2>,
     kick: Buffer<Vec2>,
     count: Buffer<u32>,
+    damage: Buffer<i32>,
 }
 
 impl ContactBuffers {
@@ -80,6 +84,7 @@ impl ContactBuffers {
             push: self.push.view(),
             kick: self.kick.view(),
             count: self.count.view(),
+            damage: self.damage.view(),
         }
     }
 }
@@ -114,6 +119,16 @@ struct FreeLists {
     scan: PrefixSum,
 }
 
+/// Views of a world's device buffers, for the game's kernels.
+pub(crate) struct Views {
+    pub bodies: Bodies,
+    pub kinds: DevSlice<KindInfo>,
+    pub ranges: DevSlice<SlotRange>,
+    pub contacts: Contacts,
+    pub grid: CellIndex,
+    pub free: FreeSlots,
+}
+
 /// A world on a device: its bodies and the scratch its step needs.
 pub struct Simulation<'d> {
     device: &'d Device,
@@ -121,6 +136,7 @@ pub struct Simulation<'d> {
     layout: Layout,
     space: Space,
     collisions: bool,
+    collide: Kernel<CollideArgs>,
     kinds: Buffer<KindInfo>,
     ranges: Buffer<SlotRange>,
     bodies: BodyBuffers,
@@ -160,6 +176,7 @@ impl<'d> Simulation<'d> {
             mass: device.upload(&mass)?,
             alive: device.alloc_zeroed(n)?,
             state: device.alloc_zeroed(n)?,
+            age: device.alloc_zeroed(n)?,
             rng_params: device.upload(&rng::slot_params(slots))?,
             rng_words: device.upload(&rng::word_major_states(&seeds))?,
             rng_index: device.alloc_zeroed(n)?,
@@ -169,6 +186,12 @@ impl<'d> Simulation<'d> {
             spec: spec.clone(),
             space,
             collisions: spec.collision_masks().iter().any(|&m| m != 0),
+            // No rectangles: the narrow phase without the rectangle tests.
+            collide: if spec.has_rects() {
+                registry::COLLIDE
+            } else {
+                registry::COLLIDE_CIRCLES
+            },
             kinds: device.upload(&layout::kind_table(spec))?,
             ranges: device.upload(&layout.ranges)?,
             bodies,
@@ -176,6 +199,7 @@ impl<'d> Simulation<'d> {
                 push: device.alloc_zeroed(n)?,
                 kick: device.alloc_zeroed(n)?,
                 count: device.alloc_zeroed(n)?,
+                damage: device.alloc_zeroed(n)?,
             },
             broad: BroadPhase {
                 keys: device.alloc_zeroed(n)?,
@@ -265,36 +289,63 @@ impl<'d> Simulation<'d> {
 
     /// Advances the world by one time step.
     pub fn step(&mut self) -> Result<(), Error> {
-        let bodies = self.bodies.view();
-        let slots = self.layout.slots;
-        let contacts = self.contacts.view();
         if self.collisions {
             self.build_grid()?;
-            let collide = CollideArgs {
-                bodies,
-                kinds: self.kinds.view(),
-                space: self.space,
-                grid: self.broad.index(),
-                contacts,
-            };
-            self.launch(registry::COLLIDE, slots, &collide)?;
+            self.collide()?;
         }
-        let integrate = IntegrateArgs {
-            bodies,
+        self.finish_step()
+    }
+
+    /// Whether any two kinds collide (else the narrow phase is never launched).
+    pub(crate) fn collides(&self) -> bool {
+        self.collisions
+    }
+
+    /// Narrow phase: contacts and their response, on this step's grid.
+    pub(crate) fn collide(&self) -> Result<(), Error> {
+        let collide = CollideArgs {
+            bodies: self.bodies.view(),
             kinds: self.kinds.view(),
-            contacts,
+            space: self.space,
+            grid: self.broad.index(),
+            contacts: self.contacts.view(),
+        };
+        self.launch(self.collide, self.layout.slots, &collide)
+    }
+
+    /// Integration, deaths, the free lists, and the step count.
+    pub(crate) fn finish_step(&mut self) -> Result<(), Error> {
+        let integrate = IntegrateArgs {
+            bodies: self.bodies.view(),
+            kinds: self.kinds.view(),
+            contacts: self.contacts.view(),
             space: self.space,
             dt: self.spec.dt,
             reserved: 0,
         };
-        self.launch(registry::INTEGRATE, slots, &integrate)?;
+        self.launch(registry::INTEGRATE, self.layout.slots, &integrate)?;
         self.rebuild_free_lists()?;
         self.steps += 1;
         Ok(())
     }
 
+    /// The device views the game's kernels take.
+    pub(crate) fn views(&self) -> Views {
+        Views {
+            bodies: self.bodies.view(),
+            kinds: self.kinds.view(),
+            ranges: self.ranges.view(),
+            contacts: self.contacts.view(),
+            grid: self.broad.index(),
+            free: FreeSlots {
+                list: self.free.list.view(),
+                count: self.free.count.view(),
+            },
+        }
+    }
+
     /// Broad phase: keys, sort, cell bounds.
-    fn build_grid(&mut self) -> Result<(), Error> {
+    pub(crate) fn build_grid(&mut self) -> Result<(), Error> {
         let slots = self.layout.slots;
         let assign = AssignArgs {
             bodies: self.bodies.view(),
@@ -346,7 +397,7 @@ impl<'d> Simulation<'d> {
     }
 
     /// Launches `kernel` with one thread per item.
-    fn launch<A: KernelArgs>(&self, kernel: Kernel<A>, items: u32, args: &A) -> Result<(), Error> {
+    pub(crate) fn launch<A: KernelArgs>(&self, kernel: Kernel<A>, items: u32, args: &A) -> Result<(), Error> {
         // SAFETY: every view in the argument structs of this module is of a buffer owned by
         // `self` and sized from the layout for the kernel's contract; nothing else touches
         // them during the launch.
@@ -368,6 +419,7 @@ impl<'d> Simulation<'d> {
             mass: d.download(&b.mass)?,
             alive: d.download(&b.alive)?,
             state: d.download(&b.state)?,
+            age: d.download(&b.age)?,
             rng_words: d.download(&b.rng_words)?,
             rng_index: d.download(&b.rng_index)?,
             contacts: d.download(&self.contacts.count)?,
@@ -407,6 +459,7 @@ impl<'d> Simulation<'d> {
             snapshot.energy[s] = self.spec.kinds[kind as usize].energy;
             snapshot.alive[s] = 1;
             snapshot.state[s] = 0;
+            snapshot.age[s] = 0;
         }
         let (d, b) = (self.device, &mut self.bodies);
         d.write(&mut b.pos, &snapshot.pos)?;
@@ -416,6 +469,7 @@ impl<'d> Simulation<'d> {
         d.write(&mut b.energy, &snapshot.energy)?;
         d.write(&mut b.alive, &snapshot.alive)?;
         d.write(&mut b.state, &snapshot.state)?;
+        d.write(&mut b.age, &snapshot.age)?;
         self.rebuild_free_lists()
     }
 

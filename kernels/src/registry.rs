@@ -66,8 +66,10 @@ kernels! {
     GATHER_FREE = gather_free(free_list::GatherArgs) => free_list::gather_free;
     /// Brings bodies to life at random places from their slots' generators.
     SCATTER = scatter(scatter::ScatterArgs) => scatter::scatter;
-    /// The master thread: ship, shots, score, FPS meter, game over, spawn counts (one thread).
+    /// The master thread before the physics: ship, shots, spawn counts (one thread).
     MASTER = master(master::MasterArgs) => master::master;
+    /// The master thread after the physics: score, counts, FPS meter, game over (one thread).
+    TALLY = tally(master::MasterArgs) => master::tally;
     /// Brings the enemies the master thread ordered to life at random places.
     BIRTHS = births(master::BirthArgs) => master::births;
     /// The kamikaze machine for one kind's slots: perceive, transition, steer.

@@ -114,7 +114,7 @@ pub const DESTROYED: u32 = 2;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct Status {
-    /// Steps the master thread has run.
+    /// Steps played.
     pub step: u32,
     /// Points: every enemy that died, worth its birth energy.
     pub score: u32,
@@ -122,11 +122,11 @@ pub struct Status {
     pub fps_meter: f32,
     /// [`PLAYING`], [`TOO_SLOW`] or [`DESTROYED`].
     pub game_over: u32,
-    /// Enemies alive (after this step's spawns).
+    /// Enemies alive.
     pub enemies_alive: u32,
     /// Enemies that died since the start.
     pub enemies_killed: u32,
-    /// Shots in flight (after this step's shot).
+    /// Shots in flight.
     pub shots_alive: u32,
     /// Steps until the ship may fire again.
     pub cooldown: u32,

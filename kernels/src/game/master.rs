@@ -1,6 +1,6 @@
 //! The master thread (paper section 5): the game's sequential logic, run by one dedicated
-//! thread in its own one-thread launch at the start of each step, and the parallel births
-//! it orders.
+//! thread in one-thread launches, [`master`] before the physics of each step and [`tally`]
+//! after it, and the parallel [`births`] it orders.
 //!
 //! Why its own launch: everything it decides (slot allocation, spawn counts, score, game
 //! over) must be made in one fixed order to stay deterministic, and every other kernel of the
@@ -8,9 +8,9 @@
 //! master thread gets a launch of its own, before the broad phase, rather than being thread 0
 //! of a block whose other threads would have to wait for it.
 //!
-//! Its work is small on purpose: it moves the ship, fires at most one shot, counts, and
-//! writes how many enemies of each kind to spawn; [`births`] then brings them to life in
-//! parallel, each from its own slot's generator.
+//! Its work is small on purpose: it moves the ship, fires at most one shot, writes how many
+//! enemies of each kind to spawn ([`births`] brings them to life in parallel, each from its
+//! own slot's generator), and, once the step's physics is done, counts.
 
 use glam::Vec2;
 
@@ -42,7 +42,7 @@ pub struct MasterArgs {
     pub ranges: DevSlice<SlotRange>,
     /// Free slots after the previous step.
     pub free: FreeSlots,
-    /// The previous step's contacts (the ship's hits).
+    /// This step's contacts (the ship's hits, for [`tally`]).
     pub contacts: Contacts,
     /// The game's state: read, advanced, written back (one element).
     pub status: DevSlice<Status>,
@@ -52,6 +52,8 @@ pub struct MasterArgs {
     pub spawned: DevSlice<u32>,
     /// Output: enemies to spawn this step, per kind (for [`births`]).
     pub births: DevSlice<u32>,
+    /// Output: birth velocity deviation per kind, from the last due wave of the kind.
+    pub birth_speed: DevSlice<f32>,
     /// The spawn schedule.
     pub waves: DevSlice<Wave>,
     /// The world.
@@ -62,16 +64,14 @@ pub struct MasterArgs {
 // SAFETY: repr(C) plain data.
 unsafe impl KernelArgs for MasterArgs {}
 
-/// The master thread's step (thread 0 only):
+/// The master thread before the physics (thread 0 only):
 /// 1. at step 0, the ship is born in the middle of the world;
 /// 2. the ship takes the input's movement as its velocity, and recovers energy;
 /// 3. a shot leaves the ship along the aim if the fire key is held and the gun is ready,
 ///    in the shot kind's first free slot;
-/// 4. score and counts: an enemy kind's dead are those spawned minus those alive;
-/// 5. the schedule's due waves claim free slots, in wave order;
-/// 6. the FPS meter from the ship's energy; game over below the minimum, or without a ship.
+/// 4. the schedule's due waves claim free slots, in wave order, for [`births`].
 ///
-/// After game over the state stays as it is and nothing is spawned.
+/// After game over nothing moves, fires or spawns.
 #[inline(always)]
 pub fn master(t: Thread, args: &MasterArgs) {
     if t.global() != 0 {
@@ -95,25 +95,49 @@ pub fn master(t: Thread, args: &MasterArgs) {
         let place = (args.space.size * 0.5, Vec2::ZERO);
         birth(b, &args.space, ship, place, rules.ship_energy);
     }
-    let ship_alive = b.is_alive(ship);
-    if ship_alive {
+    if b.is_alive(ship) {
         fly_ship(args, &input, step);
-        st.events.ship_hits = args.contacts.count.get(ship);
+        st.cooldown = st.cooldown.saturating_sub(1);
+        if input.firing() && st.cooldown == 0 && args.free.count.get(rules.shot_kind) > 0 {
+            fire(args, &input);
+            st.cooldown = rules.fire_period;
+            st.events.shots_fired = 1;
+        }
     }
-
-    // The gun.
-    st.cooldown = st.cooldown.saturating_sub(1);
-    let shot_free = args.free.count.get(rules.shot_kind);
-    let fired = ship_alive && input.firing() && st.cooldown == 0 && shot_free > 0;
-    if fired {
-        fire(args, &input);
-        st.cooldown = rules.fire_period;
-        st.events.shots_fired = 1;
+    // Spawns: each due wave takes what its kind has left.
+    for w in 0..args.waves.len() {
+        let wave = args.waves.get(w);
+        if wave.due(step) {
+            let k = wave.kind;
+            let asked = args.births.get(k);
+            let room = args.free.count.get(k) - asked;
+            args.births.set(k, asked + wave.count.min(room));
+            args.birth_speed.set(k, wave.speed);
+        }
     }
-    let shot_range = args.ranges.get(rules.shot_kind);
-    st.shots_alive = shot_range.capacity - shot_free + u32::from(fired);
+    for k in 0..args.births.len() {
+        let n = args.births.get(k);
+        args.spawned.set(k, args.spawned.get(k) + n);
+        st.events.spawned += n;
+    }
+    args.status.set(0, st);
+}
 
-    // Score and counts, from the free lists.
+/// The master thread after the physics (thread 0 only), from the rebuilt free lists:
+/// 1. counts and score: an enemy kind's dead are those spawned minus those alive, each
+///    worth its birth energy;
+/// 2. the ship's hits this step;
+/// 3. the FPS meter from the ship's energy; game over below the minimum, or without a ship.
+#[inline(always)]
+pub fn tally(t: Thread, args: &MasterArgs) {
+    if t.global() != 0 {
+        return;
+    }
+    let (b, rules) = (&args.bodies, &args.rules);
+    let mut st = args.status.get(0);
+    if st.is_over() {
+        return;
+    }
     let (mut alive, mut killed, mut score) = (0u32, 0u32, 0u32);
     for k in 0..args.kinds.len() {
         let info = args.kinds.get(k);
@@ -127,26 +151,18 @@ pub fn master(t: Thread, args: &MasterArgs) {
         score = score.wrapping_add(dead.wrapping_mul(info.energy as u32));
     }
     st.events.kills = killed.saturating_sub(st.enemies_killed);
+    st.enemies_alive = alive;
     st.enemies_killed = killed;
     st.score = score;
-
-    // Spawns: each due wave takes what its kind has left.
-    for w in 0..args.waves.len() {
-        let wave = args.waves.get(w);
-        if wave.due(step) {
-            let k = wave.kind;
-            let asked = args.births.get(k);
-            let room = args.free.count.get(k) - asked;
-            args.births.set(k, asked + wave.count.min(room));
-        }
-    }
-    for k in 0..args.births.len() {
-        let n = args.births.get(k);
-        args.spawned.set(k, args.spawned.get(k) + n);
-        st.events.spawned += n;
-    }
-    st.enemies_alive = alive + st.events.spawned;
-
+    let shots = args.ranges.get(rules.shot_kind).capacity;
+    st.shots_alive = shots - args.free.count.get(rules.shot_kind);
+    let ship = rules.ship.start;
+    let ship_alive = b.is_alive(ship);
+    st.events.ship_hits = if ship_alive {
+        args.contacts.count.get(ship)
+    } else {
+        0
+    };
     let energy = if ship_alive { b.energy.get(ship) } else { 0 };
     st.fps_meter = rules.fps_meter(energy);
     st.game_over = if !ship_alive {
@@ -156,7 +172,7 @@ pub fn master(t: Thread, args: &MasterArgs) {
     } else {
         PLAYING
     };
-    st.step = step + 1;
+    st.step += 1;
     args.status.set(0, st);
 }
 
@@ -200,8 +216,8 @@ pub struct BirthArgs {
     pub free: FreeSlots,
     /// Bodies to spawn per kind (from [`master`]).
     pub births: DevSlice<u32>,
-    /// Birth velocity deviation per kind.
-    pub speed: DevSlice<f32>,
+    /// Birth velocity deviation per kind (from [`master`]).
+    pub birth_speed: DevSlice<f32>,
     /// The world.
     pub space: Space,
     /// The ship's slot and the spawn distance.
@@ -232,7 +248,7 @@ pub fn births(t: Thread, args: &BirthArgs) {
     let ship = args.rules.ship.start;
     let ship_pos = b.pos.get(ship);
     let far = args.rules.spawn_distance * args.rules.spawn_distance;
-    let speed = args.speed.get(kind);
+    let speed = args.birth_speed.get(kind);
     let mut place = random_place(b, slot, &args.space, speed);
     let mut tries = 1;
     while tries < PLACE_TRIES
