@@ -10,6 +10,8 @@ mod cuda;
 
 use std::fmt;
 use std::marker::PhantomData;
+use std::collections::BTreeMap;
+use std::sync::Mutex;
 
 use gpuwars_kernels::{DevSlice, Kernel, KernelArgs};
 use serde::Serialize;
@@ -90,6 +92,8 @@ impl<T: bytemuck::Pod + Send + Sync> Element for T {}
 pub struct Device {
     imp: Imp,
     reason: String,
+    /// Launches per kernel, counted only while [`Device::count_launches`] is on.
+    launches: Option<Mutex<BTreeMap<&'static str, u64>>>,
 }
 
 enum Imp {
@@ -168,6 +172,7 @@ impl Device {
         Ok(Device {
             imp: Imp::Cpu(cpu::Emulator::new(threads)?),
             reason: reason.to_string(),
+            launches: None,
         })
     }
 
@@ -176,6 +181,7 @@ impl Device {
         Ok(Device {
             imp: Imp::Cuda(cuda::Gpu::open()?),
             reason: reason.to_string(),
+            launches: None,
         })
     }
 
@@ -311,11 +317,28 @@ impl Device {
         if grid == 0 {
             return Ok(());
         }
+        if let Some(launches) = &self.launches {
+            let mut launches = launches.lock().unwrap_or_else(|e| e.into_inner());
+            *launches.entry(kernel.name).or_default() += 1;
+        }
         match &self.imp {
             Imp::Cpu(emu) => emu.launch(kernel, grid, block, args),
             // SAFETY: forwarded from the caller.
             Imp::Cuda(gpu) => unsafe { gpu.launch(kernel, grid, block, args) },
         }
+    }
+
+    /// Starts counting launches per kernel (from zero), or stops when `on` is false. Off by
+    /// default: then a launch pays nothing for it.
+    pub fn count_launches(&mut self, on: bool) {
+        self.launches = on.then(Mutex::default);
+    }
+
+    /// Launches per kernel name since counting started (empty when off), in name order.
+    pub fn launch_counts(&self) -> BTreeMap<&'static str, u64> {
+        self.launches.as_ref().map_or_else(BTreeMap::new, |launches| {
+            launches.lock().unwrap_or_else(|e| e.into_inner()).clone()
+        })
     }
 
     /// Waits until every queued launch and copy has finished, and reports a kernel fault.

@@ -2,6 +2,7 @@
 //! each test, and plain host references that the kernels are checked against.
 #![allow(dead_code)] // each test binary uses its own part of this module
 
+pub mod game;
 pub mod sim;
 
 use std::io::Write;

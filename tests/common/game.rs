@@ -1,0 +1,147 @@
+//! Small scenes for the game tests, written as TOML the way a user would, and a driver that
+//! plays them with a scripted pilot.
+
+use glam::Vec2;
+use gpuwars::Device;
+use gpuwars::game::Game;
+use gpuwars::game::Scene;
+use gpuwars::kernels::game::control::{Input, Status};
+use gpuwars::sim::Snapshot;
+
+/// One enemy kind of a test scene.
+pub struct Enemy {
+    /// Kind name.
+    pub name: &'static str,
+    /// `kamikaze`, `group` or `tricky`.
+    pub machine: &'static str,
+    /// How many, all spawned at the start.
+    pub count: u32,
+    /// Birth energy.
+    pub energy: i32,
+    /// Vision radius.
+    pub vision: f32,
+    /// Speed.
+    pub speed: f32,
+    /// Extra lines of the `[kinds.behaviour]` table.
+    pub extra: &'static str,
+}
+
+/// A scene of `size`² with the standard ship and shots, the ship's enemies spawned at least
+/// `distance` away from it. The ship does not recover FPS and never loses (minimum 0).
+pub fn scene(size: f32, boundary: &str, distance: f32, enemies: &[Enemy]) -> Scene {
+    let names: Vec<String> = enemies.iter().map(|e| format!("\"{}\"", e.name)).collect();
+    let names = names.join(", ");
+    let mut text = format!(
+        r#"name = "test"
+description = "a test scene"
+[world]
+size = [{size}, {size}]
+dt = 0.016666668
+boundary = "{boundary}"
+[ship]
+kind = "ship"
+speed = 200.0
+fire_rate = 10.0
+shot = "shot"
+shot_speed = 600.0
+autopilot_sight = 150.0
+[fps]
+start = 60.0
+min = 0.0
+recovery = 0.0
+[spawn]
+distance = {distance}
+"#
+    );
+    for e in enemies {
+        text += &format!(
+            "[[spawn.waves]]\nkind = \"{}\"\nat = 0.0\ncount = {}\n",
+            e.name, e.count
+        );
+    }
+    text += &format!(
+        r#"[[kinds]]
+name = "ship"
+circle = 10.0
+mass = 20.0
+capacity = 1
+energy = 6000
+damage = 100
+collides_with = [{names}]
+[[kinds]]
+name = "shot"
+circle = 2.0
+mass = 0.1
+capacity = 64
+energy = 1
+damage = 1
+lifetime = 1.5
+collides_with = [{names}]
+"#
+    );
+    for e in enemies {
+        text += &format!(
+            "[[kinds]]\nname = \"{}\"\ncircle = 5.0\nmass = 1.0\ncapacity = {}\nenergy = {}\ndamage = 10\nmax_speed = {}\n[kinds.behaviour]\nmachine = \"{}\"\nvision = {}\nspeed = {}\n{}\n",
+            e.name, e.count, e.energy, e.speed, e.machine, e.vision, e.speed, e.extra
+        );
+    }
+    Scene::from_toml(&text, "test scene").unwrap_or_else(|e| panic!("{e}\n{text}"))
+}
+
+/// Plays `steps` steps; before each, `pilot` sees the state and picks the input (`None`: the
+/// autopilot's) and after each `watch` sees the status and the state.
+pub fn play<'d>(
+    device: &'d Device,
+    scene: &Scene,
+    seed: u32,
+    steps: u32,
+    mut pilot: impl FnMut(&Snapshot) -> Option<Input>,
+    mut watch: impl FnMut(&Status, &Snapshot),
+) -> Game<'d> {
+    let mut game = Game::new(device, scene, seed).unwrap();
+    let mut snapshot = game.snapshot().unwrap();
+    for _ in 0..steps {
+        let status = game.step(pilot(&snapshot)).unwrap();
+        snapshot = game.snapshot().unwrap();
+        watch(&status, &snapshot);
+    }
+    game
+}
+
+/// Input that keeps the ship still and aims at `target` from the ship's slot, firing if
+/// `fire`.
+pub fn aim_at(snapshot: &Snapshot, ship: usize, target: Vec2, fire: bool) -> Input {
+    Input {
+        aim: Input::aim_towards(target - snapshot.pos[ship]),
+        fire: u32::from(fire),
+        ..Input::default()
+    }
+}
+
+/// Live slots of kind `kind`.
+pub fn live_of(snapshot: &Snapshot, kind: u32) -> Vec<usize> {
+    snapshot.live().filter(|&s| snapshot.kind[s] == kind).collect()
+}
+
+/// Mean distance from each body in `slots` to its nearest other one (on a torus of `size`
+/// when `wrap`).
+pub fn mean_nearest(snapshot: &Snapshot, slots: &[usize], size: f32, wrap: bool) -> f32 {
+    let gap = |a: Vec2, b: Vec2| {
+        let mut d = (b - a).abs();
+        if wrap {
+            d = d.min(Vec2::splat(size) - d);
+        }
+        d.length()
+    };
+    let total: f32 = slots
+        .iter()
+        .map(|&a| {
+            slots
+                .iter()
+                .filter(|&&b| b != a)
+                .map(|&b| gap(snapshot.pos[a], snapshot.pos[b]))
+                .fold(f32::INFINITY, f32::min)
+        })
+        .sum();
+    total / slots.len() as f32
+}
