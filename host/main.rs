@@ -2,7 +2,14 @@
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+
+use anyhow::bail;
+use clap::{Args, Parser, Subcommand};
+use gpuwars::game::demo::{self, Report};
+use gpuwars::game::replay::Replay;
+use gpuwars::game::Scene;
+use gpuwars::game::scene;
 use gpuwars::info::Info;
 use gpuwars::{BackendRequest, Device};
 
@@ -29,12 +36,55 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Version, backend and why, the GPU, the embedded PTX and its kernels (the default).
+    /// Version, backend and why, the GPU, the embedded PTX and its kernels.
     Info {
         /// Print JSON instead of text.
         #[arg(long)]
         json: bool,
     },
+    /// Lists the built-in scenes.
+    Scenes,
+    /// The autopilot plays a scene without a window and prints its figures (the default).
+    Demo(DemoArgs),
+    /// Plays a recorded game again and checks that it ends in the recorded state.
+    Replay {
+        /// The replay file (written by `demo --record`).
+        file: PathBuf,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+#[derive(Args)]
+struct DemoArgs {
+    /// A built-in scene's name (see `gpuwars scenes`) or a path to a scene TOML file.
+    #[arg(long, default_value = "paper")]
+    scene: String,
+    /// Steps to play (the game may end sooner).
+    #[arg(long, default_value_t = 3600, value_parser = clap::value_parser!(u64).range(1..=1_000_000_000))]
+    steps: u64,
+    /// Seed of the random number generators.
+    #[arg(long, default_value_t = 1)]
+    seed: u32,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+    /// Write the game's inputs to this replay file.
+    #[arg(long)]
+    record: Option<PathBuf>,
+}
+
+impl Default for DemoArgs {
+    fn default() -> Self {
+        DemoArgs {
+            scene: "paper".to_string(),
+            steps: 3600,
+            seed: 1,
+            json: false,
+            record: None,
+        }
+    }
 }
 
 fn main() -> ExitCode {
@@ -49,8 +99,17 @@ fn main() -> ExitCode {
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
+    let command = cli.command.unwrap_or(Command::Demo(DemoArgs::default()));
+    if let Command::Scenes = command {
+        for built_in in scene::BUILT_IN {
+            let scene = Scene::from_toml(built_in.source, built_in.name)?;
+            println!("{:<10}{}", scene.name, scene.description);
+        }
+        return Ok(());
+    }
     let device = Device::select(cli.backend, cli.cpu_threads.map(usize::from))?;
-    match cli.command.unwrap_or(Command::Info { json: false }) {
+    match command {
+        Command::Scenes => unreachable!("handled above"),
         Command::Info { json } => {
             let info = Info::gather(&device);
             if json {
@@ -59,6 +118,38 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 print!("{}", info.to_text());
             }
         }
+        Command::Demo(args) => {
+            let scene = Scene::load(&args.scene)?;
+            let (report, replay) = demo::demo(&device, &scene, args.seed, args.steps)?;
+            if let Some(path) = &args.record {
+                replay.save(path)?;
+            }
+            print_report(&report, args.json)?;
+        }
+        Command::Replay { file, json } => {
+            let replay = Replay::load(&file)?;
+            let origin = format!("{} (scene `{}`)", file.display(), replay.scene);
+            let scene = Scene::from_toml(&replay.scene_toml, &origin)?;
+            let report = demo::replay(&device, &scene, &replay)?;
+            print_report(&report, json)?;
+            let recorded = format!("{:#018x}", replay.state_hash);
+            if report.state_hash != recorded {
+                bail!(
+                    "{}: the replay ended in state {} but was recorded ending in {recorded}",
+                    file.display(),
+                    report.state_hash
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+fn print_report(report: &Report, json: bool) -> anyhow::Result<()> {
+    if json {
+        println!("{}", serde_json::to_string_pretty(report)?);
+    } else {
+        print!("{}", report.to_text());
     }
     Ok(())
 }

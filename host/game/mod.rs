@@ -3,7 +3,9 @@
 
 pub mod scene;
 pub mod spec;
+pub mod demo;
 pub mod engine;
 
 pub use engine::Game;
+pub use spec::Scene;
 pub mod replay;

@@ -1,0 +1,161 @@
+//! Playing a scene without a window: the autopilot demo and replays, and the figures they
+//! print.
+
+use std::time::Instant;
+
+use gpuwars_kernels::game::control::{DESTROYED, Input, Status, TOO_SLOW};
+use serde::Serialize;
+
+use super::replay::Replay;
+use super::spec::Scene;
+use super::Game;
+use crate::{BackendKind, Device, Error};
+
+/// What `gpuwars demo` and `gpuwars replay` print.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Report {
+    /// The backend that ran the kernels.
+    pub backend: BackendKind,
+    /// The GPU's name, or the CPU emulation and its threads.
+    pub device: String,
+    /// The scene's name.
+    pub scene: String,
+    /// The seed of the generators.
+    pub seed: u32,
+    /// Steps played (fewer than asked if the game ended).
+    pub steps: u64,
+    /// Game seconds played.
+    pub game_seconds: f64,
+    /// Steps per wall-clock second, status read-back included.
+    pub sim_steps_per_s: f64,
+    /// The final state hash, as `0x` and 16 hex digits.
+    pub state_hash: String,
+    /// Points scored.
+    pub score: u32,
+    /// Enemies alive at the end.
+    pub enemies_alive: u32,
+    /// Enemies that died.
+    pub enemies_killed: u32,
+    /// Shots fired.
+    pub shots_fired: u64,
+    /// The FPS meter at the end.
+    pub fps_meter: f32,
+    /// Whether the game ended.
+    pub game_over: bool,
+    /// Why it ended: "too slow", "ship destroyed", or "" while playing.
+    pub game_over_reason: &'static str,
+}
+
+impl Report {
+    /// The report as aligned lines of text.
+    pub fn to_text(&self) -> String {
+        let mut out = String::new();
+        let mut line = |key: &str, value: String| out += &format!("{key:<18}{value}\n");
+        line("backend:", self.backend.to_string());
+        line("device:", self.device.clone());
+        line("scene:", self.scene.clone());
+        line("seed:", self.seed.to_string());
+        line(
+            "steps:",
+            format!("{} ({:.1} s of game time)", self.steps, self.game_seconds),
+        );
+        line("sim_steps_per_s:", format!("{:.1}", self.sim_steps_per_s));
+        line("state_hash:", self.state_hash.clone());
+        line("score:", self.score.to_string());
+        line("enemies_alive:", self.enemies_alive.to_string());
+        line("enemies_killed:", self.enemies_killed.to_string());
+        line("shots_fired:", self.shots_fired.to_string());
+        line("fps_meter:", format!("{:.2}", self.fps_meter));
+        let over = if self.game_over {
+            format!("yes ({})", self.game_over_reason)
+        } else {
+            "no".to_string()
+        };
+        line("game_over:", over);
+        out
+    }
+}
+
+/// A short description of the device.
+pub fn device_name(device: &Device) -> String {
+    match (device.gpu_properties(), device.cpu_threads()) {
+        (Some(gpu), _) => gpu.name.clone(),
+        (None, Some(threads)) => format!("CPU emulation, {threads} threads"),
+        (None, None) => "CPU emulation".to_string(),
+    }
+}
+
+/// Plays up to `steps` steps (fewer if the game ends), each with the input `pilot` gives for
+/// its index (`None`: the autopilot's), and reports. The inputs actually applied are
+/// returned too, for a replay.
+fn play(
+    game: &mut Game,
+    seed: u32,
+    steps: u64,
+    mut pilot: impl FnMut(u64) -> Option<Input>,
+) -> Result<(Report, Vec<Input>), Error> {
+    let mut inputs = Vec::new();
+    let mut shots = 0u64;
+    let mut status = Status::default();
+    let start = Instant::now();
+    for i in 0..steps {
+        status = game.step(pilot(i))?;
+        inputs.push(status.input);
+        shots += u64::from(status.events.shots_fired);
+        if status.is_over() {
+            break;
+        }
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    let device = game.simulation().device();
+    let played = inputs.len() as u64;
+    let report = Report {
+        backend: device.kind(),
+        device: device_name(device),
+        scene: game.scene().name.clone(),
+        seed,
+        steps: played,
+        game_seconds: played as f64 * f64::from(game.scene().world.dt),
+        sim_steps_per_s: played as f64 / seconds.max(f64::MIN_POSITIVE),
+        state_hash: format!("{:#018x}", game.state_hash()?),
+        score: status.score,
+        enemies_alive: status.enemies_alive,
+        enemies_killed: status.enemies_killed,
+        shots_fired: shots,
+        fps_meter: status.fps_meter,
+        game_over: status.is_over(),
+        game_over_reason: match status.game_over {
+            TOO_SLOW => "too slow",
+            DESTROYED => "ship destroyed",
+            _ => "",
+        },
+    };
+    Ok((report, inputs))
+}
+
+/// The autopilot plays `scene` for up to `steps` steps; returns the report and the replay
+/// of the game.
+pub fn demo(device: &Device, scene: &Scene, seed: u32, steps: u64) -> Result<(Report, Replay), Error> {
+    let mut game = Game::new(device, scene, seed)?;
+    let (report, inputs) = play(&mut game, seed, steps, |_| None)?;
+    let replay = Replay {
+        scene: scene.name.clone(),
+        scene_toml: scene.source.clone(),
+        seed,
+        backend: report.backend.to_string(),
+        state_hash: game.state_hash()?,
+        inputs,
+    };
+    Ok((report, replay))
+}
+
+/// Plays `replay`'s inputs on its scene (already read from its `scene_toml`) and reports;
+/// the caller compares [`Report::state_hash`] with the recorded one.
+pub fn replay(device: &Device, scene: &Scene, replay: &Replay) -> Result<Report, Error> {
+    let mut game = Game::new(device, scene, replay.seed)?;
+    let inputs = &replay.inputs;
+    let (report, _) = play(&mut game, replay.seed, inputs.len() as u64, |i| {
+        Some(inputs[i as usize])
+    })?;
+    Ok(report)
+}

@@ -1,0 +1,142 @@
+//! Whole games: the stages a scene launches, determinism across backends and thread
+//! counts, replays, and the autopilot's survival on the paper's scene.
+
+mod common;
+
+use gpuwars::Device;
+use gpuwars::game::scene::built_in;
+use gpuwars::game::{Game, Scene, demo};
+use gpuwars::kernels::registry;
+
+fn scene(name: &str) -> Scene {
+    built_in(name).expect("a built-in scene").expect("it is valid")
+}
+
+/// Plays `steps` autopilot steps of `scene` and returns the game's state hash.
+fn hash_after(device: &Device, scene: &Scene, seed: u32, steps: u32) -> u64 {
+    let mut game = Game::new(device, scene, seed).unwrap();
+    for _ in 0..steps {
+        game.step(None).unwrap();
+    }
+    game.state_hash().unwrap()
+}
+
+/// The launches of `steps` steps of `scene` (autopilot or still input), by kernel name.
+fn launches(scene: &Scene, steps: u32, autopilot: bool) -> std::collections::BTreeMap<&'static str, u64> {
+    let mut device = Device::cpu(Some(2), "tests").unwrap();
+    device.count_launches(true);
+    let mut game = Game::new(&device, scene, 1).unwrap();
+    let input = (!autopilot).then(Default::default);
+    for _ in 0..steps {
+        game.step(input).unwrap();
+    }
+    drop(game);
+    device.launch_counts()
+}
+
+#[test]
+fn a_scene_launches_only_the_stages_it_uses() {
+    let count = |counts: &std::collections::BTreeMap<&str, u64>, name: &str| {
+        counts.get(name).copied().unwrap_or(0)
+    };
+    let (think_k, think_g, think_t) = (
+        registry::THINK_KAMIKAZE.name,
+        registry::THINK_GROUP.name,
+        registry::THINK_TRICKY.name,
+    );
+    // Kamikazes only, circles only, one wave at the start (then one every 5 s).
+    let k = launches(&scene("kamikaze"), 10, true);
+    assert_eq!(count(&k, think_k), 10);
+    assert_eq!(count(&k, think_g) + count(&k, think_t), 0, "{k:?}");
+    assert_eq!(count(&k, registry::COLLIDE_CIRCLES.name), 10);
+    assert_eq!(count(&k, registry::COLLIDE.name), 0, "no rectangles, no rectangle tests");
+    assert_eq!(count(&k, registry::BIRTHS.name), 1);
+    assert_eq!(count(&k, registry::MASTER.name), 10);
+    assert_eq!(count(&k, registry::TALLY.name), 10);
+    assert_eq!(count(&k, registry::AUTOPILOT.name), 10);
+    // Given input, no autopilot.
+    let still = launches(&scene("kamikaze"), 10, false);
+    assert_eq!(count(&still, registry::AUTOPILOT.name), 0);
+    // Tricky enemies only.
+    let t = launches(&scene("tricky"), 4, true);
+    assert_eq!(count(&t, think_t), 4);
+    assert_eq!(count(&t, think_k) + count(&t, think_g), 0, "{t:?}");
+    // Rectangles: the full narrow phase.
+    let a = launches(&scene("arena"), 4, true);
+    assert_eq!(count(&a, registry::COLLIDE.name), 4);
+    assert_eq!(count(&a, registry::COLLIDE_CIRCLES.name), 0);
+    // The paper's seven kinds: one AI launch per kind and step.
+    let p = launches(&scene("paper"), 2, true);
+    assert_eq!(count(&p, think_k), 2 * 2);
+    assert_eq!(count(&p, think_g), 3 * 2);
+    assert_eq!(count(&p, think_t), 2 * 2);
+}
+
+#[test]
+fn buffers_are_sized_from_the_scene() {
+    for built in gpuwars::game::scene::BUILT_IN {
+        let scene = scene(built.name);
+        let game = Game::new(common::cpu(), &scene, 1).unwrap();
+        let expected: u32 = scene
+            .world
+            .kinds
+            .iter()
+            .map(|k| k.capacity.next_multiple_of(32))
+            .sum();
+        assert_eq!(game.simulation().layout().slots, expected, "{}", built.name);
+    }
+}
+
+#[test]
+fn the_game_hash_does_not_depend_on_the_emulators_thread_count() {
+    let scene = scene("paper");
+    let hashes: Vec<u64> = [1, 2, 7]
+        .into_iter()
+        .map(|threads| {
+            let device = Device::cpu(Some(threads), "tests").unwrap();
+            hash_after(&device, &scene, 1, 240)
+        })
+        .collect();
+    assert!(hashes.iter().all(|&h| h == hashes[0]), "{hashes:x?}");
+    let other_seed = hash_after(common::cpu(), &scene, 2, 240);
+    assert_ne!(other_seed, hashes[0]);
+}
+
+#[test]
+fn the_gpu_plays_the_same_game_as_the_cpu() {
+    let Some(gpu) = common::gpu() else { return };
+    for name in ["paper", "arena", "tricky", "group"] {
+        let scene = scene(name);
+        let cpu = hash_after(common::cpu(), &scene, 1, 300);
+        let gpu = hash_after(gpu, &scene, 1, 300);
+        println!("{name}: cpu {cpu:#018x}, gpu {gpu:#018x}");
+        assert_eq!(cpu, gpu, "{name}");
+    }
+}
+
+fn a_replay_reproduces_the_game(device: &Device) {
+    for name in ["kamikaze", "group", "arena"] {
+        let scene = scene(name);
+        let (report, replay) = demo::demo(device, &scene, 3, 400).unwrap();
+        let text = replay.to_json();
+        let read = gpuwars::game::replay::Replay::parse(&text, "memory").unwrap();
+        let scene_again = Scene::from_toml(&read.scene_toml, "replay").unwrap();
+        let again = demo::replay(device, &scene_again, &read).unwrap();
+        assert_eq!(again.state_hash, report.state_hash, "{name}");
+        assert_eq!(again.score, report.score);
+        assert_eq!(format!("{:#018x}", read.state_hash), report.state_hash);
+    }
+}
+
+fn the_autopilot_survives_a_minute_of_the_paper_scene(device: &Device) {
+    let (report, _) = demo::demo(device, &scene("paper"), 1, 3600).unwrap();
+    println!("{}", report.to_text());
+    assert_eq!(report.steps, 3600, "the game ended early: {report:?}");
+    assert!(!report.game_over);
+    assert!(report.enemies_killed > 0 && report.enemies_alive > 4096, "{report:?}");
+}
+
+on_both_backends!(
+    a_replay_reproduces_the_game,
+    the_autopilot_survives_a_minute_of_the_paper_scene,
+);
