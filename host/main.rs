@@ -6,9 +6,9 @@ use std::path::PathBuf;
 
 use anyhow::bail;
 use clap::{Args, Parser, Subcommand};
+use gpuwars::game::Scene;
 use gpuwars::game::demo::{self, Report};
 use gpuwars::game::replay::Replay;
-use gpuwars::game::Scene;
 use gpuwars::game::scene;
 use gpuwars::info::Info;
 use gpuwars::{BackendRequest, Device};

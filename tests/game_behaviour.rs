@@ -33,12 +33,12 @@ fn kamikaze_that_sees_the_ship_hits_it(device: &Device) {
         |_| Some(Input::default()),
         |status, snap| {
             step += 1;
-            if let Some(&k) = live_of(snap, FIRST_ENEMY).first() {
-                if snap.state[k] == State::Attacking as u32 {
-                    attacked_at.get_or_insert(step);
-                    let d = snap.pos[k] - snap.pos[SHIP];
-                    distances.push(d.abs().min(glam::Vec2::splat(400.0) - d.abs()).length());
-                }
+            if let Some(&k) = live_of(snap, FIRST_ENEMY).first()
+                && snap.state[k] == State::Attacking as u32
+            {
+                attacked_at.get_or_insert(step);
+                let d = snap.pos[k] - snap.pos[SHIP];
+                distances.push(d.abs().min(glam::Vec2::splat(400.0) - d.abs()).length());
             }
             if status.events.ship_hits > 0 {
                 hit_at.get_or_insert(step);
@@ -47,13 +47,25 @@ fn kamikaze_that_sees_the_ship_hits_it(device: &Device) {
     );
     let attacked_at = attacked_at.expect("the kamikaze never attacked");
     let hit_at = hit_at.expect("the kamikaze never hit the ship");
-    assert!(attacked_at <= 2, "it saw the ship only at step {attacked_at}");
+    assert!(
+        attacked_at <= 2,
+        "it saw the ship only at step {attacked_at}"
+    );
     assert!(hit_at > attacked_at);
     // It closes in all the way: every attacking step brings it nearer.
-    assert!(distances.windows(2).all(|w| w[1] <= w[0] + 1e-3), "{distances:?}");
+    assert!(
+        distances.windows(2).all(|w| w[1] <= w[0] + 1e-3),
+        "{distances:?}"
+    );
     let status = game.status();
-    assert_eq!(status.enemies_killed, 1, "it should die on the ship: {status:?}");
-    assert!(status.fps_meter < 60.0, "the hit cost the ship no time: {status:?}");
+    assert_eq!(
+        status.enemies_killed, 1,
+        "it should die on the ship: {status:?}"
+    );
+    assert!(
+        status.fps_meter < 60.0,
+        "the hit cost the ship no time: {status:?}"
+    );
 }
 
 /// Mean distance from each enemy to its nearest fellow, at the start and after 10 s, for 48
@@ -126,8 +138,8 @@ fn share_of_shots_that_hit(device: &Device, avoid: &'static str) -> f64 {
             fired += u64::from(status.events.shots_fired);
             // A shot touching anything this step is a hit (it dies of it).
             hits += (0..snap.slots())
-                    .filter(|&s| snap.kind[s] == 1 && snap.contacts[s] > 0)
-                    .count() as u64;
+                .filter(|&s| snap.kind[s] == 1 && snap.contacts[s] > 0)
+                .count() as u64;
         },
     );
     assert!(fired > 100, "only {fired} shots were fired");
@@ -138,7 +150,10 @@ fn avoiding_enemies_dodge_more_bullets(device: &Device) {
     let with = share_of_shots_that_hit(device, "avoid_bullets = true");
     let without = share_of_shots_that_hit(device, "avoid_bullets = false");
     println!("shots that hit: {with:.3} avoiding, {without:.3} not avoiding");
-    assert!(with < 0.8 * without, "avoiding {with}, not avoiding {without}");
+    assert!(
+        with < 0.8 * without,
+        "avoiding {with}, not avoiding {without}"
+    );
 }
 
 fn tricky_enemy_low_on_energy_escapes_and_recovers(device: &Device) {
@@ -184,13 +199,24 @@ fn tricky_enemy_low_on_energy_escapes_and_recovers(device: &Device) {
         .iter()
         .rposition(|e| e.0 == escaping)
         .expect("it never escaped");
-    let first = last - log[..last].iter().rev().take_while(|e| e.0 == escaping).count();
+    let first = last
+        - log[..last]
+            .iter()
+            .rev()
+            .take_while(|e| e.0 == escaping)
+            .count();
     assert!(last < log.len(), "it was still escaping at the end");
     let (run, after) = (&log[first..last], log[last]);
     assert!(run[0].1 <= 2, "it escaped with energy {}", run[0].1);
-    assert!(run.windows(2).all(|w| w[1].1 >= w[0].1), "energy fell while escaping");
+    assert!(
+        run.windows(2).all(|w| w[1].1 >= w[0].1),
+        "energy fell while escaping"
+    );
     assert!(after.1 == 4, "it stopped escaping at energy {}", after.1);
-    assert!(run.last().unwrap().2 > run[0].2, "it did not get away: {run:?}");
+    assert!(
+        run.last().unwrap().2 > run[0].2,
+        "it did not get away: {run:?}"
+    );
 }
 
 on_both_backends!(
@@ -199,4 +225,3 @@ on_both_backends!(
     avoiding_enemies_dodge_more_bullets,
     tricky_enemy_low_on_energy_escapes_and_recovers,
 );
-

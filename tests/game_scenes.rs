@@ -9,7 +9,9 @@ use gpuwars::game::{Game, Scene, demo};
 use gpuwars::kernels::registry;
 
 fn scene(name: &str) -> Scene {
-    built_in(name).expect("a built-in scene").expect("it is valid")
+    built_in(name)
+        .expect("a built-in scene")
+        .expect("it is valid")
 }
 
 /// Plays `steps` autopilot steps of `scene` and returns the game's state hash.
@@ -22,7 +24,11 @@ fn hash_after(device: &Device, scene: &Scene, seed: u32, steps: u32) -> u64 {
 }
 
 /// The launches of `steps` steps of `scene` (autopilot or still input), by kernel name.
-fn launches(scene: &Scene, steps: u32, autopilot: bool) -> std::collections::BTreeMap<&'static str, u64> {
+fn launches(
+    scene: &Scene,
+    steps: u32,
+    autopilot: bool,
+) -> std::collections::BTreeMap<&'static str, u64> {
     let mut device = Device::cpu(Some(2), "tests").unwrap();
     device.count_launches(true);
     let mut game = Game::new(&device, scene, 1).unwrap();
@@ -49,7 +55,11 @@ fn a_scene_launches_only_the_stages_it_uses() {
     assert_eq!(count(&k, think_k), 10);
     assert_eq!(count(&k, think_g) + count(&k, think_t), 0, "{k:?}");
     assert_eq!(count(&k, registry::COLLIDE_CIRCLES.name), 10);
-    assert_eq!(count(&k, registry::COLLIDE.name), 0, "no rectangles, no rectangle tests");
+    assert_eq!(
+        count(&k, registry::COLLIDE.name),
+        0,
+        "no rectangles, no rectangle tests"
+    );
     assert_eq!(count(&k, registry::BIRTHS.name), 1);
     assert_eq!(count(&k, registry::MASTER.name), 10);
     assert_eq!(count(&k, registry::TALLY.name), 10);
@@ -133,7 +143,10 @@ fn the_autopilot_survives_a_minute_of_the_paper_scene(device: &Device) {
     println!("{}", report.to_text());
     assert_eq!(report.steps, 3600, "the game ended early: {report:?}");
     assert!(!report.game_over);
-    assert!(report.enemies_killed > 0 && report.enemies_alive > 4096, "{report:?}");
+    assert!(
+        report.enemies_killed > 0 && report.enemies_alive > 4096,
+        "{report:?}"
+    );
 }
 
 on_both_backends!(

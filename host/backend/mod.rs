@@ -8,9 +8,9 @@
 mod cpu;
 mod cuda;
 
+use std::collections::BTreeMap;
 use std::fmt;
 use std::marker::PhantomData;
-use std::collections::BTreeMap;
 use std::sync::Mutex;
 
 use gpuwars_kernels::{DevSlice, Kernel, KernelArgs};
@@ -336,9 +336,11 @@ impl Device {
 
     /// Launches per kernel name since counting started (empty when off), in name order.
     pub fn launch_counts(&self) -> BTreeMap<&'static str, u64> {
-        self.launches.as_ref().map_or_else(BTreeMap::new, |launches| {
-            launches.lock().unwrap_or_else(|e| e.into_inner()).clone()
-        })
+        self.launches
+            .as_ref()
+            .map_or_else(BTreeMap::new, |launches| {
+                launches.lock().unwrap_or_else(|e| e.into_inner()).clone()
+            })
     }
 
     /// Waits until every queued launch and copy has finished, and reports a kernel fault.

@@ -6,9 +6,9 @@ use std::time::Instant;
 use gpuwars_kernels::game::control::{DESTROYED, Input, Status, TOO_SLOW};
 use serde::Serialize;
 
+use super::Game;
 use super::replay::Replay;
 use super::spec::Scene;
-use super::Game;
 use crate::{BackendKind, Device, Error};
 
 /// What `gpuwars demo` and `gpuwars replay` print.
@@ -135,7 +135,12 @@ fn play(
 
 /// The autopilot plays `scene` for up to `steps` steps; returns the report and the replay
 /// of the game.
-pub fn demo(device: &Device, scene: &Scene, seed: u32, steps: u64) -> Result<(Report, Replay), Error> {
+pub fn demo(
+    device: &Device,
+    scene: &Scene,
+    seed: u32,
+    steps: u64,
+) -> Result<(Report, Replay), Error> {
     let mut game = Game::new(device, scene, seed)?;
     let (report, inputs) = play(&mut game, seed, steps, |_| None)?;
     let replay = Replay {

@@ -156,7 +156,12 @@ impl Behaviour {
             return Err(error(at("machine"), "must be kamikaze, group or tricky"));
         }
         check_range(at("vision"), self.vision, (0.0, false), MAX_SIDE)?;
-        check_range(at("speed"), self.speed, (0.0, false), kind.max_speed.min(MAX_SIDE))?;
+        check_range(
+            at("speed"),
+            self.speed,
+            (0.0, false),
+            kind.max_speed.min(MAX_SIDE),
+        )?;
         if !kind.mass.is_finite() {
             return Err(error(
                 at("machine"),

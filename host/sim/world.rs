@@ -13,6 +13,7 @@
 //! A world whose kinds never collide skips the first two.
 
 use glam::Vec2;
+use gpuwars_kernels::game::master::FreeSlots;
 use gpuwars_kernels::rng::Mt607Params;
 use gpuwars_kernels::rng::RngStreams;
 use gpuwars_kernels::sim::broad::{AssignArgs, BoundsArgs, CellIndex};
@@ -21,7 +22,6 @@ use gpuwars_kernels::sim::integrate::IntegrateArgs;
 use gpuwars_kernels::sim::narrow::CollideArgs;
 use gpuwars_kernels::sim::scatter::ScatterArgs;
 use gpuwars_kernels::sim::{Bodies, Contacts, KindInfo, SlotRange, Space};
-use gpuwars_kernels::game::master::FreeSlots;
 use gpuwars_kernels::{DevSlice, Kernel, KernelArgs, registry};
 
 use super::layout::{self, Layout};
@@ -397,7 +397,12 @@ impl<'d> Simulation<'d> {
     }
 
     /// Launches `kernel` with one thread per item.
-    pub(crate) fn launch<A: KernelArgs>(&self, kernel: Kernel<A>, items: u32, args: &A) -> Result<(), Error> {
+    pub(crate) fn launch<A: KernelArgs>(
+        &self,
+        kernel: Kernel<A>,
+        items: u32,
+        args: &A,
+    ) -> Result<(), Error> {
         // SAFETY: every view in the argument structs of this module is of a buffer owned by
         // `self` and sized from the layout for the kernel's contract; nothing else touches
         // them during the launch.

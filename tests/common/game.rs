@@ -120,7 +120,10 @@ pub fn aim_at(snapshot: &Snapshot, ship: usize, target: Vec2, fire: bool) -> Inp
 
 /// Live slots of kind `kind`.
 pub fn live_of(snapshot: &Snapshot, kind: u32) -> Vec<usize> {
-    snapshot.live().filter(|&s| snapshot.kind[s] == kind).collect()
+    snapshot
+        .live()
+        .filter(|&s| snapshot.kind[s] == kind)
+        .collect()
 }
 
 /// Mean distance from each body in `slots` to its nearest other one (on a torus of `size`

@@ -83,7 +83,9 @@ pub fn threat(d: Vec2, rel: Vec2, radius: f32) -> Option<(f32, Vec2)> {
         return None;
     }
     // Step away from the point of closest approach; dead-on, step to the shot's left.
-    let away = (-miss).try_normalize().unwrap_or(rel.perp().normalize_or_zero());
+    let away = (-miss)
+        .try_normalize()
+        .unwrap_or(rel.perp().normalize_or_zero());
     Some((time, away))
 }
 
@@ -120,13 +122,13 @@ pub fn look(args: &ThinkArgs, machine: Machine, slot: u32) -> Sight {
             if dist2 < personal * personal {
                 sight.crowd -= d.normalize_or_zero();
             }
-        } else if dodges && kind == args.shot_kind {
-            if let Some((time, away)) = threat(d, b.vel.get(other) - vel, radius) {
-                if time < soonest {
-                    soonest = time;
-                    sight.dodge = Some(away);
-                }
-            }
+        } else if dodges
+            && kind == args.shot_kind
+            && let Some((time, away)) = threat(d, b.vel.get(other) - vel, radius)
+            && time < soonest
+        {
+            soonest = time;
+            sight.dodge = Some(away);
         }
     });
     if similar > 0 {
@@ -197,7 +199,7 @@ pub fn think<const MACHINE: u32>(t: Thread, args: &ThinkArgs) {
     }
     if state == State::Escaping
         && brain.recover_every != 0
-        && b.age.get(slot) % brain.recover_every == 0
+        && b.age.get(slot).is_multiple_of(brain.recover_every)
     {
         b.energy.set(slot, (energy + 1).min(full));
     }

@@ -31,11 +31,7 @@ impl Input {
     pub fn movement(&self) -> Vec2 {
         let v = Vec2::new(self.move_x as f32, self.move_y as f32) / MOVE_SCALE as f32;
         let len2 = v.length_squared();
-        if len2 > 1.0 {
-            v / libm::sqrtf(len2)
-        } else {
-            v
-        }
+        if len2 > 1.0 { v / libm::sqrtf(len2) } else { v }
     }
 
     /// Unit vector of the shooting direction.

@@ -214,7 +214,11 @@ const fn rule(from: &[State], when: When, to: State) -> Rule {
         bits |= from[i].bit();
         i += 1;
     }
-    Rule { from: bits, when, to }
+    Rule {
+        from: bits,
+        when,
+        to,
+    }
 }
 
 use State::{

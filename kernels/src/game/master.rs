@@ -183,7 +183,7 @@ fn fly_ship(args: &MasterArgs, input: &Input, step: u32) {
     let ship = rules.ship.start;
     b.vel.set(ship, input.movement() * rules.ship_speed);
     b.force.set(ship, Vec2::ZERO);
-    if rules.recover_every != 0 && step % rules.recover_every == 0 {
+    if rules.recover_every != 0 && step.is_multiple_of(rules.recover_every) {
         let energy = b.energy.get(ship);
         b.energy.set(ship, (energy + 1).min(rules.ship_energy));
     }
@@ -199,7 +199,13 @@ fn fire(args: &MasterArgs, input: &Input) {
     let aim = input.aim_dir();
     let gap = args.kinds.get(rules.ship_kind).radius + shot.radius;
     let pos = b.pos.get(ship) + aim * (gap * 1.01);
-    birth(b, &args.space, slot, (pos, aim * rules.shot_speed), shot.energy);
+    birth(
+        b,
+        &args.space,
+        slot,
+        (pos, aim * rules.shot_speed),
+        shot.energy,
+    );
 }
 
 /// Arguments of [`births`].

@@ -71,7 +71,7 @@ impl Wave {
         if self.every == 0 {
             since == 0
         } else {
-            since % self.every == 0
+            since.is_multiple_of(self.every)
         }
     }
 }
