@@ -59,10 +59,10 @@ enum Command {
 #[derive(Args)]
 struct DemoArgs {
     /// A built-in scene's name (see `gpuwars scenes`) or a path to a scene TOML file.
-    #[arg(long, default_value = "paper")]
+    #[arg(long, env = "GPUWARS_SCENE", default_value = "paper")]
     scene: String,
     /// Steps to play (the game may end sooner).
-    #[arg(long, default_value_t = 3600, value_parser = clap::value_parser!(u64).range(1..=1_000_000_000))]
+    #[arg(long, env = "GPUWARS_STEPS", default_value_t = 3600, value_parser = clap::value_parser!(u64).range(1..=1_000_000_000))]
     steps: u64,
     /// Seed of the random number generators.
     #[arg(long, default_value_t = 1)]
@@ -75,16 +75,14 @@ struct DemoArgs {
     record: Option<PathBuf>,
 }
 
-impl Default for DemoArgs {
-    fn default() -> Self {
-        DemoArgs {
-            scene: "paper".to_string(),
-            steps: 3600,
-            seed: 1,
-            json: false,
-            record: None,
-        }
+/// The default command: the demo with its defaults (and the environment's settings).
+fn default_demo() -> DemoArgs {
+    #[derive(Parser)]
+    struct Defaults {
+        #[command(flatten)]
+        demo: DemoArgs,
     }
+    Defaults::parse_from(["gpuwars"]).demo
 }
 
 fn main() -> ExitCode {
@@ -99,7 +97,7 @@ fn main() -> ExitCode {
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
-    let command = cli.command.unwrap_or(Command::Demo(DemoArgs::default()));
+    let command = cli.command.unwrap_or_else(|| Command::Demo(default_demo()));
     if let Command::Scenes = command {
         for built_in in scene::BUILT_IN {
             let scene = Scene::from_toml(built_in.source, built_in.name)?;

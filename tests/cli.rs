@@ -121,8 +121,8 @@ fn bad_flags_name_the_allowed_values() {
 }
 
 #[test]
-fn text_info_is_the_default_command() {
-    let out = gpuwars(&["--backend", "cpu"]);
+fn text_info_names_the_backend() {
+    let out = gpuwars(&["info", "--backend", "cpu"]);
     assert!(out.status.success());
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
@@ -130,4 +130,134 @@ fn text_info_is_the_default_command() {
         "{stdout}"
     );
     assert!(stdout.contains("backend:      cpu"), "{stdout}");
+}
+
+#[test]
+fn the_default_command_is_the_headless_demo() {
+    let out = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
+        .args(["--backend", "cpu"])
+        .env("GPUWARS_SCENE", "kamikaze")
+        .env("GPUWARS_STEPS", "30")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("scene:            kamikaze"), "{stdout}");
+    assert!(stdout.contains("steps:            30 "), "{stdout}");
+}
+
+#[test]
+fn scenes_lists_every_built_in_scene() {
+    let out = gpuwars(&["scenes"]);
+    assert!(out.status.success());
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let names: Vec<&str> = stdout
+        .lines()
+        .filter_map(|l| l.split_whitespace().next())
+        .collect();
+    let built_in: Vec<&str> = gpuwars::game::scene::BUILT_IN
+        .iter()
+        .map(|b| b.name)
+        .collect();
+    assert_eq!(names, built_in);
+    assert!(built_in.contains(&"paper"));
+}
+
+fn demo_json(args: &[&str]) -> Value {
+    let mut all = vec!["demo", "--backend", "cpu", "--json"];
+    all.extend_from_slice(args);
+    info_json(&all)
+}
+
+#[test]
+fn demo_prints_every_figure_and_is_repeatable() {
+    let report = demo_json(&["--scene", "kamikaze", "--steps", "120", "--seed", "4"]);
+    for key in [
+        "backend",
+        "device",
+        "scene",
+        "seed",
+        "steps",
+        "sim_steps_per_s",
+        "state_hash",
+        "score",
+        "enemies_alive",
+        "enemies_killed",
+        "fps_meter",
+        "game_over",
+    ] {
+        assert!(!report[key].is_null(), "{key} missing from {report}");
+    }
+    assert_eq!(report["backend"], "cpu");
+    assert_eq!(report["scene"], "kamikaze");
+    assert_eq!(report["seed"], 4);
+    assert_eq!(report["steps"], 120);
+    assert_eq!(report["game_over"], false);
+    assert!(report["sim_steps_per_s"].as_f64().unwrap() > 0.0);
+    let hash = report["state_hash"].as_str().unwrap();
+    assert!(hash.len() == 18 && hash.starts_with("0x"), "{hash}");
+    let again = demo_json(&["--scene", "kamikaze", "--steps", "120", "--seed", "4"]);
+    assert_eq!(again["state_hash"], report["state_hash"]);
+    let other = demo_json(&["--scene", "kamikaze", "--steps", "120", "--seed", "5"]);
+    assert_ne!(other["state_hash"], report["state_hash"]);
+}
+
+#[test]
+fn demo_takes_a_scene_file_and_names_the_line_of_a_bad_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = dir.path().join("mine.toml");
+    let source = gpuwars::game::scene::BUILT_IN[1]
+        .source
+        .replace("name = \"kamikaze\"", "name = \"mine\"");
+    std::fs::write(&good, &source).unwrap();
+    let report = demo_json(&["--scene", good.to_str().unwrap(), "--steps", "10"]);
+    assert_eq!(report["scene"], "mine");
+
+    let bad = dir.path().join("bad.toml");
+    let broken = source.replace("capacity = 128", "capacity = 0");
+    let line = broken.lines().position(|l| l == "capacity = 0").unwrap() + 1;
+    std::fs::write(&bad, &broken).unwrap();
+    let out = gpuwars(&["demo", "--backend", "cpu", "--scene", bad.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains(&format!(
+            "bad.toml:{line}: kinds[2].capacity: 0 is out of range"
+        )),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn a_recorded_demo_replays_to_the_same_hash_and_a_tampered_one_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("game.replay.json");
+    let path = file.to_str().unwrap();
+    let report = demo_json(&["--scene", "group", "--steps", "150", "--record", path]);
+    let replayed = info_json(&["replay", path, "--backend", "cpu", "--json"]);
+    assert_eq!(replayed["state_hash"], report["state_hash"]);
+    assert_eq!(replayed["steps"], 150);
+
+    let text = std::fs::read_to_string(&file).unwrap();
+    let hash = report["state_hash"].as_str().unwrap();
+    std::fs::write(&file, text.replace(hash, "0x0000000000000001")).unwrap();
+    let out = gpuwars(&["replay", path, "--backend", "cpu"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("recorded ending in 0x0000000000000001"),
+        "{stderr}"
+    );
+
+    std::fs::write(&file, &text[..text.len() / 2]).unwrap();
+    let out = gpuwars(&["replay", path, "--backend", "cpu"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("game.replay.json:"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
 }
