@@ -12,7 +12,7 @@
 //! continues the creator's random stream); the tempering masks depend on `matrix_a` alone and
 //! are computed in parallel. The file is written atomically.
 
-use std::io::Write;
+use std::fmt::Write;
 use std::path::PathBuf;
 use std::sync::mpsc;
 
@@ -71,31 +71,20 @@ fn main() -> anyhow::Result<()> {
     progress.finish();
     sets.sort_unstable_by_key(|&(id, _)| id);
 
-    let dir = args.out.parent().filter(|d| !d.as_os_str().is_empty());
-    let mut file = tempfile::NamedTempFile::new_in(dir.unwrap_or(".".as_ref()))
-        .context("creating the temporary output file")?;
-    writeln!(
-        file,
+    let mut text = format!(
         "# MT607 parameter sets (w = 32, p = 607) from the Dynamic Creator: dcmt's init_dc({seed})\n\
          # followed by get_mt_parameter_id(32, 607, id) for id = 0..{count} in sequence.\n\
          # Made by: cargo run --release --example mt607_table -- --seed {seed} --count {count} --out FILE\n\
-         # Columns: id matrix_a mask_b mask_c"
-    )?;
+         # Columns: id matrix_a mask_b mask_c\n"
+    );
     for (id, p) in &sets {
         writeln!(
-            file,
+            text,
             "{id} {:#010x} {:#010x} {:#010x}",
             p.matrix_a, p.mask_b, p.mask_c
         )?;
     }
-    // A temporary file is private (0600); the table is ordinary data.
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        file.as_file()
-            .set_permissions(std::fs::Permissions::from_mode(0o644))?;
-    }
-    file.persist(&args.out)
+    gpuwars::files::write_atomically(&args.out, text.as_bytes())
         .with_context(|| format!("writing {}", args.out.display()))?;
     eprintln!(
         "wrote {} parameter sets to {}",

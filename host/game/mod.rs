@@ -3,9 +3,9 @@
 
 pub mod demo;
 pub mod engine;
+pub mod replay;
 pub mod scene;
 pub mod spec;
 
 pub use engine::Game;
 pub use spec::Scene;
-pub mod replay;

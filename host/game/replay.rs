@@ -1,0 +1,746 @@
+//! Replays: the per-step [`Input`] of one game, with what it takes to run it again (the scene's
+//! TOML text, the seed) and the final state hash it must reproduce.
+//!
+//! The file is JSON, versioned, with the inputs run-length encoded one run per line:
+//!
+//! ```json
+//! {
+//!   "format": "gpuwars-replay",
+//!   "version": 1,
+//!   "scene": "paper",
+//!   "scene_toml": "<the whole scene TOML text>",
+//!   "seed": 1,
+//!   "backend": "cpu",
+//!   "steps": 3600,
+//!   "state_hash": "0x0123456789abcdef",
+//!   "inputs": [
+//!     [12, 0, 0, 0, 0],
+//!     [1, -707, 707, 16384, 1]
+//!   ]
+//! }
+//! ```
+//!
+//! Each run is `[repeat, move_x, move_y, aim, fire]`. Reading checks everything and reports
+//! the line and the field of the first problem; it never panics.
+
+use std::cell::Cell;
+use std::fmt::{self, Display};
+use std::path::Path;
+
+use gpuwars_kernels::game::control::Input;
+use serde::de::{self, DeserializeSeed, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
+
+/// The `format` of every replay file.
+pub const FORMAT: &str = "gpuwars-replay";
+/// The `version` this build reads and writes.
+pub const VERSION: u64 = 1;
+/// The most steps a replay may hold.
+pub const MAX_STEPS: u64 = 1_000_000_000;
+
+/// The keys of the top-level object, in the order they are written.
+const KEYS: [&str; 9] = [
+    "format",
+    "version",
+    "scene",
+    "scene_toml",
+    "seed",
+    "backend",
+    "steps",
+    "state_hash",
+    "inputs",
+];
+
+/// One recorded game.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Replay {
+    /// Short name of the scene (`paper`, …).
+    pub scene: String,
+    /// The whole TOML text of the scene, so that the replay does not depend on a file that may
+    /// change.
+    pub scene_toml: String,
+    /// The game's random seed.
+    pub seed: u32,
+    /// The backend that recorded it (informational: every backend gives the same hash).
+    pub backend: String,
+    /// The state hash after the last step.
+    pub state_hash: u64,
+    /// The input of each step, in order.
+    pub inputs: Vec<Input>,
+}
+
+/// What is wrong with a replay file, and where.
+///
+/// Displays as `{file}:{line}: {field}: {problem}`, without `:{line}` when the line is
+/// unknown and without `{field}: ` when no field is concerned.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub struct ReplayError {
+    /// The path as given.
+    pub file: String,
+    /// 1-based line, when the error points into the text.
+    pub line: Option<usize>,
+    /// The key concerned (`seed`, `inputs[17].aim`: run 17, counted from 0), or empty.
+    pub field: String,
+    /// What is wrong and, for ranges, what is allowed.
+    pub problem: String,
+}
+
+impl fmt::Display for ReplayError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.file)?;
+        if let Some(line) = self.line {
+            write!(f, ":{line}")?;
+        }
+        f.write_str(": ")?;
+        if !self.field.is_empty() {
+            write!(f, "{}: ", self.field)?;
+        }
+        f.write_str(&self.problem)
+    }
+}
+
+impl ReplayError {
+    /// An error in `file`.
+    fn new(file: &str, line: Option<usize>, field: impl Display, problem: impl Display) -> Self {
+        ReplayError {
+            file: file.to_owned(),
+            line,
+            field: field.to_string(),
+            problem: problem.to_string(),
+        }
+    }
+}
+
+impl Replay {
+    /// The JSON text (runs merged, one run per line).
+    pub fn to_json(&self) -> String {
+        let runs: Vec<String> = self
+            .inputs
+            .chunk_by(|a, b| a == b)
+            .map(|run| {
+                let i = run[0];
+                let n = run.len();
+                format!(
+                    "    [{n}, {}, {}, {}, {}]",
+                    i.move_x, i.move_y, i.aim, i.fire
+                )
+            })
+            .collect();
+        let inputs = if runs.is_empty() {
+            "[]".to_owned()
+        } else {
+            format!("[\n{}\n  ]", runs.join(",\n"))
+        };
+        // Value's Display escapes a string exactly as JSON needs, and cannot fail.
+        let string = |s: &str| serde_json::Value::from(s).to_string();
+        format!(
+            "{{\n  \"format\": {},\n  \"version\": {VERSION},\n  \"scene\": {},\n  \
+             \"scene_toml\": {},\n  \"seed\": {},\n  \"backend\": {},\n  \"steps\": {},\n  \
+             \"state_hash\": \"0x{:016x}\",\n  \"inputs\": {inputs}\n}}\n",
+            string(FORMAT),
+            string(&self.scene),
+            string(&self.scene_toml),
+            self.seed,
+            string(&self.backend),
+            self.inputs.len(),
+            self.state_hash,
+        )
+    }
+
+    /// Parses and validates; `origin` names the file in errors.
+    pub fn parse(text: &str, origin: &str) -> Result<Replay, ReplayError> {
+        // The header first: a file of another version is reported as such, not as a pile of
+        // keys this build does not know.
+        let header = read_fields(text, origin, true)?;
+        let missing = |key: &str| ReplayError::new(origin, None, key, "missing");
+        header.format.ok_or_else(|| missing("format"))?;
+        header.version.ok_or_else(|| missing("version"))?;
+
+        let fields = read_fields(text, origin, false)?;
+        let scene = fields.scene.ok_or_else(|| missing("scene"))?;
+        let scene_toml = fields.scene_toml.ok_or_else(|| missing("scene_toml"))?;
+        let seed = fields.seed.ok_or_else(|| missing("seed"))?;
+        let backend = fields.backend.ok_or_else(|| missing("backend"))?;
+        let steps = fields.steps.ok_or_else(|| missing("steps"))?;
+        let state_hash = fields.state_hash.ok_or_else(|| missing("state_hash"))?;
+        let runs = fields.inputs.ok_or_else(|| missing("inputs"))?;
+
+        // The runs were checked to add up to at most MAX_STEPS as they were read.
+        let total: u64 = runs.iter().map(|&(repeat, _)| repeat).sum();
+        let steps_error =
+            |problem: String| ReplayError::new(origin, key_line(text, "steps"), "steps", problem);
+        if total != steps {
+            return Err(steps_error(format!(
+                "{steps} does not match the inputs, whose runs add up to {total} steps"
+            )));
+        }
+        // Reserved up front so that a huge replay is an error, not an abort.
+        let mut inputs = Vec::new();
+        usize::try_from(total)
+            .ok()
+            .and_then(|total| inputs.try_reserve_exact(total).ok())
+            .ok_or_else(|| steps_error(format!("{steps} steps do not fit in memory")))?;
+        for (repeat, input) in runs {
+            // Each repeat is at most `total`, which fits in a usize (reserved above).
+            inputs.extend(std::iter::repeat_n(input, repeat as usize));
+        }
+        Ok(Replay {
+            scene,
+            scene_toml,
+            seed,
+            backend,
+            state_hash,
+            inputs,
+        })
+    }
+
+    /// Reads and parses a file.
+    pub fn load(path: &Path) -> Result<Replay, ReplayError> {
+        let origin = path.display().to_string();
+        let bytes = std::fs::read(path)
+            .map_err(|e| ReplayError::new(&origin, None, "", format!("cannot read: {e}")))?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+            let line = line_at(valid, valid.len());
+            ReplayError::new(&origin, Some(line), "", "not UTF-8 text")
+        })?;
+        Replay::parse(&text, &origin)
+    }
+
+    /// Writes atomically: a temporary file in the same directory, flushed and synced, then
+    /// renamed over `path`. An existing file is replaced only on success; on failure nothing
+    /// is left behind. A replay that could not be read back (an input out of range, too many
+    /// steps) is refused before anything is written.
+    pub fn save(&self, path: &Path) -> Result<(), ReplayError> {
+        let origin = path.display().to_string();
+        self.check(&origin)?;
+        let io_error = |what: &str, e: std::io::Error| {
+            ReplayError::new(&origin, None, "", format!("cannot {what}: {e}"))
+        };
+        crate::files::write_atomically(path, self.to_json().as_bytes())
+            .map_err(|e| io_error("write", e))?;
+        Ok(())
+    }
+
+    /// What [`Replay::parse`] would refuse in this replay's file.
+    fn check(&self, origin: &str) -> Result<(), ReplayError> {
+        if self.inputs.len() as u64 > MAX_STEPS {
+            let problem = format!(
+                "{} steps is out of range (allowed 0 to {MAX_STEPS}); not saved",
+                self.inputs.len()
+            );
+            return Err(ReplayError::new(origin, None, "inputs", problem));
+        }
+        for (step, input) in self.inputs.iter().enumerate() {
+            if let Some((field, allowed)) = input.problem() {
+                let problem = format!("out of range (allowed {allowed}) in {input:?}; not saved");
+                return Err(ReplayError::new(
+                    origin,
+                    None,
+                    format!("inputs[{step}].{field}"),
+                    problem,
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The 1-based line of byte `at` of `text`.
+fn line_at(text: &[u8], at: usize) -> usize {
+    text[..at].iter().filter(|&&b| b == b'\n').count() + 1
+}
+
+/// The line of the top-level key `key` in the JSON object `text`, if it is written plainly
+/// (without escapes). serde_json gives no positions for values that parsed fine.
+fn key_line(text: &str, key: &str) -> Option<usize> {
+    let bytes = text.as_bytes();
+    let mut depth = 0usize;
+    let mut i = 0;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'{' | b'[' => depth += 1,
+            b'}' | b']' => depth = depth.saturating_sub(1),
+            b'"' => {
+                let start = i + 1;
+                i = start;
+                while i < bytes.len() && bytes[i] != b'"' {
+                    i += if bytes[i] == b'\\' { 2 } else { 1 };
+                }
+                let is_key = depth == 1
+                    && text
+                        .get(i + 1..)
+                        .is_some_and(|rest| rest.trim_start().starts_with(':'));
+                if is_key && text.get(start..i) == Some(key) {
+                    return Some(line_at(bytes, start));
+                }
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    None
+}
+
+/// Runs the strict reader (or, with `header_only`, the one that reads only `format` and
+/// `version`) over the whole text.
+fn read_fields(text: &str, origin: &str, header_only: bool) -> Result<Fields, ReplayError> {
+    let blame = Blame::default();
+    let mut json = serde_json::Deserializer::from_str(text);
+    let seed = Top {
+        blame: &blame,
+        header_only,
+    };
+    let fields = seed.deserialize(&mut json).and_then(|fields| {
+        json.end()?;
+        Ok(fields)
+    });
+    fields.map_err(|e| {
+        // serde_json appends the position to the message; the line is reported on its own.
+        let message = e.to_string();
+        let position = format!(" at line {} column {}", e.line(), e.column());
+        let problem = message.strip_suffix(&position).unwrap_or(&message);
+        let line = (e.line() > 0).then_some(e.line());
+        ReplayError::new(origin, line, blame.0.take().unwrap_or_default(), problem)
+    })
+}
+
+/// The name of the value a parse error happened in. serde_json knows the line of an error but
+/// not which key it was under, so the readers below note it on the way out.
+#[derive(Default)]
+struct Blame(Cell<Option<String>>);
+
+impl Blame {
+    /// Names `field` as where `result`'s error happened, unless a value inside it already was.
+    fn name<T, E>(&self, field: impl Display, result: Result<T, E>) -> Result<T, E> {
+        if result.is_err() {
+            self.note(field);
+        }
+        result
+    }
+
+    /// An error about `field`.
+    fn fail<E: de::Error>(&self, field: impl Display, problem: impl Display) -> E {
+        self.note(field);
+        E::custom(problem)
+    }
+
+    /// Notes `field` unless a field was noted already (the innermost is the most precise).
+    fn note(&self, field: impl Display) {
+        let inner = self.0.take();
+        self.0.set(inner.or_else(|| Some(field.to_string())));
+    }
+}
+
+/// Where in the file a value is.
+#[derive(Clone, Copy)]
+enum Field {
+    /// A top-level key.
+    Key(&'static str),
+    /// Run `i` of `inputs`.
+    Run(usize),
+    /// One number of run `i`.
+    Number(usize, &'static str),
+}
+
+impl Display for Field {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Field::Key(key) => f.write_str(key),
+            Field::Run(i) => write!(f, "inputs[{i}]"),
+            Field::Number(i, name) => write!(f, "inputs[{i}].{name}"),
+        }
+    }
+}
+
+/// The top-level values, as read (all `None` but `format` and `version` for a header).
+#[derive(Default)]
+struct Fields {
+    format: Option<()>,
+    version: Option<()>,
+    scene: Option<String>,
+    scene_toml: Option<String>,
+    seed: Option<u32>,
+    backend: Option<String>,
+    steps: Option<u64>,
+    state_hash: Option<u64>,
+    inputs: Option<Vec<(u64, Input)>>,
+}
+
+/// Reads the top-level object; with `header_only`, just `format` and `version` (the rest is
+/// skipped, only its syntax checked).
+struct Top<'a> {
+    blame: &'a Blame,
+    header_only: bool,
+}
+
+impl<'de> DeserializeSeed<'de> for Top<'_> {
+    type Value = Fields;
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<Fields, D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for Top<'_> {
+    type Value = Fields;
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a replay (a JSON object)")
+    }
+
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Fields, A::Error> {
+        let blame = self.blame;
+        let mut f = Fields::default();
+        while let Some(key) = map.next_key::<String>()? {
+            let map = &mut map;
+            match key.as_str() {
+                "format" => {
+                    let value = text(blame, "format", |s| match s {
+                        FORMAT => Ok(()),
+                        _ => Err(format!(
+                            "{s:?} is not a GpuWars replay (allowed {FORMAT:?})"
+                        )),
+                    });
+                    store(map, blame, &mut f.format, "format", value)?;
+                }
+                "version" => {
+                    let version = Int {
+                        blame,
+                        field: Field::Key("version"),
+                        allowed: VERSION.to_string(),
+                        convert: |v| match u64::try_from(v) {
+                            Ok(VERSION) => Ok(()),
+                            _ => Err(format!(
+                                "unsupported version {v} (this build reads version {VERSION})"
+                            )),
+                        },
+                    };
+                    store(map, blame, &mut f.version, "version", version)?;
+                }
+                other if self.header_only => {
+                    blame.name(other, map.next_value::<IgnoredAny>())?;
+                }
+                "scene" => store(map, blame, &mut f.scene, "scene", string(blame, "scene"))?,
+                "scene_toml" => {
+                    let value = string(blame, "scene_toml");
+                    store(map, blame, &mut f.scene_toml, "scene_toml", value)?;
+                }
+                "seed" => {
+                    let value = ranged(blame, Field::Key("seed"), 0, u32::MAX);
+                    store(map, blame, &mut f.seed, "seed", value)?;
+                }
+                "backend" => {
+                    let value = string(blame, "backend");
+                    store(map, blame, &mut f.backend, "backend", value)?;
+                }
+                "steps" => {
+                    let value = ranged(blame, Field::Key("steps"), 0, MAX_STEPS);
+                    store(map, blame, &mut f.steps, "steps", value)?;
+                }
+                "state_hash" => {
+                    let value = text(blame, "state_hash", parse_hash);
+                    store(map, blame, &mut f.state_hash, "state_hash", value)?;
+                }
+                "inputs" => store(map, blame, &mut f.inputs, "inputs", Runs { blame })?,
+                other => {
+                    let allowed = KEYS.join(", ");
+                    return Err(blame.fail(other, format!("unknown key (allowed {allowed})")));
+                }
+            }
+        }
+        Ok(f)
+    }
+}
+
+/// Reads the value of `key` into `slot`; a key may appear once.
+fn store<'de, A: MapAccess<'de>, S: DeserializeSeed<'de>>(
+    map: &mut A,
+    blame: &Blame,
+    slot: &mut Option<S::Value>,
+    key: &str,
+    seed: S,
+) -> Result<(), A::Error> {
+    if slot.is_some() {
+        return Err(blame.fail(key, "appears twice"));
+    }
+    *slot = Some(map.next_value_seed(seed)?);
+    Ok(())
+}
+
+/// `0x` and 16 hex digits (either case).
+fn parse_hash(s: &str) -> Result<u64, String> {
+    s.strip_prefix("0x")
+        .or_else(|| s.strip_prefix("0X"))
+        .filter(|digits| digits.len() == 16 && digits.bytes().all(|b| b.is_ascii_hexdigit()))
+        .and_then(|digits| u64::from_str_radix(digits, 16).ok())
+        .ok_or_else(|| format!("{s:?} is not a hash (allowed \"0x\" and 16 hex digits)"))
+}
+
+/// A JSON string, turned into a `T` by `convert` (whose error is the problem).
+struct Text<'a, F> {
+    blame: &'a Blame,
+    field: &'static str,
+    convert: F,
+}
+
+/// A string checked by `convert`.
+fn text<'a, T, F: FnOnce(&str) -> Result<T, String>>(
+    blame: &'a Blame,
+    field: &'static str,
+    convert: F,
+) -> Text<'a, F> {
+    Text {
+        blame,
+        field,
+        convert,
+    }
+}
+
+/// Any string.
+fn string<'a>(
+    blame: &'a Blame,
+    field: &'static str,
+) -> Text<'a, impl FnOnce(&str) -> Result<String, String>> {
+    text(blame, field, |s| Ok(s.to_owned()))
+}
+
+impl<'de, T, F: FnOnce(&str) -> Result<T, String>> DeserializeSeed<'de> for Text<'_, F> {
+    type Value = T;
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<T, D::Error> {
+        let (blame, field) = (self.blame, self.field);
+        blame.name(field, d.deserialize_any(self))
+    }
+}
+
+impl<'de, T, F: FnOnce(&str) -> Result<T, String>> Visitor<'de> for Text<'_, F> {
+    type Value = T;
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a string")
+    }
+
+    fn visit_str<E: de::Error>(self, s: &str) -> Result<T, E> {
+        (self.convert)(s).map_err(E::custom)
+    }
+}
+
+/// A JSON integer, turned into a `T` by `convert` (whose error is the problem); `allowed` says
+/// what it may be, for the error about a value of another type.
+struct Int<'a, F> {
+    blame: &'a Blame,
+    field: Field,
+    allowed: String,
+    convert: F,
+}
+
+impl<'de, T, F: FnOnce(i128) -> Result<T, String>> DeserializeSeed<'de> for Int<'_, F> {
+    type Value = T;
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<T, D::Error> {
+        let (blame, field) = (self.blame, self.field);
+        blame.name(field, d.deserialize_any(self))
+    }
+}
+
+impl<'de, T, F: FnOnce(i128) -> Result<T, String>> Visitor<'de> for Int<'_, F> {
+    type Value = T;
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "an integer (allowed {})", self.allowed)
+    }
+
+    fn visit_i64<E: de::Error>(self, v: i64) -> Result<T, E> {
+        (self.convert)(v.into()).map_err(E::custom)
+    }
+
+    fn visit_u64<E: de::Error>(self, v: u64) -> Result<T, E> {
+        (self.convert)(v.into()).map_err(E::custom)
+    }
+}
+
+/// `v` as a `T` in `lo..=hi`.
+fn in_range<T: TryFrom<i128> + PartialOrd + Display>(v: i128, lo: T, hi: T) -> Result<T, String> {
+    T::try_from(v)
+        .ok()
+        .filter(|t| *t >= lo && *t <= hi)
+        .ok_or_else(|| format!("{v} is out of range (allowed {lo} to {hi})"))
+}
+
+/// An integer in `lo..=hi`.
+fn ranged<T: TryFrom<i128> + PartialOrd + Display + Copy>(
+    blame: &Blame,
+    field: Field,
+    lo: T,
+    hi: T,
+) -> Int<'_, impl FnOnce(i128) -> Result<T, String>> {
+    Int {
+        blame,
+        field,
+        allowed: format!("{lo} to {hi}"),
+        convert: move |v| in_range(v, lo, hi),
+    }
+}
+
+/// Stores `v` in one field of an [`Input`], saturated to the field's type (a negative value
+/// becomes `u32::MAX` in an unsigned one, so that it stays out of range); returns whether `v`
+/// fitted unchanged.
+type Setter = fn(&mut Input, i128) -> bool;
+
+/// The numbers of a run after the repeat, in file order.
+const INPUT_FIELDS: [(&str, Setter); 4] = [
+    ("move_x", |input, v| {
+        input.move_x = saturate_i32(v);
+        i128::from(input.move_x) == v
+    }),
+    ("move_y", |input, v| {
+        input.move_y = saturate_i32(v);
+        i128::from(input.move_y) == v
+    }),
+    ("aim", |input, v| {
+        input.aim = u32::try_from(v).unwrap_or(u32::MAX);
+        i128::from(input.aim) == v
+    }),
+    ("fire", |input, v| {
+        input.fire = u32::try_from(v).unwrap_or(u32::MAX);
+        i128::from(input.fire) == v
+    }),
+];
+
+/// `v`, clamped to the range of an `i32`.
+fn saturate_i32(v: i128) -> i32 {
+    i32::try_from(v).unwrap_or(if v < 0 { i32::MIN } else { i32::MAX })
+}
+
+/// One number of an input, checked by [`Input::problem`] on an input that is all zeros but
+/// for it (so the ranges are the kernels' own).
+fn input_number<'a>(
+    blame: &'a Blame,
+    run: usize,
+    (name, set): (&'static str, Setter),
+) -> Int<'a, impl FnOnce(i128) -> Result<i128, String>> {
+    let allowed = move |v| {
+        let mut probe = Input::default();
+        let fits = set(&mut probe, v);
+        (probe.problem().map(|(_, allowed)| allowed), fits)
+    };
+    // The largest integer is out of any range the field has, if it has one.
+    let any = allowed(i128::MAX).0.unwrap_or("any 32-bit integer");
+    Int {
+        blame,
+        field: Field::Number(run, name),
+        allowed: any.to_owned(),
+        convert: move |v| match allowed(v) {
+            (Some(allowed), _) => Err(format!("{v} is out of range (allowed {allowed})")),
+            (None, false) => Err(format!("{v} does not fit in 32 bits")),
+            (None, true) => Ok(v),
+        },
+    }
+}
+
+/// The `inputs` array: its runs as `(repeat, input)`.
+struct Runs<'a> {
+    blame: &'a Blame,
+}
+
+impl<'de> DeserializeSeed<'de> for Runs<'_> {
+    type Value = Vec<(u64, Input)>;
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
+        let blame = self.blame;
+        blame.name("inputs", d.deserialize_any(self))
+    }
+}
+
+impl<'de> Visitor<'de> for Runs<'_> {
+    type Value = Vec<(u64, Input)>;
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("an array of runs [repeat, move_x, move_y, aim, fire]")
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+        let mut runs = Vec::new();
+        let mut total = 0;
+        let run = |index, total| Run {
+            blame: self.blame,
+            index,
+            total,
+        };
+        while let Some((repeat, input)) = seq.next_element_seed(run(runs.len(), total))? {
+            total += repeat;
+            runs.push((repeat, input));
+        }
+        Ok(runs)
+    }
+}
+
+/// Run `index` of `inputs`; `total` is the steps of the runs before it.
+struct Run<'a> {
+    blame: &'a Blame,
+    index: usize,
+    total: u64,
+}
+
+impl<'de> DeserializeSeed<'de> for Run<'_> {
+    type Value = (u64, Input);
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
+        let (blame, index) = (self.blame, self.index);
+        blame.name(Field::Run(index), d.deserialize_any(self))
+    }
+}
+
+impl<'de> Visitor<'de> for Run<'_> {
+    type Value = (u64, Input);
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a run [repeat, move_x, move_y, aim, fire]")
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+        let Run {
+            blame,
+            index,
+            total,
+        } = self;
+        let length = |found: usize| -> A::Error {
+            blame.fail(
+                Field::Run(index),
+                format!("has {found} numbers, expected 5: [repeat, move_x, move_y, aim, fire]"),
+            )
+        };
+        // Checked here, at the number, so the error points at this run's line.
+        let repeat = Int {
+            blame,
+            field: Field::Number(index, "repeat"),
+            allowed: format!("1 to {MAX_STEPS}"),
+            convert: |v| {
+                let repeat = in_range(v, 1, MAX_STEPS)?;
+                match total + repeat {
+                    sum if sum > MAX_STEPS => Err(format!(
+                        "the runs so far add up to {sum} steps (allowed at most {MAX_STEPS})"
+                    )),
+                    _ => Ok(repeat),
+                }
+            },
+        };
+        let repeat = seq.next_element_seed(repeat)?.ok_or_else(|| length(0))?;
+        let mut input = Input::default();
+        for (k, field) in INPUT_FIELDS.into_iter().enumerate() {
+            let number = input_number(blame, index, field);
+            let v = seq
+                .next_element_seed(number)?
+                .ok_or_else(|| length(k + 1))?;
+            (field.1)(&mut input, v);
+        }
+        let mut found = 1 + INPUT_FIELDS.len();
+        while seq.next_element::<IgnoredAny>()?.is_some() {
+            found += 1;
+        }
+        if found > 1 + INPUT_FIELDS.len() {
+            return Err(length(found));
+        }
+        Ok((repeat, input))
+    }
+}
