@@ -68,47 +68,8 @@ pub struct Replay {
     pub inputs: Vec<Input>,
 }
 
-/// What is wrong with a replay file, and where.
-///
-/// Displays as `{file}:{line}: {field}: {problem}`, without `:{line}` when the line is
-/// unknown and without `{field}: ` when no field is concerned.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-pub struct ReplayError {
-    /// The path as given.
-    pub file: String,
-    /// 1-based line, when the error points into the text.
-    pub line: Option<usize>,
-    /// The key concerned (`seed`, `inputs[17].aim`: run 17, counted from 0), or empty.
-    pub field: String,
-    /// What is wrong and, for ranges, what is allowed.
-    pub problem: String,
-}
-
-impl fmt::Display for ReplayError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.file)?;
-        if let Some(line) = self.line {
-            write!(f, ":{line}")?;
-        }
-        f.write_str(": ")?;
-        if !self.field.is_empty() {
-            write!(f, "{}: ", self.field)?;
-        }
-        f.write_str(&self.problem)
-    }
-}
-
-impl ReplayError {
-    /// An error in `file`.
-    fn new(file: &str, line: Option<usize>, field: impl Display, problem: impl Display) -> Self {
-        ReplayError {
-            file: file.to_owned(),
-            line,
-            field: field.to_string(),
-            problem: problem.to_string(),
-        }
-    }
-}
+/// What is wrong with a replay file, and where (see [`crate::files::FileError`]).
+pub type ReplayError = crate::files::FileError;
 
 impl Replay {
     /// The JSON text (runs merged, one run per line).

@@ -18,8 +18,10 @@ use toml::Spanned;
 use toml::de::{DeTable, DeValue};
 
 use super::spec::{FpsSpec, GameSpec, Scene, ShipSpec, SpawnSpec, WaveSpec};
+// Errors of the file's own rules read like the world's: a field and what is allowed.
 use crate::sim::spec::{
     Behaviour, Boundary, KindSpec, MAX_SIDE, MAX_SLOTS, Machine, Shape, SpecError, WorldSpec,
+    check_range as check, error as invalid,
 };
 
 /// Largest speed, distance or time (seconds) in a scene: as far as f32 world coordinates go.
@@ -29,35 +31,8 @@ const MAX_FIRE_RATE: f32 = 1000.0;
 /// Largest FPS meter and FPS recovery per second.
 const MAX_FPS: f32 = 10000.0;
 
-/// What is wrong with a scene, and where.
-///
-/// Displays as `{file}:{line}: {field}: {problem}`, without `:{line}` when the line is
-/// unknown and without `{field}: ` when no field is concerned.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-pub struct SceneError {
-    /// The path as given, or ``built-in scene `paper` ``.
-    pub file: String,
-    /// 1-based line, when the error points into the text.
-    pub line: Option<usize>,
-    /// Dotted TOML path of the key concerned (`kinds[2].mass`), or empty.
-    pub field: String,
-    /// What is wrong and, for ranges, what is allowed.
-    pub problem: String,
-}
-
-impl fmt::Display for SceneError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.file)?;
-        if let Some(line) = self.line {
-            write!(f, ":{line}")?;
-        }
-        f.write_str(": ")?;
-        if !self.field.is_empty() {
-            write!(f, "{}: ", self.field)?;
-        }
-        f.write_str(&self.problem)
-    }
-}
+/// What is wrong with a scene, and where (see [`crate::files::FileError`]).
+pub type SceneError = crate::files::FileError;
 
 /// A scene shipped in the binary.
 #[derive(Clone, Copy, Debug)]
@@ -128,9 +103,10 @@ impl Scene {
             };
             error(line, field, e.message().into())
         })?;
-        raw.into_scene(text).map_err(|Invalid { field, problem }| {
-            error(line_of_field(text, &field), field, problem)
-        })
+        raw.into_scene(text)
+            .map_err(|SpecError { field, problem }| {
+                error(line_of_field(text, &field), field, problem)
+            })
     }
 
     /// The built-in scene called `name_or_path` if there is one, else the TOML file at that
@@ -257,50 +233,13 @@ fn infinity() -> f32 {
     f32::INFINITY
 }
 
-/// A broken rule, named by its TOML path (`kinds[2].circle`, `spawn.waves[0].times`).
-struct Invalid {
-    field: String,
-    problem: String,
-}
-
-fn invalid(field: impl fmt::Display, problem: impl fmt::Display) -> Invalid {
-    Invalid {
-        field: field.to_string(),
-        problem: problem.to_string(),
-    }
-}
-
-/// `value` must be in `(low, high]` (or `[low, high]` if `low_inclusive`); NaN never is.
-/// The message matches [`WorldSpec::validate`]'s.
-fn check(
-    field: impl fmt::Display,
-    value: f32,
-    (low, low_inclusive): (f32, bool),
-    high: f32,
-) -> Result<(), Invalid> {
-    let above = if low_inclusive {
-        value >= low
-    } else {
-        value > low
-    };
-    if above && value <= high {
-        Ok(())
-    } else {
-        let open = if low_inclusive { '[' } else { '(' };
-        Err(invalid(
-            field,
-            format!("{value} is out of range (allowed {open}{low}, {high}])"),
-        ))
-    }
-}
-
 /// `value` as a `T`, if it is in `low..=high` (which `T` must hold).
 fn integer<T: TryFrom<i64>>(
     field: impl fmt::Display,
     value: i64,
     low: i64,
     high: i64,
-) -> Result<T, Invalid> {
+) -> Result<T, SpecError> {
     match T::try_from(value) {
         Ok(v) if (low..=high).contains(&value) => Ok(v),
         _ => Err(invalid(
@@ -310,13 +249,13 @@ fn integer<T: TryFrom<i64>>(
     }
 }
 
-fn unknown_kind(field: impl fmt::Display, name: &str) -> Invalid {
+fn unknown_kind(field: impl fmt::Display, name: &str) -> SpecError {
     invalid(field, format!("no kind is named `{name}`"))
 }
 
 impl RawScene {
     /// The scene, checked; `text` becomes its source.
-    fn into_scene(self, text: &str) -> Result<Scene, Invalid> {
+    fn into_scene(self, text: &str) -> Result<Scene, SpecError> {
         if self.name.trim().is_empty() {
             return Err(invalid("name", "must not be empty"));
         }
@@ -339,7 +278,7 @@ impl RawScene {
 }
 
 impl RawWorld {
-    fn into_spec(self, kinds: Vec<RawKind>) -> Result<WorldSpec, Invalid> {
+    fn into_spec(self, kinds: Vec<RawKind>) -> Result<WorldSpec, SpecError> {
         let boundary = match self.boundary.as_str() {
             "clamp" => Boundary::Clamp,
             "wrap" => Boundary::Wrap,
@@ -366,7 +305,7 @@ impl RawWorld {
 
 impl RawKind {
     /// Kind number `k`.
-    fn into_spec(self, k: usize) -> Result<KindSpec, Invalid> {
+    fn into_spec(self, k: usize) -> Result<KindSpec, SpecError> {
         let at = |field: &str| format!("kinds[{k}].{field}");
         let shape = match (self.circle, self.rect) {
             (Some(radius), None) => Shape::Circle { radius },
@@ -411,7 +350,7 @@ impl RawKind {
 impl RawBehaviour {
     /// The behaviour; `at` names its fields. Settings the machine ignores must be left at
     /// their defaults, so that a file never says something the game does not do.
-    fn into_spec(self, at: impl Fn(&str) -> String) -> Result<Behaviour, Invalid> {
+    fn into_spec(self, at: impl Fn(&str) -> String) -> Result<Behaviour, SpecError> {
         let machine = match self.machine.as_str() {
             "kamikaze" => Machine::Kamikaze,
             "group" => Machine::Group,
@@ -484,7 +423,7 @@ impl RawFps {
 }
 
 impl RawSpawn {
-    fn into_spec(self) -> Result<SpawnSpec, Invalid> {
+    fn into_spec(self) -> Result<SpawnSpec, SpecError> {
         let waves = self.waves.into_iter().enumerate().map(|(w, wave)| {
             let at = |field: &str| format!("spawn.waves[{w}].{field}");
             let max = u32::MAX.into();
@@ -506,7 +445,7 @@ impl RawSpawn {
 
 /// [`WorldSpec::validate`]'s error with its field in TOML terms: `size.x` → `world.size`,
 /// `kinds[2] (shot).radius` → `kinds[2].circle`, …
-fn toml_field(world: &WorldSpec, e: SpecError) -> Invalid {
+fn toml_field(world: &WorldSpec, e: SpecError) -> SpecError {
     let field = match e.field.as_str() {
         "size.x" | "size.y" => "world.size".to_owned(),
         "dt" => "world.dt".to_owned(),
@@ -527,14 +466,14 @@ fn toml_field(world: &WorldSpec, e: SpecError) -> Invalid {
             })
             .unwrap_or_else(|| field.to_owned()),
     };
-    Invalid {
+    SpecError {
         field,
         problem: e.problem,
     }
 }
 
 /// The rules of [`GameSpec`]'s docs, given a valid `world`.
-fn check_game(world: &WorldSpec, game: &GameSpec) -> Result<(), Invalid> {
+fn check_game(world: &WorldSpec, game: &GameSpec) -> Result<(), SpecError> {
     let ShipSpec {
         kind,
         speed,

@@ -119,15 +119,16 @@ pub struct SpecError {
     pub problem: String,
 }
 
-fn error(field: impl fmt::Display, problem: impl fmt::Display) -> SpecError {
+/// A [`SpecError`] for `field`.
+pub(crate) fn error(field: impl fmt::Display, problem: impl fmt::Display) -> SpecError {
     SpecError {
         field: field.to_string(),
         problem: problem.to_string(),
     }
 }
 
-/// `value` must be finite and in `(low, high]` (or `[low, high]` if `low_inclusive`).
-fn check_range(
+/// `value` must be in `(low, high]` (or `[low, high]` if `low_inclusive`); NaN never is.
+pub(crate) fn check_range(
     field: impl fmt::Display,
     value: f32,
     (low, low_inclusive): (f32, bool),
