@@ -53,6 +53,14 @@ impl fmt::Display for FileError {
     }
 }
 
+/// The 1-based line of byte `at` of `text` (bytes past the end count as the end).
+pub fn line_of(text: &[u8], at: usize) -> usize {
+    1 + text[..at.min(text.len())]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+}
+
 /// Writes `bytes` to `path` atomically: into a temporary file in the same directory, flushed
 /// and synced to disk, readable by all like any data file (0644 on Unix; a temporary file
 /// starts private), then renamed over `path`. On any error `path` is left as it was and the

@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::game::{Enemy, aim_at, live_of, mean_nearest, play, scene};
+use common::game::{Enemy, aim_at, live_of, mean_nearest, play, scene, torus_distance};
 use gpuwars::Device;
 use gpuwars::kernels::game::control::Input;
 use gpuwars::kernels::game::fsm::State;
@@ -37,8 +37,7 @@ fn kamikaze_that_sees_the_ship_hits_it(device: &Device) {
                 && snap.state[k] == State::Attacking as u32
             {
                 attacked_at.get_or_insert(step);
-                let d = snap.pos[k] - snap.pos[SHIP];
-                distances.push(d.abs().min(glam::Vec2::splat(400.0) - d.abs()).length());
+                distances.push(torus_distance(snap.pos[SHIP], snap.pos[k], 400.0));
             }
             if status.events.ship_hits > 0 {
                 hit_at.get_or_insert(step);
@@ -187,8 +186,7 @@ fn tricky_enemy_low_on_energy_escapes_and_recovers(device: &Device) {
         },
         |_, snap| {
             if let Some(&k) = live_of(snap, FIRST_ENEMY).first() {
-                let d = snap.pos[k] - snap.pos[SHIP];
-                let d = d.abs().min(glam::Vec2::splat(600.0) - d.abs()).length();
+                let d = torus_distance(snap.pos[SHIP], snap.pos[k], 600.0);
                 log.push((snap.state[k], snap.energy[k], d));
             }
         },

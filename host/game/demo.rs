@@ -86,14 +86,14 @@ pub fn device_name(device: &Device) -> String {
 }
 
 /// Plays up to `steps` steps (fewer if the game ends), each with the input `pilot` gives for
-/// its index (`None`: the autopilot's), and reports. The inputs actually applied are
-/// returned too, for a replay.
+/// its index (`None`: the autopilot's), and reports. The inputs actually applied and the
+/// final state hash are returned too, for a replay.
 fn play(
     game: &mut Game,
     seed: u32,
     steps: u64,
     mut pilot: impl FnMut(u64) -> Option<Input>,
-) -> Result<(Report, Vec<Input>), Error> {
+) -> Result<(Report, Vec<Input>, u64), Error> {
     let mut inputs = Vec::new();
     let mut shots = 0u64;
     let mut status = Status::default();
@@ -109,6 +109,7 @@ fn play(
     let seconds = start.elapsed().as_secs_f64();
     let device = game.simulation().device();
     let played = inputs.len() as u64;
+    let hash = game.state_hash()?;
     let report = Report {
         backend: device.kind(),
         device: device_name(device),
@@ -117,7 +118,7 @@ fn play(
         steps: played,
         game_seconds: played as f64 * f64::from(game.scene().world.dt),
         sim_steps_per_s: played as f64 / seconds.max(f64::MIN_POSITIVE),
-        state_hash: format!("{:#018x}", game.state_hash()?),
+        state_hash: format!("{hash:#018x}"),
         score: status.score,
         enemies_alive: status.enemies_alive,
         enemies_killed: status.enemies_killed,
@@ -130,7 +131,7 @@ fn play(
             _ => "",
         },
     };
-    Ok((report, inputs))
+    Ok((report, inputs, hash))
 }
 
 /// The autopilot plays `scene` for up to `steps` steps; returns the report and the replay
@@ -142,13 +143,13 @@ pub fn demo(
     steps: u64,
 ) -> Result<(Report, Replay), Error> {
     let mut game = Game::new(device, scene, seed)?;
-    let (report, inputs) = play(&mut game, seed, steps, |_| None)?;
+    let (report, inputs, state_hash) = play(&mut game, seed, steps, |_| None)?;
     let replay = Replay {
         scene: scene.name.clone(),
         scene_toml: scene.source.clone(),
         seed,
         backend: report.backend.to_string(),
-        state_hash: game.state_hash()?,
+        state_hash,
         inputs,
     };
     Ok((report, replay))
@@ -159,7 +160,7 @@ pub fn demo(
 pub fn replay(device: &Device, scene: &Scene, replay: &Replay) -> Result<Report, Error> {
     let mut game = Game::new(device, scene, replay.seed)?;
     let inputs = &replay.inputs;
-    let (report, _) = play(&mut game, replay.seed, inputs.len() as u64, |i| {
+    let (report, _, _) = play(&mut game, replay.seed, inputs.len() as u64, |i| {
         Some(inputs[i as usize])
     })?;
     Ok(report)

@@ -266,7 +266,8 @@ impl<'d> Game<'d> {
         let device = self.sim.device();
         let mut h = Xxh3::new();
         h.update(&self.sim.state_hash()?.to_le_bytes());
-        h.update(bytemuck::cast_slice(&device.download(&self.status)?));
+        // `last` is the device's status as read back after the step.
+        h.update(bytemuck::bytes_of(&self.last));
         h.update(bytemuck::cast_slice(&device.download(&self.spawned)?));
         Ok(h.digest())
     }

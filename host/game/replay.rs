@@ -28,6 +28,8 @@ use std::fmt::{self, Display};
 use std::path::Path;
 
 use gpuwars_kernels::game::control::Input;
+
+use crate::files::line_of;
 use serde::de::{self, DeserializeSeed, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
 
 /// The `format` of every replay file.
@@ -161,7 +163,7 @@ impl Replay {
             .map_err(|e| ReplayError::new(&origin, None, "", format!("cannot read: {e}")))?;
         let text = String::from_utf8(bytes).map_err(|e| {
             let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
-            let line = line_at(valid, valid.len());
+            let line = line_of(valid, valid.len());
             ReplayError::new(&origin, Some(line), "", "not UTF-8 text")
         })?;
         Replay::parse(&text, &origin)
@@ -174,12 +176,8 @@ impl Replay {
     pub fn save(&self, path: &Path) -> Result<(), ReplayError> {
         let origin = path.display().to_string();
         self.check(&origin)?;
-        let io_error = |what: &str, e: std::io::Error| {
-            ReplayError::new(&origin, None, "", format!("cannot {what}: {e}"))
-        };
         crate::files::write_atomically(path, self.to_json().as_bytes())
-            .map_err(|e| io_error("write", e))?;
-        Ok(())
+            .map_err(|e| ReplayError::new(&origin, None, "", format!("cannot write: {e}")))
     }
 
     /// What [`Replay::parse`] would refuse in this replay's file.
@@ -206,11 +204,6 @@ impl Replay {
     }
 }
 
-/// The 1-based line of byte `at` of `text`.
-fn line_at(text: &[u8], at: usize) -> usize {
-    text[..at].iter().filter(|&&b| b == b'\n').count() + 1
-}
-
 /// The line of the top-level key `key` in the JSON object `text`, if it is written plainly
 /// (without escapes). serde_json gives no positions for values that parsed fine.
 fn key_line(text: &str, key: &str) -> Option<usize> {
@@ -232,7 +225,7 @@ fn key_line(text: &str, key: &str) -> Option<usize> {
                         .get(i + 1..)
                         .is_some_and(|rest| rest.trim_start().starts_with(':'));
                 if is_key && text.get(start..i) == Some(key) {
-                    return Some(line_at(bytes, start));
+                    return Some(line_of(bytes, start));
                 }
             }
             _ => {}

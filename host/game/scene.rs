@@ -17,6 +17,8 @@ use serde::Deserialize;
 use toml::Spanned;
 use toml::de::{DeTable, DeValue};
 
+use crate::files::line_of;
+
 use super::spec::{FpsSpec, GameSpec, Scene, ShipSpec, SpawnSpec, WaveSpec};
 // Errors of the file's own rules read like the world's: a field and what is allowed.
 use crate::sim::spec::{
@@ -83,14 +85,9 @@ pub fn built_in(name: &str) -> Option<Result<Scene, SceneError>> {
 impl Scene {
     /// Parses and validates TOML text; `origin` names the file in errors.
     pub fn from_toml(text: &str, origin: &str) -> Result<Scene, SceneError> {
-        let error = |line, field, problem| SceneError {
-            file: origin.to_owned(),
-            line,
-            field,
-            problem,
-        };
+        let error = |line, field, problem: &str| SceneError::new(origin, line, field, problem);
         let doc = DeTable::parse(text)
-            .map_err(|e| error(line_at(text, e.span()), String::new(), e.message().into()))?;
+            .map_err(|e| error(line_at(text, e.span()), String::new(), e.message()))?;
         let root = doc.span();
         let raw = RawScene::deserialize(toml::de::Deserializer::from(doc)).map_err(|e| {
             let (line, field) = match e.span() {
@@ -101,11 +98,11 @@ impl Scene {
                 ),
                 _ => (None, String::new()),
             };
-            error(line, field, e.message().into())
+            error(line, field, e.message())
         })?;
         raw.into_scene(text)
             .map_err(|SpecError { field, problem }| {
-                error(line_of_field(text, &field), field, problem)
+                error(line_of_field(text, &field), field, &problem)
             })
     }
 
@@ -115,12 +112,8 @@ impl Scene {
         if let Some(scene) = built_in(name_or_path) {
             return scene;
         }
-        let text = std::fs::read_to_string(name_or_path).map_err(|e| SceneError {
-            file: name_or_path.to_owned(),
-            line: None,
-            field: String::new(),
-            problem: e.to_string(),
-        })?;
+        let text = std::fs::read_to_string(name_or_path)
+            .map_err(|e| SceneError::new(name_or_path, None, "", e))?;
         Scene::from_toml(&text, name_or_path)
     }
 }
@@ -134,8 +127,8 @@ struct RawScene {
     name: String,
     description: String,
     world: RawWorld,
-    ship: RawShip,
-    fps: RawFps,
+    ship: ShipSpec,
+    fps: FpsSpec,
     spawn: RawSpawn,
     kinds: Vec<RawKind>,
 }
@@ -148,25 +141,6 @@ struct RawWorld {
     boundary: String,
     #[serde(default)]
     cell: f32,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawShip {
-    kind: String,
-    speed: f32,
-    fire_rate: f32,
-    shot: String,
-    shot_speed: f32,
-    autopilot_sight: f32,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawFps {
-    start: f32,
-    min: f32,
-    recovery: f32,
 }
 
 #[derive(Deserialize)]
@@ -262,8 +236,8 @@ impl RawScene {
         let world = self.world.into_spec(self.kinds)?;
         world.validate().map_err(|e| toml_field(&world, e))?;
         let game = GameSpec {
-            ship: self.ship.into_spec(),
-            fps: self.fps.into_spec(),
+            ship: self.ship,
+            fps: self.fps,
             spawn: self.spawn.into_spec()?,
         };
         check_game(&world, &game)?;
@@ -396,29 +370,6 @@ impl RawBehaviour {
             low_energy,
             recovery: self.recovery,
         })
-    }
-}
-
-impl RawShip {
-    fn into_spec(self) -> ShipSpec {
-        ShipSpec {
-            kind: self.kind,
-            speed: self.speed,
-            fire_rate: self.fire_rate,
-            shot: self.shot,
-            shot_speed: self.shot_speed,
-            autopilot_sight: self.autopilot_sight,
-        }
-    }
-}
-
-impl RawFps {
-    fn into_spec(self) -> FpsSpec {
-        FpsSpec {
-            start: self.start,
-            min: self.min,
-            recovery: self.recovery,
-        }
     }
 }
 
@@ -560,13 +511,7 @@ fn check_game(world: &WorldSpec, game: &GameSpec) -> Result<(), SpecError> {
 
 /// 1-based line of the byte `span` starts at.
 fn line_at(text: &str, span: Option<Range<usize>>) -> Option<usize> {
-    let start = span?.start.min(text.len());
-    Some(
-        1 + text.as_bytes()[..start]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count(),
-    )
+    Some(line_of(text.as_bytes(), span?.start))
 }
 
 /// The dotted path (`kinds[3].capacity`) of the smallest key or value around byte `pos` of

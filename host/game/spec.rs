@@ -1,10 +1,13 @@
 //! A scene's game rules, as the host describes them: the ship and its gun, the FPS meter and
 //! the spawn schedule. With a [`WorldSpec`] they make a [`Scene`].
 
+use serde::Deserialize;
+
 use crate::sim::WorldSpec;
 
-/// The ship and its gun.
-#[derive(Clone, Debug, PartialEq)]
+/// The ship and its gun (read from a scene's `[ship]` table as it is).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ShipSpec {
     /// Name of the ship's kind (capacity 1, no behaviour).
     pub kind: String,
@@ -20,8 +23,10 @@ pub struct ShipSpec {
     pub autopilot_sight: f32,
 }
 
-/// The FPS meter: the paper's measure of the ship's health.
-#[derive(Clone, Debug, PartialEq)]
+/// The FPS meter: the paper's measure of the ship's health (read from a scene's `[fps]`
+/// table as it is).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct FpsSpec {
     /// The meter at full energy (> 0).
     pub start: f32,

@@ -126,15 +126,21 @@ pub fn live_of(snapshot: &Snapshot, kind: u32) -> Vec<usize> {
         .collect()
 }
 
+/// Distance from `a` to `b` on a wrapping square world of side `size`.
+pub fn torus_distance(a: Vec2, b: Vec2, size: f32) -> f32 {
+    let d = (b - a).abs();
+    d.min(Vec2::splat(size) - d).length()
+}
+
 /// Mean distance from each body in `slots` to its nearest other one (on a torus of `size`
 /// when `wrap`).
 pub fn mean_nearest(snapshot: &Snapshot, slots: &[usize], size: f32, wrap: bool) -> f32 {
     let gap = |a: Vec2, b: Vec2| {
-        let mut d = (b - a).abs();
         if wrap {
-            d = d.min(Vec2::splat(size) - d);
+            torus_distance(a, b, size)
+        } else {
+            a.distance(b)
         }
-        d.length()
     };
     let total: f32 = slots
         .iter()
