@@ -8,7 +8,7 @@
 //! Every timed step ends with a synchronise.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use gpuwars::sim::Simulation;
+use gpuwars::pipeline::Simulation;
 
 mod common;
 use common::device;

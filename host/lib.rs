@@ -9,9 +9,10 @@ pub mod backend;
 pub mod files;
 pub mod game;
 pub mod info;
+pub mod pipeline;
 pub mod primitives;
 pub mod ptx;
 pub mod sim;
 
-pub use backend::{BackendKind, BackendRequest, Buffer, Device, Element, Error};
+pub use backend::{BackendKind, BackendRequest, Buffer, Device, Element, Error, Op, Plan};
 pub use gpuwars_kernels as kernels;

@@ -6,10 +6,10 @@ use std::path::PathBuf;
 
 use anyhow::bail;
 use clap::{Args, Parser, Subcommand};
-use gpuwars::game::Scene;
-use gpuwars::game::demo::{self, Report};
+use gpuwars::game::demo::{self, Report, RunOptions};
 use gpuwars::game::replay::Replay;
 use gpuwars::game::scene;
+use gpuwars::game::{Options, Scene};
 use gpuwars::info::Info;
 use gpuwars::{BackendRequest, Device};
 
@@ -53,7 +53,35 @@ enum Command {
         /// Print JSON instead of text.
         #[arg(long)]
         json: bool,
+        #[command(flatten)]
+        run: RunArgs,
     },
+}
+
+/// How a game runs on its device.
+#[derive(Args)]
+struct RunArgs {
+    /// Steps in flight before the host reads a status back (1: wait for every step).
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u16).range(1..=1024))]
+    lag: u16,
+    /// Launch the kernels one by one instead of replaying the step as a CUDA graph.
+    #[arg(long)]
+    no_graphs: bool,
+    /// Time every stage of every step and print the table (steps then wait for each stage).
+    #[arg(long)]
+    profile: bool,
+}
+
+impl RunArgs {
+    fn options(&self) -> RunOptions {
+        RunOptions {
+            game: Options {
+                lag: usize::from(self.lag),
+                graphs: !self.no_graphs,
+            },
+            profile: self.profile,
+        }
+    }
 }
 
 #[derive(Args)]
@@ -73,6 +101,8 @@ struct DemoArgs {
     /// Write the game's inputs to this replay file.
     #[arg(long)]
     record: Option<PathBuf>,
+    #[command(flatten)]
+    run: RunArgs,
 }
 
 /// The default command: the demo with its defaults (and the environment's settings).
@@ -118,17 +148,18 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Command::Demo(args) => {
             let scene = Scene::load(&args.scene)?;
-            let (report, replay) = demo::demo(&device, &scene, args.seed, args.steps)?;
+            let (report, replay) =
+                demo::demo(&device, &scene, args.seed, args.steps, args.run.options())?;
             if let Some(path) = &args.record {
                 replay.save(path)?;
             }
             print_report(&report, args.json)?;
         }
-        Command::Replay { file, json } => {
+        Command::Replay { file, json, run } => {
             let replay = Replay::load(&file)?;
             let origin = format!("{} (scene `{}`)", file.display(), replay.scene);
             let scene = Scene::from_toml(&replay.scene_toml, &origin)?;
-            let report = demo::replay(&device, &scene, &replay)?;
+            let report = demo::replay(&device, &scene, &replay, run.options())?;
             print_report(&report, json)?;
             let recorded = format!("{:#018x}", replay.state_hash);
             if report.state_hash != recorded {

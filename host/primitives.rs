@@ -7,7 +7,7 @@
 use gpuwars_kernels::primitives::{histogram as hist, scan, sort};
 use gpuwars_kernels::{DevSlice, registry};
 
-use crate::{Buffer, Device, Error};
+use crate::{Buffer, Device, Error, Op};
 
 /// Threads per block of every primitive's launches.
 pub const BLOCK: u32 = 256;
@@ -48,14 +48,28 @@ pub struct PrefixSum {
 impl PrefixSum {
     /// Scratch for sums of up to `capacity` elements.
     pub fn new(device: &Device, capacity: usize) -> Result<Self, Error> {
-        let mut levels = Vec::new();
+        let levels = Self::level_lens(capacity)?
+            .into_iter()
+            .map(|len| device.alloc_zeroed(len))
+            .collect::<Result<_, _>>()?;
+        Ok(PrefixSum { levels, capacity })
+    }
+
+    /// The length of each level of tile sums for `capacity` elements.
+    fn level_lens(capacity: usize) -> Result<Vec<usize>, Error> {
         let mut n = u32::try_from(capacity)
             .map_err(|_| Error::Invalid(format!("a prefix sum of {capacity} elements")))?;
+        let mut lens = Vec::new();
         while n > scan::TILE {
             n = scan::tiles(n);
-            levels.push(device.alloc_zeroed(n as usize)?);
+            lens.push(n as usize);
         }
-        Ok(PrefixSum { levels, capacity })
+        Ok(lens)
+    }
+
+    /// Elements of scratch that [`PrefixSum::new`] allocates for `capacity` elements.
+    pub fn scratch_len(capacity: usize) -> usize {
+        Self::level_lens(capacity).map_or(0, |lens| lens.iter().sum())
     }
 
     /// The most elements one call can scan.
@@ -77,8 +91,10 @@ impl PrefixSum {
             Some(self.capacity),
             &[("input", input.len()), ("output", output.len())],
         )?;
-        // SAFETY: the views are of live buffers of `device`, `n` within each (checked).
-        unsafe { self.scan(device, input.view_prefix(n), output.view_prefix(n), 0) }
+        // SAFETY: the views are of live buffers of `device`, `n` within each (checked), and
+        // the ops run before this borrow of them ends.
+        let ops = unsafe { self.ops(input.view_prefix(n), output.view_prefix(n)) }?;
+        device.run(&device.plan(ops, false)?)
     }
 
     /// Replaces the first `n` elements of `data` by their exclusive prefix sums.
@@ -96,19 +112,44 @@ impl PrefixSum {
         )?;
         let view = data.view_prefix(n);
         // SAFETY: as in `run`; `scan_tiles` supports input == output.
-        unsafe { self.scan(device, view, view, 0) }
+        let ops = unsafe { self.ops(view, view) }?;
+        device.run(&device.plan(ops, false)?)
+    }
+
+    /// The launches that write the exclusive prefix sums of `input` to `output` (which may
+    /// be `input` itself), for a plan.
+    ///
+    /// # Safety
+    /// As for [`Op::launch`]: `input` and `output` view buffers of the device that will run
+    /// the ops, of the same length, and outlive them; so does this scratch.
+    pub unsafe fn ops(
+        &self,
+        input: DevSlice<u32>,
+        output: DevSlice<u32>,
+    ) -> Result<Vec<Op>, Error> {
+        if input.len() != output.len() || input.len() as usize > self.capacity {
+            return Err(Error::Invalid(format!(
+                "a prefix sum of {} elements into {} (capacity {})",
+                input.len(),
+                output.len(),
+                self.capacity
+            )));
+        }
+        let mut ops = Vec::new();
+        // SAFETY: forwarded from the caller.
+        unsafe { self.push_ops(input, output, 0, &mut ops) };
+        Ok(ops)
     }
 
     /// # Safety
-    /// `input` and `output` view live buffers of `device` of the same length, at most the
-    /// capacity; `level` indexes the scratch that matches their length.
-    unsafe fn scan(
+    /// As for [`PrefixSum::ops`]; `level` indexes the scratch that matches their length.
+    unsafe fn push_ops(
         &self,
-        device: &Device,
         input: DevSlice<u32>,
         output: DevSlice<u32>,
         level: usize,
-    ) -> Result<(), Error> {
+        ops: &mut Vec<Op>,
+    ) {
         let n = input.len();
         let tiles = scan::tiles(n);
         let tile_offsets = if n <= scan::TILE {
@@ -120,10 +161,17 @@ impl PrefixSum {
                 tile_sums: sums,
                 n,
             };
+            let bytes = 4 * u64::from(n + tiles);
             // SAFETY: forwarded; the scratch level holds `tiles` elements.
             unsafe {
-                device.launch(registry::SCAN_REDUCE, grid(tiles), BLOCK, &args)?;
-                self.scan(device, sums, sums, level + 1)?;
+                ops.push(Op::launch(
+                    registry::SCAN_REDUCE,
+                    grid(tiles),
+                    BLOCK,
+                    args,
+                    bytes,
+                ));
+                self.push_ops(sums, sums, level + 1, ops);
             }
             sums
         };
@@ -133,8 +181,9 @@ impl PrefixSum {
             output,
             n,
         };
+        let bytes = 4 * u64::from(2 * n + tile_offsets.len());
         // SAFETY: forwarded.
-        unsafe { device.launch(registry::SCAN_TILES, grid(tiles), BLOCK, &args) }
+        ops.push(unsafe { Op::launch(registry::SCAN_TILES, grid(tiles), BLOCK, args, bytes) });
     }
 }
 
@@ -243,10 +292,11 @@ impl CountingSort {
                 shift,
             };
             // SAFETY: every view is of a live buffer of `device` sized for `n` keys (checked
-            // above or allocated for the capacity); input and output of a pass are distinct.
+            // above or allocated for the capacity); input and output of a pass are distinct;
+            // the ops run before this call returns.
             unsafe {
                 device.launch(registry::SORT_COUNT, grid(tiles), BLOCK, &count)?;
-                self.scan.scan(device, matrix, matrix, 0)?;
+                device.run(&device.plan(self.scan.ops(matrix, matrix)?, false)?)?;
                 device.launch(registry::SORT_SCATTER, grid(tiles), BLOCK, &scatter)?;
             }
             keys_in = k_out;

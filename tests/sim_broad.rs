@@ -7,7 +7,8 @@ mod common;
 use common::sim::{Expected, brute_force, circle, close, kind, rect, world};
 use glam::Vec2;
 use gpuwars::Device;
-use gpuwars::sim::{Boundary, Simulation, WorldSpec};
+use gpuwars::pipeline::Simulation;
+use gpuwars::sim::{Boundary, WorldSpec};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 

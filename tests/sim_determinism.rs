@@ -4,7 +4,7 @@
 mod common;
 
 use common::sim::ten_thousand;
-use gpuwars::sim::Simulation;
+use gpuwars::pipeline::Simulation;
 use gpuwars::{Device, Error};
 
 /// Builds the 10,000-body world with `seed`, scatters its bodies (scaled by `1 / shrink`),

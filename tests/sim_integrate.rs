@@ -5,7 +5,8 @@ mod common;
 use common::sim::{circle, kind, world};
 use glam::{DVec2, Vec2};
 use gpuwars::Device;
-use gpuwars::sim::{Boundary, Simulation};
+use gpuwars::pipeline::Simulation;
+use gpuwars::sim::Boundary;
 
 /// With a constant force F on mass m, Euler in the paper's order (velocity first) gives
 /// v_n = v_0 + n a dt and x_n = x_0 + n dt v_0 + a dt² n (n + 1) / 2, a = F / m. The f32

@@ -8,8 +8,9 @@ use glam::Vec2;
 use gpuwars::Device;
 use gpuwars::kernels::rng::dcmt::{Creator, tempering_parameters};
 use gpuwars::kernels::rng::{Mt607, Mt19937};
+use gpuwars::pipeline::Simulation;
+use gpuwars::sim::Boundary;
 use gpuwars::sim::rng::{TABLE, TABLE_SEED, slot_params, table_params};
-use gpuwars::sim::{Boundary, Simulation};
 
 #[test]
 fn the_table_starts_with_what_the_creator_makes_in_sequence() {

@@ -5,9 +5,10 @@ mod common;
 
 use common::sim::{circle, kind, rect, world};
 use glam::Vec2;
+use gpuwars::Device;
+use gpuwars::pipeline::Simulation;
 use gpuwars::sim::layout::{Layout, WARP, space};
-use gpuwars::sim::{Boundary, Simulation, WorldSpec};
-use gpuwars::{Device, Error};
+use gpuwars::sim::{Boundary, WorldSpec};
 
 fn valid() -> WorldSpec {
     world(
@@ -81,10 +82,15 @@ fn invalid_worlds_are_refused_with_the_field_and_the_allowed_range() {
     for (break_it, expected) in cases {
         let mut spec = valid();
         break_it(&mut spec);
+        let rule = spec.validate().expect_err(expected);
+        assert!(
+            rule.to_string().contains(expected),
+            "`{rule}` lacks `{expected}`"
+        );
+        // A world is refused with the same words, before anything is allocated.
         let err = Simulation::new(common::cpu(), &spec, 1)
             .err()
             .expect(expected);
-        assert!(matches!(err, Error::Spec(_)), "{err}");
         assert!(
             err.to_string().contains(expected),
             "`{err}` lacks `{expected}`"

@@ -1,34 +1,72 @@
 //! The CPU emulation: runs the kernel bodies of `gpuwars-kernels`, compiled natively.
 //!
 //! Blocks run in parallel on a rayon pool and the threads of a block run one after another,
-//! in order. Since kernels are barrier-free, this is exactly the GPU's semantics; atomics are
+//! in order (or, under [`Schedule::Shuffled`], both in a shuffled order). Since kernels are barrier-free, this is exactly the GPU's semantics; atomics are
 //! real atomics. A launch returns when the whole grid has run.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr::NonNull;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use gpuwars_kernels::{Kernel, KernelArgs, Thread};
+use rand::rngs::StdRng;
+use rand::seq::SliceRandom;
+use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
 
 use super::{Element, Error};
 
+/// The order in which the emulator runs a launch's blocks and a block's threads.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Schedule {
+    /// Blocks in parallel as the pool takes them, the threads of a block in order: the
+    /// fast way.
+    #[default]
+    InOrder,
+    /// Every launch runs its blocks, and each block its threads, in an order shuffled from
+    /// this seed (and the launch's count): a result that depends on scheduling changes
+    /// under it, so the determinism tests catch it on the CPU rather than on the GPU.
+    Shuffled {
+        /// Seed of the shuffles.
+        seed: u64,
+    },
+}
+
 /// The emulator: a pool of worker threads.
 pub(super) struct Emulator {
     pool: rayon::ThreadPool,
+    schedule: Schedule,
+    /// Launches so far, so that each shuffled launch gets its own order.
+    launches: AtomicU64,
 }
 
 impl Emulator {
-    pub(super) fn new(threads: Option<usize>) -> Result<Self, Error> {
+    pub(super) fn new(threads: Option<usize>, schedule: Schedule) -> Result<Self, Error> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads.unwrap_or(0))
             .thread_name(|i| format!("gpuwars-emu-{i}"))
             .build()
             .map_err(|e| Error::Invalid(format!("cannot start the emulator's threads: {e}")))?;
-        Ok(Emulator { pool })
+        Ok(Emulator {
+            pool,
+            schedule,
+            launches: AtomicU64::new(0),
+        })
     }
 
     pub(super) fn threads(&self) -> usize {
         self.pool.current_num_threads()
+    }
+
+    pub(super) fn schedule(&self) -> Schedule {
+        self.schedule
+    }
+
+    /// Runs `work` on a worker of the pool: the launches it issues then start their blocks
+    /// without waking another thread first (a launch from outside the pool costs two
+    /// cross-thread wake-ups).
+    pub(super) fn run<R: Send>(&self, work: impl FnOnce() -> R + Send) -> R {
+        self.pool.install(work)
     }
 
     pub(super) fn launch<A: KernelArgs>(
@@ -38,22 +76,38 @@ impl Emulator {
         block: u32,
         args: &A,
     ) -> Result<(), Error> {
-        let run_block = |b: u32| {
-            for t in 0..block {
-                let thread = Thread {
-                    thread: t,
-                    block: b,
-                    block_dim: block,
-                    grid_dim: grid,
-                };
-                (kernel.body)(thread, args);
-            }
+        let thread = |t: u32, b: u32| Thread {
+            thread: t,
+            block: b,
+            block_dim: block,
+            grid_dim: grid,
         };
         // A failed bounds check panics inside a worker; turn it into an error, as a trap is
         // one on the GPU.
-        catch_unwind(AssertUnwindSafe(|| {
-            self.pool
-                .install(|| (0..grid).into_par_iter().for_each(run_block))
+        catch_unwind(AssertUnwindSafe(|| match self.schedule {
+            Schedule::InOrder => self.pool.install(|| {
+                (0..grid).into_par_iter().for_each(|b| {
+                    for t in 0..block {
+                        (kernel.body)(thread(t, b), args);
+                    }
+                })
+            }),
+            Schedule::Shuffled { seed } => {
+                let launch = self.launches.fetch_add(1, Ordering::Relaxed);
+                let mut rng =
+                    StdRng::seed_from_u64(seed ^ launch.wrapping_mul(0x9e37_79b9_7f4a_7c15));
+                let mut blocks: Vec<(u32, u64)> = (0..grid).map(|b| (b, rng.random())).collect();
+                blocks.shuffle(&mut rng);
+                self.pool.install(|| {
+                    blocks.into_par_iter().for_each(|(b, block_seed)| {
+                        let mut order: Vec<u32> = (0..block).collect();
+                        order.shuffle(&mut StdRng::seed_from_u64(block_seed));
+                        for t in order {
+                            (kernel.body)(thread(t, b), args);
+                        }
+                    })
+                })
+            }
         }))
         .map_err(|payload| Error::KernelFault {
             kernel: kernel.name,

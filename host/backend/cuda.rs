@@ -7,8 +7,8 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 use cudarc::driver::{
-    CudaContext, CudaFunction, CudaSlice, CudaStream, DevicePtr, DeviceRepr, DriverError,
-    LaunchConfig, PushKernelArg, sys,
+    CudaContext, CudaEvent, CudaFunction, CudaGraph, CudaSlice, CudaStream, DevicePtr, DeviceRepr,
+    DriverError, LaunchConfig, PushKernelArg, result, sys,
 };
 use cudarc::nvrtc::Ptx;
 use gpuwars_kernels::{Kernel, KernelArgs, registry};
@@ -34,6 +34,7 @@ pub struct GpuProperties {
 
 /// An open GPU: context, stream and every kernel of the module.
 pub(super) struct Gpu {
+    ctx: Arc<CudaContext>,
     stream: Arc<CudaStream>,
     functions: HashMap<&'static str, CudaFunction>,
     properties: GpuProperties,
@@ -76,6 +77,9 @@ impl Gpu {
         // multi-stream use would only cost time.
         // SAFETY: this backend never uses a second stream.
         unsafe { ctx.disable_event_tracking() };
+        // Our own stream rather than the legacy default one, which synchronises with every
+        // other stream of the context and cannot be captured into a graph.
+        let stream = ctx.new_stream().map_err(driver("creating a stream"))?;
         let module = ctx
             .load_module(Ptx::from_src(ptx::PTX))
             .map_err(driver("loading the kernels' PTX"))?;
@@ -88,7 +92,8 @@ impl Gpu {
         }
         let properties = properties(&ctx).map_err(driver("querying device 0"))?;
         Ok(Gpu {
-            stream: ctx.default_stream(),
+            ctx,
+            stream,
             functions,
             properties,
         })
@@ -176,10 +181,154 @@ impl Gpu {
             })
     }
 
+    /// Queues a clear of `bytes` bytes at device address `addr`.
+    ///
+    /// # Safety
+    /// The bytes belong to a live allocation that nothing else uses meanwhile.
+    pub(super) unsafe fn clear(&self, addr: u64, bytes: usize) -> Result<(), Error> {
+        // SAFETY: forwarded from the caller.
+        unsafe { result::memset_d8_async(addr, 0, bytes, self.stream.cu_stream()) }
+            .map_err(driver("clearing device memory"))
+    }
+
+    /// Records what `issue` queues on the stream as a graph instead of running it.
+    pub(super) fn capture(
+        &self,
+        issue: impl FnOnce() -> Result<(), Error>,
+    ) -> Result<CudaGraph, Error> {
+        self.stream
+            .begin_capture(sys::CUstreamCaptureMode::CU_STREAM_CAPTURE_MODE_THREAD_LOCAL)
+            .map_err(driver("starting a graph capture"))?;
+        let issued = issue();
+        // End the capture whatever happened, so that the stream is usable again.
+        let graph = self
+            .stream
+            .end_capture(sys::CUgraphInstantiate_flags(0))
+            .map_err(driver("capturing a graph"));
+        issued?;
+        let graph = graph?.ok_or_else(|| Error::Invalid("an empty graph was captured".into()))?;
+        graph.upload().map_err(driver("uploading a graph"))?;
+        Ok(graph)
+    }
+
+    /// Queues one replay of `graph`.
+    pub(super) fn replay(&self, graph: &CudaGraph) -> Result<(), Error> {
+        graph.launch().map_err(driver("launching a graph"))
+    }
+
+    /// A new event, with timing when `timed`.
+    pub(super) fn event(&self, timed: bool) -> Result<CudaEvent, Error> {
+        let flags = if timed {
+            sys::CUevent_flags::CU_EVENT_DEFAULT
+        } else {
+            sys::CUevent_flags::CU_EVENT_DISABLE_TIMING
+        };
+        self.ctx
+            .new_event(Some(flags))
+            .map_err(driver("creating an event"))
+    }
+
+    /// Records `event` after the work queued so far.
+    pub(super) fn record(&self, event: &CudaEvent) -> Result<(), Error> {
+        event
+            .record(&self.stream)
+            .map_err(driver("recording an event"))
+    }
+
+    /// Page-locked host memory of `bytes` bytes, for asynchronous copies.
+    pub(super) fn pinned(&self, bytes: usize) -> Result<Pinned, Error> {
+        self.ctx
+            .bind_to_thread()
+            .map_err(driver("binding the context"))?;
+        // SAFETY: a plain allocation; freed in `Pinned::drop`.
+        let ptr = unsafe { result::malloc_host(bytes.max(1), 0) }
+            .map_err(driver("allocating pinned host memory"))?;
+        // cuMemHostAlloc does not promise zeroed memory.
+        // SAFETY: `bytes` bytes were just allocated.
+        unsafe { std::ptr::write_bytes(ptr.cast::<u8>(), 0, bytes) };
+        Ok(Pinned {
+            ptr: ptr.cast(),
+            ctx: self.ctx.clone(),
+        })
+    }
+
+    /// Queues a copy of `bytes` bytes from host address `src` to device address `dst`.
+    ///
+    /// # Safety
+    /// `src` is pinned memory that stays unchanged until the copy has run; `dst` a live
+    /// device allocation of at least `bytes` bytes.
+    pub(super) unsafe fn upload_async(
+        &self,
+        src: *const u8,
+        dst: u64,
+        bytes: usize,
+    ) -> Result<(), Error> {
+        // SAFETY: forwarded from the caller.
+        unsafe {
+            result::memcpy_htod_async(
+                dst,
+                std::slice::from_raw_parts(src, bytes),
+                self.stream.cu_stream(),
+            )
+        }
+        .map_err(driver("copying to the device"))
+    }
+
+    /// Queues a copy of `bytes` bytes from device address `src` to host address `dst`.
+    ///
+    /// # Safety
+    /// `dst` is pinned memory that nothing reads until the copy has run; `src` a live device
+    /// allocation of at least `bytes` bytes.
+    pub(super) unsafe fn download_async(
+        &self,
+        src: u64,
+        dst: *mut u8,
+        bytes: usize,
+    ) -> Result<(), Error> {
+        // SAFETY: forwarded from the caller.
+        unsafe {
+            result::memcpy_dtoh_async(
+                std::slice::from_raw_parts_mut(dst, bytes),
+                src,
+                self.stream.cu_stream(),
+            )
+        }
+        .map_err(driver("copying from the device"))
+    }
+
+    /// Free and total device memory in bytes.
+    pub(super) fn memory(&self) -> Result<(u64, u64), Error> {
+        self.ctx
+            .bind_to_thread()
+            .map_err(driver("binding the context"))?;
+        let (free, total) = result::mem_get_info().map_err(driver("querying device memory"))?;
+        Ok((free as u64, total as u64))
+    }
+
     pub(super) fn synchronize(&self) -> Result<(), Error> {
         self.stream
             .synchronize()
             .map_err(driver("waiting for the GPU (a kernel may have faulted)"))
+    }
+}
+
+/// Page-locked host memory, freed on drop.
+pub(super) struct Pinned {
+    pub(super) ptr: *mut u8,
+    ctx: Arc<CudaContext>,
+}
+
+// SAFETY: plain memory owned by this handle.
+unsafe impl Send for Pinned {}
+// SAFETY: as above; access is through the owner's `&mut` or after a fence.
+unsafe impl Sync for Pinned {}
+
+impl Drop for Pinned {
+    fn drop(&mut self) {
+        // Nothing may still be copying into it: the owner waits for its fences first.
+        let _ = self.ctx.bind_to_thread();
+        // SAFETY: allocated by `malloc_host`.
+        let _ = unsafe { result::free_host(self.ptr.cast()) };
     }
 }
 

@@ -7,6 +7,8 @@
 
 mod cpu;
 mod cuda;
+mod plan;
+mod ring;
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -16,7 +18,10 @@ use std::sync::Mutex;
 use gpuwars_kernels::{DevSlice, Kernel, KernelArgs};
 use serde::Serialize;
 
+pub use cpu::Schedule;
 pub use cuda::GpuProperties;
+pub use plan::{Op, Plan};
+pub use ring::Ring;
 
 /// The largest block the GPU accepts; the emulator enforces it too, so that a launch that runs
 /// on one backend runs on the other.
@@ -47,9 +52,18 @@ pub enum Error {
     /// A launch, buffer or size outside what the backends accept.
     #[error("invalid request: {0}")]
     Invalid(String),
-    /// A world description that breaks a rule.
-    #[error("invalid world: {0}")]
-    Spec(#[from] crate::sim::SpecError),
+    /// A world larger than the device's free memory.
+    #[error("{what} needs {needed} bytes of {place} memory, but only {free} are free")]
+    OutOfMemory {
+        /// What was being made.
+        what: String,
+        /// Bytes it needs.
+        needed: u64,
+        /// Bytes free.
+        free: u64,
+        /// "device" or "host".
+        place: &'static str,
+    },
 }
 
 /// Which backend runs the kernels.
@@ -169,8 +183,18 @@ impl Device {
 
     /// The CPU emulation with `threads` workers (`None`: one per core).
     pub fn cpu(threads: Option<usize>, reason: &str) -> Result<Device, Error> {
+        Device::cpu_scheduled(threads, Schedule::InOrder, reason)
+    }
+
+    /// The CPU emulation with `threads` workers, running blocks and threads as `schedule`
+    /// says.
+    pub fn cpu_scheduled(
+        threads: Option<usize>,
+        schedule: Schedule,
+        reason: &str,
+    ) -> Result<Device, Error> {
         Ok(Device {
-            imp: Imp::Cpu(cpu::Emulator::new(threads)?),
+            imp: Imp::Cpu(cpu::Emulator::new(threads, schedule)?),
             reason: reason.to_string(),
             launches: None,
         })
@@ -308,6 +332,24 @@ impl Device {
         block: u32,
         args: &A,
     ) -> Result<(), Error> {
+        if grid > 0 {
+            self.count([kernel.name]);
+        }
+        // SAFETY: forwarded from the caller.
+        unsafe { self.issue(kernel, grid, block, args) }
+    }
+
+    /// [`Device::launch`] without counting it.
+    ///
+    /// # Safety
+    /// As for [`Device::launch`].
+    unsafe fn issue<A: KernelArgs>(
+        &self,
+        kernel: Kernel<A>,
+        grid: u32,
+        block: u32,
+        args: &A,
+    ) -> Result<(), Error> {
         if block == 0 || block > MAX_BLOCK {
             return Err(Error::Invalid(format!(
                 "kernel `{}`: block of {block} threads (allowed 1..={MAX_BLOCK})",
@@ -317,14 +359,20 @@ impl Device {
         if grid == 0 {
             return Ok(());
         }
-        if let Some(launches) = &self.launches {
-            let mut launches = launches.lock().unwrap_or_else(|e| e.into_inner());
-            *launches.entry(kernel.name).or_default() += 1;
-        }
         match &self.imp {
             Imp::Cpu(emu) => emu.launch(kernel, grid, block, args),
             // SAFETY: forwarded from the caller.
             Imp::Cuda(gpu) => unsafe { gpu.launch(kernel, grid, block, args) },
+        }
+    }
+
+    /// Adds one launch of each named kernel to the counts, if counting is on.
+    fn count(&self, kernels: impl IntoIterator<Item = &'static str>) {
+        if let Some(launches) = &self.launches {
+            let mut launches = launches.lock().unwrap_or_else(|e| e.into_inner());
+            for name in kernels {
+                *launches.entry(name).or_default() += 1;
+            }
         }
     }
 
@@ -341,6 +389,80 @@ impl Device {
             .map_or_else(BTreeMap::new, |launches| {
                 launches.lock().unwrap_or_else(|e| e.into_inner()).clone()
             })
+    }
+
+    /// Free and total memory, in bytes, where this device keeps its buffers: the GPU's
+    /// memory, or the host's available memory for the emulation (`None` where the system
+    /// does not say).
+    pub fn memory(&self) -> Result<Option<(u64, u64)>, Error> {
+        match &self.imp {
+            Imp::Cuda(gpu) => gpu.memory().map(Some),
+            Imp::Cpu(_) => Ok(host_memory()),
+        }
+    }
+
+    /// Fails with [`Error::OutOfMemory`] unless `bytes` more bytes fit in the device's free
+    /// memory; `what` names what needs them.
+    pub fn check_fits(&self, what: &str, bytes: u64) -> Result<(), Error> {
+        match self.memory()? {
+            Some((free, _)) if bytes > free => Err(Error::OutOfMemory {
+                what: what.to_string(),
+                needed: bytes,
+                free,
+                place: match self.kind() {
+                    BackendKind::Cuda => "device",
+                    BackendKind::Cpu => "host",
+                },
+            }),
+            _ => Ok(()),
+        }
+    }
+
+    /// Queues the zeroing of every element `view` covers.
+    ///
+    /// # Safety
+    /// `view` views a live buffer of this device that nothing else touches until the clear
+    /// is done.
+    pub unsafe fn clear<T: Element>(&self, view: DevSlice<T>) -> Result<(), Error> {
+        let bytes = view.len() as usize * size_of::<T>();
+        if bytes == 0 {
+            return Ok(());
+        }
+        match &self.imp {
+            // SAFETY: forwarded from the caller; launches are synchronous, so no kernel runs.
+            Imp::Cpu(_) => unsafe {
+                std::ptr::write_bytes(view.addr() as *mut u8, 0, bytes);
+                Ok(())
+            },
+            // SAFETY: forwarded from the caller.
+            Imp::Cuda(gpu) => unsafe { gpu.clear(view.addr(), bytes) },
+        }
+    }
+
+    /// Bytes per second of a large device-to-device copy, read plus written: the
+    /// bandwidth ceiling a memory-bound kernel is measured against.
+    pub fn copy_bandwidth(&self) -> Result<f64, Error> {
+        let (len, reps) = match self.kind() {
+            BackendKind::Cuda => (1usize << 26, 20),
+            BackendKind::Cpu => (1 << 23, 5),
+        };
+        let src = self.alloc_zeroed::<u32>(len)?;
+        let mut dst = self.alloc_zeroed::<u32>(len)?;
+        self.copy(&src, &mut dst)?;
+        let start = self.mark()?;
+        for _ in 0..reps {
+            self.copy(&src, &mut dst)?;
+        }
+        let seconds = self.mark()?.seconds_since(&start)?;
+        Ok((2 * len * size_of::<u32>() * reps) as f64 / seconds.max(f64::MIN_POSITIVE))
+    }
+
+    /// The emulator's schedule; `None` on the GPU.
+    pub fn schedule(&self) -> Option<Schedule> {
+        match &self.imp {
+            Imp::Cpu(emu) => Some(emu.schedule()),
+            Imp::Cuda(_) => None,
+        }
     }
 
     /// Waits until every queued launch and copy has finished, and reports a kernel fault.
@@ -367,6 +489,22 @@ fn check_len<T>(len: usize) -> Result<(), Error> {
         )));
     }
     Ok(())
+}
+
+/// The host's available and total memory, from `/proc/meminfo`.
+fn host_memory() -> Option<(u64, u64)> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let field = |name: &str| -> Option<u64> {
+        let line = info.lines().find(|l| l.starts_with(name))?;
+        let kib: u64 = line[name.len()..]
+            .trim()
+            .trim_end_matches("kB")
+            .trim()
+            .parse()
+            .ok()?;
+        Some(kib * 1024)
+    };
+    Some((field("MemAvailable:")?, field("MemTotal:")?))
 }
 
 fn foreign_buffer() -> Error {

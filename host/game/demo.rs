@@ -7,8 +7,10 @@ use gpuwars_kernels::game::control::{DESTROYED, Input, Status, TOO_SLOW};
 use serde::Serialize;
 
 use super::Game;
+use super::engine::Options;
 use super::replay::Replay;
 use super::spec::Scene;
+use crate::pipeline::Profile;
 use crate::{BackendKind, Device, Error};
 
 /// What `gpuwars demo` and `gpuwars replay` print.
@@ -28,6 +30,12 @@ pub struct Report {
     pub game_seconds: f64,
     /// Steps per wall-clock second, status read-back included.
     pub sim_steps_per_s: f64,
+    /// Kernel launches per step.
+    pub launches_per_step: usize,
+    /// Whether each step replayed a CUDA graph.
+    pub graphs: bool,
+    /// Steps in flight before a status was read back.
+    pub lag: usize,
     /// The final state hash, as `0x` and 16 hex digits.
     pub state_hash: String,
     /// Points scored.
@@ -44,6 +52,19 @@ pub struct Report {
     pub game_over: bool,
     /// Why it ended: "too slow", "ship destroyed", or "" while playing.
     pub game_over_reason: &'static str,
+    /// Per-stage times, with `--profile`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub profile: Option<ProfileReport>,
+}
+
+/// The stage times of a profiled run, and the device's copy bandwidth measured in it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ProfileReport {
+    /// Bytes per second of a large device-to-device copy (read plus written).
+    pub copy_bandwidth: f64,
+    /// The stages' times.
+    #[serde(flatten)]
+    pub profile: Profile,
 }
 
 impl Report {
@@ -60,6 +81,19 @@ impl Report {
             format!("{} ({:.1} s of game time)", self.steps, self.game_seconds),
         );
         line("sim_steps_per_s:", format!("{:.1}", self.sim_steps_per_s));
+        line(
+            "launches:",
+            format!(
+                "{} per step ({}, status read back {} step(s) late)",
+                self.launches_per_step,
+                if self.graphs {
+                    "CUDA graph"
+                } else {
+                    "one by one"
+                },
+                self.lag
+            ),
+        );
         line("state_hash:", self.state_hash.clone());
         line("score:", self.score.to_string());
         line("enemies_alive:", self.enemies_alive.to_string());
@@ -72,6 +106,14 @@ impl Report {
             "no".to_string()
         };
         line("game_over:", over);
+        if let Some(p) = &self.profile {
+            out += &format!(
+                "\nstage times over {} steps (copy bandwidth {:.1} GB/s):\n{}",
+                p.profile.steps,
+                p.copy_bandwidth / 1e9,
+                p.profile.to_table(Some(p.copy_bandwidth))
+            );
+        }
         out
     }
 }
@@ -85,31 +127,79 @@ pub fn device_name(device: &Device) -> String {
     }
 }
 
+/// How `demo` and `replay` run a game.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RunOptions {
+    /// Lag and graphs.
+    pub game: Options,
+    /// Time every stage of every step (steps then run stage by stage and wait).
+    pub profile: bool,
+}
+
+/// The statuses of a game as they come back, up to the first that ends it.
+#[derive(Default)]
+struct Record {
+    inputs: Vec<Input>,
+    shots: u64,
+    last: Status,
+    over: bool,
+}
+
+impl Record {
+    fn take(&mut self, status: Status) {
+        if self.over {
+            // Steps queued after the end change nothing: their statuses repeat the last.
+            return;
+        }
+        self.inputs.push(status.input);
+        self.shots += u64::from(status.events.shots_fired);
+        self.last = status;
+        self.over = status.is_over();
+    }
+}
+
 /// Plays up to `steps` steps (fewer if the game ends), each with the input `pilot` gives for
 /// its index (`None`: the autopilot's), and reports. The inputs actually applied and the
-/// final state hash are returned too, for a replay.
+/// final state hash are returned too, for a replay. Statuses come back `lag` steps late;
+/// the game ends at the same step whatever the lag, since the device decides it.
 fn play(
     game: &mut Game,
     seed: u32,
     steps: u64,
+    options: RunOptions,
     mut pilot: impl FnMut(u64) -> Option<Input>,
 ) -> Result<(Report, Vec<Input>, u64), Error> {
-    let mut inputs = Vec::new();
-    let mut shots = 0u64;
-    let mut status = Status::default();
+    let mut record = Record::default();
+    let mut profile = options.profile.then(Profile::default);
     let start = Instant::now();
     for i in 0..steps {
-        status = game.step(pilot(i))?;
-        inputs.push(status.input);
-        shots += u64::from(status.events.shots_fired);
-        if status.is_over() {
+        match &mut profile {
+            Some(profile) => game.submit_profiled(pilot(i), profile)?,
+            None => game.submit(pilot(i))?,
+        }
+        while let Some(status) = game.ready_status() {
+            record.take(status);
+        }
+        if record.over {
             break;
         }
     }
+    while let Some(status) = game.next_status()? {
+        record.take(status);
+    }
     let seconds = start.elapsed().as_secs_f64();
-    let device = game.simulation().device();
-    let played = inputs.len() as u64;
     let hash = game.state_hash()?;
+    let pipeline = game.pipeline();
+    let device = pipeline.device();
+    let profile = match profile {
+        Some(profile) => Some(ProfileReport {
+            copy_bandwidth: device.copy_bandwidth()?,
+            profile,
+        }),
+        None => None,
+    };
+    let status = record.last;
+    let played = record.inputs.len() as u64;
     let report = Report {
         backend: device.kind(),
         device: device_name(device),
@@ -118,11 +208,14 @@ fn play(
         steps: played,
         game_seconds: played as f64 * f64::from(game.scene().world.dt),
         sim_steps_per_s: played as f64 / seconds.max(f64::MIN_POSITIVE),
+        launches_per_step: pipeline.launches_per_step(),
+        graphs: pipeline.uses_graphs() && !options.profile,
+        lag: options.game.lag,
         state_hash: format!("{hash:#018x}"),
         score: status.score,
         enemies_alive: status.enemies_alive,
         enemies_killed: status.enemies_killed,
-        shots_fired: shots,
+        shots_fired: record.shots,
         fps_meter: status.fps_meter,
         game_over: status.is_over(),
         game_over_reason: match status.game_over {
@@ -130,8 +223,9 @@ fn play(
             DESTROYED => "ship destroyed",
             _ => "",
         },
+        profile,
     };
-    Ok((report, inputs, hash))
+    Ok((report, record.inputs, hash))
 }
 
 /// The autopilot plays `scene` for up to `steps` steps; returns the report and the replay
@@ -141,9 +235,10 @@ pub fn demo(
     scene: &Scene,
     seed: u32,
     steps: u64,
+    options: RunOptions,
 ) -> Result<(Report, Replay), Error> {
-    let mut game = Game::new(device, scene, seed)?;
-    let (report, inputs, state_hash) = play(&mut game, seed, steps, |_| None)?;
+    let mut game = Game::with_options(device, scene, seed, options.game)?;
+    let (report, inputs, state_hash) = play(&mut game, seed, steps, options, |_| None)?;
     let replay = Replay {
         scene: scene.name.clone(),
         scene_toml: scene.source.clone(),
@@ -157,10 +252,15 @@ pub fn demo(
 
 /// Plays `replay`'s inputs on its scene (already read from its `scene_toml`) and reports;
 /// the caller compares [`Report::state_hash`] with the recorded one.
-pub fn replay(device: &Device, scene: &Scene, replay: &Replay) -> Result<Report, Error> {
-    let mut game = Game::new(device, scene, replay.seed)?;
+pub fn replay(
+    device: &Device,
+    scene: &Scene,
+    replay: &Replay,
+    options: RunOptions,
+) -> Result<Report, Error> {
+    let mut game = Game::with_options(device, scene, replay.seed, options.game)?;
     let inputs = &replay.inputs;
-    let (report, _, _) = play(&mut game, replay.seed, inputs.len() as u64, |i| {
+    let (report, _, _) = play(&mut game, replay.seed, inputs.len() as u64, options, |i| {
         Some(inputs[i as usize])
     })?;
     Ok(report)

@@ -1,46 +1,54 @@
-//! A game on a device: the world of a [`Scene`], the master thread's state, and the order in
-//! which a game step's kernels run (see `gpuwars_kernels::game`).
+//! A game on a device: the pipeline configured with a [`Scene`]'s game (see
+//! `crate::pipeline`), and the ring through which commands go up and statuses come back.
 
-use gpuwars_kernels::game::ai::ThinkArgs;
-use gpuwars_kernels::game::autopilot::AutopilotArgs;
-use gpuwars_kernels::game::control::{Input, Status};
+use std::collections::VecDeque;
+
+use gpuwars_kernels::game::control::{Command, Input, Status};
 use gpuwars_kernels::game::fsm::Machine;
-use gpuwars_kernels::game::master::{BirthArgs, MasterArgs};
 use gpuwars_kernels::game::rules::{Brain, Rules, Wave};
-use gpuwars_kernels::sim::SlotRange;
-use gpuwars_kernels::{Kernel, registry};
+use gpuwars_kernels::registry;
 use xxhash_rust::xxh3::Xxh3;
 
 use super::spec::Scene;
-use crate::sim::layout::steps;
-use crate::sim::{Simulation, Snapshot};
-use crate::{Buffer, Device, Error};
+use crate::backend::Ring;
+use crate::pipeline::{GameConfig, Mind, Pipeline, Profile};
+use crate::sim::Snapshot;
+use crate::sim::layout::{Layout, steps};
+use crate::{Device, Error};
 
-/// One enemy kind's AI launch: its slots, its brain, its machine's kernel.
-struct Mind {
-    range: SlotRange,
-    brain: Brain,
-    kernel: Kernel<ThinkArgs>,
+/// How a game runs on its device.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Options {
+    /// Steps that may be in flight before the host reads a status back (1: it waits for
+    /// every step).
+    pub lag: usize,
+    /// Record the step as a CUDA graph (on the GPU).
+    pub graphs: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            lag: 4,
+            graphs: true,
+        }
+    }
 }
 
 /// A game in progress on a device.
 pub struct Game<'d> {
-    sim: Simulation<'d>,
+    // The ring's pinned memory outlives the copies queued into it (it waits for them on
+    // drop), and those copies read the pipeline's buffers: dropped first.
+    ring: Ring<Command, Status>,
+    pipeline: Pipeline<'d>,
     scene: Scene,
-    rules: Rules,
-    minds: Vec<Mind>,
-    waves: Vec<Wave>,
-    wave_table: Buffer<Wave>,
-    status: Buffer<Status>,
-    input: Buffer<Input>,
-    spawned: Buffer<u32>,
-    births: Buffer<u32>,
-    birth_speed: Buffer<f32>,
+    /// Statuses read back and not yet handed out, oldest first.
+    arrived: VecDeque<Status>,
     last: Status,
 }
 
 /// The rules of `scene` in the kernels' terms (steps instead of seconds, kind indices).
-fn rules(scene: &Scene, sim: &Simulation) -> Rules {
+fn rules(scene: &Scene, layout: &Layout) -> Rules {
     let (world, game) = (&scene.world, &scene.game);
     let dt = world.dt;
     let kind = |name: &str| world.kind_index(name).expect("validated scene") as u32;
@@ -51,7 +59,7 @@ fn rules(scene: &Scene, sim: &Simulation) -> Rules {
     Rules {
         ship_kind,
         shot_kind: kind(&game.ship.shot),
-        ship: sim.layout().ranges[ship_kind as usize],
+        ship: layout.ranges[ship_kind as usize],
         ship_speed: game.ship.speed,
         shot_speed: game.ship.shot_speed,
         fire_period: steps(1.0 / game.ship.fire_rate, dt),
@@ -88,7 +96,7 @@ fn waves(scene: &Scene) -> Vec<Wave> {
 }
 
 /// One AI launch per kind with a behaviour.
-fn minds(scene: &Scene, sim: &Simulation) -> Vec<Mind> {
+fn minds(scene: &Scene, layout: &Layout) -> Vec<Mind> {
     let dt = scene.world.dt;
     scene
         .world
@@ -104,7 +112,7 @@ fn minds(scene: &Scene, sim: &Simulation) -> Vec<Mind> {
                 Machine::Tricky => registry::THINK_TRICKY,
             };
             Some(Mind {
-                range: sim.layout().ranges[k],
+                range: layout.ranges[k],
                 brain: Brain {
                     machine: b.machine as u32,
                     kind: k as u32,
@@ -125,27 +133,32 @@ impl<'d> Game<'d> {
     /// A new game of `scene` (validated by the scene loader) with generators seeded from
     /// `seed`; the ship is born on the first step.
     pub fn new(device: &'d Device, scene: &Scene, seed: u32) -> Result<Self, Error> {
+        Self::with_options(device, scene, seed, Options::default())
+    }
+
+    /// A new game, run as `options` say.
+    pub fn with_options(
+        device: &'d Device,
+        scene: &Scene,
+        seed: u32,
+        options: Options,
+    ) -> Result<Self, Error> {
         let mut world = scene.world.clone();
         // The autopilot looks through the grid too.
         world.vision = world.vision.max(scene.game.ship.autopilot_sight);
-        let sim = Simulation::new(device, &world, seed)?;
-        let kinds = world.kinds.len();
-        let rules = rules(scene, &sim);
-        let minds = minds(scene, &sim);
-        let waves = waves(scene);
+        let layout = Layout::new(&world);
+        let game = GameConfig {
+            rules: rules(scene, &layout),
+            minds: minds(scene, &layout),
+            waves: waves(scene),
+        };
+        let pipeline = Pipeline::new(device, &world, seed, Some(game), options.graphs)?;
         Ok(Game {
-            wave_table: device.upload(&waves)?,
-            status: device.alloc_zeroed(1)?,
-            input: device.alloc_zeroed(1)?,
-            spawned: device.alloc_zeroed(kinds)?,
-            births: device.alloc_zeroed(kinds)?,
-            birth_speed: device.alloc_zeroed(kinds)?,
-            last: Status::default(),
+            ring: device.ring(options.lag)?,
+            pipeline,
             scene: scene.clone(),
-            sim,
-            rules,
-            minds,
-            waves,
+            arrived: VecDeque::new(),
+            last: Status::default(),
         })
     }
 
@@ -154,121 +167,108 @@ impl<'d> Game<'d> {
         &self.scene
     }
 
-    /// The world underneath.
-    pub fn simulation(&self) -> &Simulation<'d> {
-        &self.sim
+    /// The world and its step pipeline.
+    pub fn pipeline(&self) -> &Pipeline<'d> {
+        &self.pipeline
     }
 
-    /// The status after the last step.
+    /// The latest status read back.
     pub fn status(&self) -> Status {
         self.last
     }
 
-    /// The master thread's arguments.
-    fn master_args(&self) -> MasterArgs {
-        let v = self.sim.views();
-        MasterArgs {
-            bodies: v.bodies,
-            kinds: v.kinds,
-            ranges: v.ranges,
-            free: v.free,
-            contacts: v.contacts,
-            status: self.status.view(),
-            input: self.input.view(),
-            spawned: self.spawned.view(),
-            births: self.births.view(),
-            birth_speed: self.birth_speed.view(),
-            waves: self.wave_table.view(),
-            space: *self.sim.space(),
-            rules: self.rules,
-        }
+    /// Queues one step with `input`, or with the autopilot's when `None`, without waiting
+    /// for it. The statuses of earlier steps that had to be read back to make room are
+    /// kept for [`Game::next_status`].
+    pub fn submit(&mut self, input: Option<Input>) -> Result<(), Error> {
+        self.queue(input, None)
     }
 
-    /// Plays one step with `input`, or with the autopilot's when `None`, and returns the
-    /// status read back after it.
-    pub fn step(&mut self, input: Option<Input>) -> Result<Status, Error> {
-        let device = self.sim.device();
-        let v = self.sim.views();
-        let space = *self.sim.space();
-        match input {
+    /// As [`Game::submit`], stage by stage, timing each stage into `profile` (waits for
+    /// the step).
+    pub fn submit_profiled(
+        &mut self,
+        input: Option<Input>,
+        profile: &mut Profile,
+    ) -> Result<(), Error> {
+        self.queue(input, Some(profile))
+    }
+
+    fn queue(&mut self, input: Option<Input>, profile: Option<&mut Profile>) -> Result<(), Error> {
+        let command = match input {
             Some(input) => {
                 if let Some((field, allowed)) = input.problem() {
                     return Err(Error::Invalid(format!(
                         "input {field} is out of range (allowed {allowed}): {input:?}"
                     )));
                 }
-                device.write(&mut self.input, &[input])?;
+                Command::input(input)
             }
-            None => {
-                let args = AutopilotArgs {
-                    bodies: v.bodies,
-                    kinds: v.kinds,
-                    space,
-                    grid: v.grid,
-                    input: self.input.view(),
-                    rules: self.rules,
-                };
-                self.sim.launch(registry::AUTOPILOT, 1, &args)?;
-            }
+            None => Command::autopilot(),
+        };
+        if let Some(status) = self.ring.reserve()? {
+            self.arrived.push_back(status);
         }
-        let master = self.master_args();
-        self.sim.launch(registry::MASTER, 1, &master)?;
-        let step = self.sim.steps() as u32;
-        if !self.last.is_over() && self.waves.iter().any(|w| w.due(step)) {
-            let births = BirthArgs {
-                bodies: v.bodies,
-                kinds: v.kinds,
-                ranges: v.ranges,
-                free: v.free,
-                births: self.births.view(),
-                birth_speed: self.birth_speed.view(),
-                space,
-                rules: self.rules,
-            };
-            self.sim
-                .launch(registry::BIRTHS, self.sim.layout().slots, &births)?;
+        let device = self.pipeline.device();
+        self.ring.send(device, command, self.pipeline.command()?)?;
+        match profile {
+            Some(profile) => self.pipeline.step_profiled(profile)?,
+            None => self.pipeline.step()?,
         }
-        // The grid serves the contacts, the enemies' vision and the autopilot's (next step).
-        if self.sim.collides() || !self.minds.is_empty() || input.is_none() {
-            self.sim.build_grid()?;
+        self.ring.receive(device, self.pipeline.status()?)
+    }
+
+    /// The status of the oldest step not yet handed out, waiting for it if it is still in
+    /// flight; `None` when every queued step's status has been handed out.
+    pub fn next_status(&mut self) -> Result<Option<Status>, Error> {
+        let status = match self.arrived.pop_front() {
+            Some(status) => Some(status),
+            None => self.ring.oldest()?,
+        };
+        if let Some(status) = status {
+            self.last = status;
         }
-        if self.sim.collides() {
-            self.sim.collide()?;
+        Ok(status)
+    }
+
+    /// The status of a step that [`Game::submit`] already made room for, without waiting.
+    pub fn ready_status(&mut self) -> Option<Status> {
+        let status = self.arrived.pop_front();
+        if let Some(status) = status {
+            self.last = status;
         }
-        for mind in &self.minds {
-            let args = ThinkArgs {
-                bodies: v.bodies,
-                kinds: v.kinds,
-                space,
-                grid: v.grid,
-                contacts: v.contacts,
-                range: mind.range,
-                brain: mind.brain,
-                ship: self.rules.ship.start,
-                shot_kind: self.rules.shot_kind,
-            };
-            self.sim.launch(mind.kernel, mind.range.capacity, &args)?;
-        }
-        self.sim.finish_step()?;
-        self.sim.launch(registry::TALLY, 1, &master)?;
-        self.last = device.download(&self.status)?[0];
+        status
+    }
+
+    /// Plays one step with `input`, or with the autopilot's when `None`, and returns its
+    /// status (waits for it, and hands out every earlier status first).
+    pub fn step(&mut self, input: Option<Input>) -> Result<Status, Error> {
+        self.submit(input)?;
+        while self.next_status()?.is_some() {}
         Ok(self.last)
     }
 
-    /// The whole state of the world, read back.
-    pub fn snapshot(&self) -> Result<Snapshot, Error> {
-        self.sim.snapshot()
+    /// Waits for every queued step and takes the last status.
+    fn settle(&mut self) -> Result<(), Error> {
+        while self.next_status()?.is_some() {}
+        Ok(())
+    }
+
+    /// The whole state of the world, read back after every queued step. Its step count is
+    /// the steps the game played (steps queued after the game ended change nothing).
+    pub fn snapshot(&mut self) -> Result<Snapshot, Error> {
+        self.settle()?;
+        self.pipeline.snapshot_at(u64::from(self.last.step))
     }
 
     /// XXH3-64 over the world's state hash, the status and the spawn counts: equal only if
     /// two games agree bit for bit.
-    pub fn state_hash(&self) -> Result<u64, Error> {
-        let device = self.sim.device();
+    pub fn state_hash(&mut self) -> Result<u64, Error> {
+        let world = self.snapshot()?.state_hash();
         let mut h = Xxh3::new();
-        h.update(&self.sim.state_hash()?.to_le_bytes());
-        // `last` is the device's status as read back after the step.
+        h.update(&world.to_le_bytes());
         h.update(bytemuck::bytes_of(&self.last));
-        h.update(bytemuck::cast_slice(&device.download(&self.spawned)?));
+        h.update(bytemuck::cast_slice(&self.pipeline.spawned()?));
         Ok(h.digest())
     }
 }

@@ -7,5 +7,5 @@ pub mod replay;
 pub mod scene;
 pub mod spec;
 
-pub use engine::Game;
+pub use engine::{Game, Options};
 pub use spec::Scene;

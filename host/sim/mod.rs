@@ -1,12 +1,12 @@
-//! The host half of the simulation core: world descriptions, slot layout, the device
-//! buffers of a world and the order in which a step's kernels run.
+//! The host half of the simulation core: world descriptions and their validation, slot
+//! layout and grid sizing, the device buffers of a world, snapshots and the state hash. The
+//! order of a step's launches is the pipeline's (`crate::pipeline`).
 
 pub mod layout;
 pub mod rng;
 pub mod snapshot;
 pub mod spec;
-pub mod world;
+pub mod state;
 
 pub use snapshot::Snapshot;
 pub use spec::{Boundary, KindSpec, Shape, SpecError, WorldSpec};
-pub use world::Simulation;

@@ -145,6 +145,12 @@ impl<T: Copy> DevSlice<T> {
         _element: PhantomData,
     };
 
+    /// The device address of the first element.
+    #[inline(always)]
+    pub fn addr(&self) -> u64 {
+        self.addr
+    }
+
     /// Number of elements in view.
     #[inline(always)]
     pub fn len(&self) -> u32 {

@@ -50,10 +50,12 @@ kernels! {
     SORT_COUNT = sort_count(sort::CountArgs) => sort::count_digits;
     /// Moves each tile's (key, index) pairs to their sorted slots (one counting-sort pass).
     SORT_SCATTER = sort_scatter(sort::ScatterArgs) => sort::scatter_digits;
-    /// Keys every slot by the grid cell of its body (free slots past the last cell).
-    ASSIGN_CELLS = assign_cells(broad::AssignArgs) => broad::assign_cells;
-    /// Records where each cell's run starts and ends in the sorted order.
-    CELL_BOUNDS = cell_bounds(broad::BoundsArgs) => broad::cell_bounds;
+    /// Keys every live body by its (cell, kind) bucket and counts the buckets (atomics).
+    COUNT_CELLS = count_cells(broad::CountArgs) => broad::count_cells;
+    /// Writes every live body into its bucket, in arrival order.
+    PLACE_IN_CELLS = place_in_cells(broad::PlaceArgs) => broad::place_in_cells;
+    /// Puts every bucket in increasing slot order.
+    ORDER_CELLS = order_cells(broad::OrderArgs) => broad::order_cells;
     /// Narrow phase: each body's collision response to its neighbours, and energy losses.
     COLLIDE = collide(narrow::CollideArgs) => narrow::collide;
     /// The narrow phase for worlds of circles only (no rectangle tests).

@@ -10,7 +10,7 @@ use glam::Vec2;
 
 use super::fsm::{Machine, Percept, State, next_state};
 use super::rules::Brain;
-use crate::sim::broad::CellIndex;
+use crate::sim::broad::{CellIndex, kind_bit};
 use crate::sim::{Bodies, Contacts, KindInfo, SlotRange, Space};
 use crate::{DevSlice, KernelArgs, Thread};
 
@@ -104,7 +104,15 @@ pub fn look(args: &ThinkArgs, machine: Machine, slot: u32) -> Sight {
     let mut sight = Sight::default();
     let (mut sum, mut similar) = (Vec2::ZERO, 0u32);
     let mut soonest = f32::INFINITY;
-    args.grid.for_each_near(&args.space, pos, |other| {
+    // Only the kinds this machine reacts to: the ship, its own kind, the shots it dodges.
+    let mut mask = kind_bit(b.kind.get(args.ship));
+    if social {
+        mask |= kind_bit(args.brain.kind);
+    }
+    if dodges {
+        mask |= kind_bit(args.shot_kind);
+    }
+    args.grid.for_each_near(&args.space, pos, mask, |other| {
         if other == slot {
             return;
         }
@@ -174,7 +182,7 @@ pub fn think<const MACHINE: u32>(t: Thread, args: &ThinkArgs) {
     }
     let slot = args.range.start + i;
     let b = &args.bodies;
-    if !b.is_alive(slot) {
+    if b.is_frozen() || !b.is_alive(slot) {
         return;
     }
     let machine = Machine::from_u32(MACHINE);

@@ -1,7 +1,9 @@
 //! The autopilot: a deterministic bot that writes the ship's [`Input`] on the device, for the
 //! headless demo, the benchmarks and the tests. It runs in its own one-thread launch before
-//! the master thread, looking around the ship through the previous step's grid (cell runs
-//! of slots; positions as they are now), so a bot-played step needs no read-back.
+//! the master thread every step, and passes the player's input through when the host's
+//! [`Command`] says the player flies. It looks around the ship through the previous step's
+//! grid (buckets of slots; positions as they are now), so a bot-played step needs no
+//! read-back.
 //!
 //! It flies away from the enemies near it (each weighted by closeness, those heading for it
 //! more), keeps off the world's edges when they clamp, drifts back to the middle when nothing
@@ -9,9 +11,9 @@
 
 use glam::Vec2;
 
-use super::control::Input;
+use super::control::{Command, Input};
 use super::rules::Rules;
-use crate::sim::broad::CellIndex;
+use crate::sim::broad::{CellIndex, kind_bit};
 use crate::sim::{Bodies, KindInfo, Space};
 use crate::{DevSlice, KernelArgs, Thread};
 
@@ -27,6 +29,8 @@ pub struct AutopilotArgs {
     pub space: Space,
     /// The previous step's grid.
     pub grid: CellIndex,
+    /// The host's command for this step (one element).
+    pub command: DevSlice<Command>,
     /// Output: the input for this step (one element).
     pub input: DevSlice<Input>,
     /// The scene's rules.
@@ -38,10 +42,15 @@ unsafe impl KernelArgs for AutopilotArgs {}
 /// Fraction of the sight within which an edge of a clamping world pushes the ship back.
 pub const EDGE_MARGIN: f32 = 1.0;
 
-/// Thread 0 writes the input for this step.
+/// Thread 0 writes the input for this step: the command's, or the autopilot's if it flies.
 #[inline(always)]
 pub fn autopilot(t: Thread, args: &AutopilotArgs) {
     if t.global() != 0 {
+        return;
+    }
+    let command = args.command.get(0);
+    if command.autopilot == 0 {
+        args.input.set(0, command.input);
         return;
     }
     let (b, rules, space) = (&args.bodies, &args.rules, &args.space);
@@ -54,8 +63,15 @@ pub fn autopilot(t: Thread, args: &AutopilotArgs) {
     let sight = rules.autopilot_sight;
     let mut flee = Vec2::ZERO;
     let mut target: Option<(f32, Vec2, Vec2)> = None;
-    args.grid.for_each_near(space, pos, |other| {
-        if !b.is_alive(other) || args.kinds.get(b.kind.get(other)).dies_at_zero_energy() {
+    // The enemies: the kinds driven by a machine.
+    let mut enemies = 0u32;
+    for k in 0..args.kinds.len() {
+        if !args.kinds.get(k).dies_at_zero_energy() {
+            enemies |= kind_bit(k);
+        }
+    }
+    args.grid.for_each_near(space, pos, enemies, |other| {
+        if !b.is_alive(other) {
             return;
         }
         let d = space.offset(pos, b.pos.get(other));

@@ -84,6 +84,35 @@ impl Input {
     }
 }
 
+/// What the host sends up each step: the player's input, or word that the autopilot flies.
+/// Either way the step launches the same kernels; the choice is made on the device.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Command {
+    /// The input to apply when the autopilot does not fly.
+    pub input: Input,
+    /// Non-zero: the autopilot flies this step and `input` is ignored.
+    pub autopilot: u32,
+}
+
+impl Command {
+    /// The player's `input`.
+    pub fn input(input: Input) -> Self {
+        Command {
+            input,
+            autopilot: 0,
+        }
+    }
+
+    /// The autopilot flies.
+    pub fn autopilot() -> Self {
+        Command {
+            input: Input::default(),
+            autopilot: 1,
+        }
+    }
+}
+
 /// Things that happened in one step, for the sound effects.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]

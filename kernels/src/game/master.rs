@@ -16,19 +16,10 @@ use glam::Vec2;
 
 use super::control::{DESTROYED, Events, Input, PLAYING, Status, TOO_SLOW};
 use super::rules::{Rules, Wave};
+use crate::sim::free_list::FreeSlots;
 use crate::sim::scatter::{birth, random_place};
 use crate::sim::{Bodies, Contacts, KindInfo, SlotRange, Space};
 use crate::{DevSlice, KernelArgs, Thread};
-
-/// Each kind's free slots, as the free-list rebuild leaves them.
-#[repr(C)]
-#[derive(Clone, Copy, Debug)]
-pub struct FreeSlots {
-    /// Kind `k`'s free slots in order, from its range's start.
-    pub list: DevSlice<u32>,
-    /// Free slots per kind.
-    pub count: DevSlice<u32>,
-}
 
 /// Arguments of [`master`].
 #[repr(C)]
@@ -71,7 +62,7 @@ unsafe impl KernelArgs for MasterArgs {}
 ///    in the shot kind's first free slot;
 /// 4. the schedule's due waves claim free slots, in wave order, for [`births`].
 ///
-/// After game over nothing moves, fires or spawns.
+/// After game over nothing moves, fires or spawns, and the status is left as it is.
 #[inline(always)]
 pub fn master(t: Thread, args: &MasterArgs) {
     if t.global() != 0 {
@@ -79,16 +70,16 @@ pub fn master(t: Thread, args: &MasterArgs) {
     }
     let (b, rules) = (&args.bodies, &args.rules);
     let mut st = args.status.get(0);
-    let input = args.input.get(0);
     for k in 0..args.births.len() {
         args.births.set(k, 0);
     }
-    st.events = Events::default();
-    st.input = input;
     if st.is_over() {
-        args.status.set(0, st);
+        // The status stays as the last step left it, however many steps follow.
         return;
     }
+    let input = args.input.get(0);
+    st.events = Events::default();
+    st.input = input;
     let step = st.step;
     let ship = rules.ship.start;
     if step == 0 {
@@ -127,7 +118,8 @@ pub fn master(t: Thread, args: &MasterArgs) {
 /// 1. counts and score: an enemy kind's dead are those spawned minus those alive, each
 ///    worth its birth energy;
 /// 2. the ship's hits this step;
-/// 3. the FPS meter from the ship's energy; game over below the minimum, or without a ship.
+/// 3. the FPS meter from the ship's energy; game over below the minimum, or without a ship,
+///    and then the world is frozen (see [`Bodies::frozen`]).
 #[inline(always)]
 pub fn tally(t: Thread, args: &MasterArgs) {
     if t.global() != 0 {
@@ -174,6 +166,9 @@ pub fn tally(t: Thread, args: &MasterArgs) {
     };
     st.step += 1;
     args.status.set(0, st);
+    if st.is_over() {
+        b.frozen.set(0, 1);
+    }
 }
 
 /// The ship goes where the stick points, at the scene's speed, and recovers energy.

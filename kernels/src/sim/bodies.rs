@@ -32,6 +32,10 @@ pub struct Bodies {
     pub age: DevSlice<u32>,
     /// The slot's random number generator.
     pub rng: RngStreams,
+    /// One element, non-zero once the world is frozen (the game is over): from then on the
+    /// kernels that advance bodies leave every one as it is, so that steps the host queued
+    /// before it learnt of the end change nothing.
+    pub frozen: DevSlice<u32>,
 }
 
 impl Bodies {
@@ -39,6 +43,12 @@ impl Bodies {
     #[inline(always)]
     pub fn slots(&self) -> u32 {
         self.alive.len()
+    }
+
+    /// Whether the world is frozen (see [`Bodies::frozen`]).
+    #[inline(always)]
+    pub fn is_frozen(&self) -> bool {
+        self.frozen.get(0) != 0
     }
 
     /// Whether `slot` holds a live body.

@@ -1,11 +1,23 @@
-//! The broad phase (paper 6.1): a uniform grid rebuilt every step by sorting the bodies by
-//! cell, as in NVIDIA's particles sample. The same grid answers the narrow phase's "who is
-//! near me" and, later, the enemies' vision.
+//! The broad phase (paper 6.1): a uniform grid rebuilt every step. The same grid answers the
+//! narrow phase's "who is near me" and the enemies' vision.
 //!
-//! Build: [`assign_cells`] keys each slot by its cell, the counting sort orders the
-//! (key, slot) pairs (stable, so slots stay in increasing order inside a cell), and
-//! [`cell_bounds`] records each cell's run in the sorted order. Query:
-//! [`CellIndex::for_each_near`].
+//! The grid is bucketed by (cell, kind): bucket `cell · kinds + kind` holds the live bodies of
+//! that kind in that cell, in increasing slot order, so that a query reads only the kinds it
+//! cares about (an enemy's contacts are with the ship and the shots, not with the thousands
+//! of enemies around it). Kinds own contiguous slot ranges in kind order, so reading a cell's
+//! buckets in kind order visits its bodies in plain slot order.
+//!
+//! Build, with no sort and work that grows with the live bodies:
+//! 1. [`count_cells`]: each live body adds itself to its bucket's count with an atomic add,
+//!    which hands out ranks in whatever order threads arrive (the counts do not depend on it);
+//! 2. the host takes the exclusive prefix sum of the counts: each bucket's first entry;
+//! 3. [`place_in_cells`]: each body writes its slot at its bucket's start plus its rank, a
+//!    scheduling-dependent order inside the bucket;
+//! 4. [`order_cells`]: each entry counts the smaller slots in its bucket and moves its slot to
+//!    that rank, which makes every bucket canonical (increasing slots) before anything reads
+//!    it.
+//!
+//! Query: [`CellIndex::for_each_near`].
 
 use glam::Vec2;
 
@@ -13,95 +25,170 @@ use super::Space;
 use super::bodies::Bodies;
 use crate::{DevSlice, KernelArgs, Thread};
 
-/// Arguments of [`assign_cells`].
+/// The key of a slot without a live body: in no bucket.
+pub const NO_BUCKET: u32 = u32::MAX;
+
+/// Arguments of [`count_cells`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
-pub struct AssignArgs {
-    /// The bodies (positions and liveness are read).
+pub struct CountArgs {
+    /// The bodies (positions, kinds and liveness are read).
     pub bodies: Bodies,
     /// The world and its grid.
     pub space: Space,
-    /// Output: one sort key per slot.
+    /// Output: each slot's bucket, or [`NO_BUCKET`].
     pub keys: DevSlice<u32>,
+    /// Output: each live slot's arrival rank inside its bucket.
+    pub ranks: DevSlice<u32>,
+    /// Bodies per bucket, zeroed before; `cells · kinds` buckets.
+    pub counts: DevSlice<u32>,
+    /// Number of kinds.
+    pub kinds: u32,
+    /// Keeps the struct free of implicit padding.
+    pub reserved: u32,
 }
 // SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for AssignArgs {}
+unsafe impl KernelArgs for CountArgs {}
 
-/// Thread `i` writes `keys[i]`: the cell of slot `i`'s body, or `space.cells()` (past every
-/// cell, so it sorts last and is never visited) for a free slot.
+/// Thread `i` keys slot `i` by its bucket and counts it there.
 #[inline(always)]
-pub fn assign_cells(t: Thread, args: &AssignArgs) {
+pub fn count_cells(t: Thread, args: &CountArgs) {
+    let b = &args.bodies;
     let slot = t.global();
     if slot >= args.keys.len() {
         return;
     }
-    let key = if args.bodies.is_alive(slot) {
-        args.space.cell_of(args.bodies.pos.get(slot))
-    } else {
-        args.space.cells()
-    };
+    if !b.is_alive(slot) {
+        args.keys.set(slot, NO_BUCKET);
+        return;
+    }
+    let key = args.space.cell_of(b.pos.get(slot)) * args.kinds + b.kind.get(slot);
     args.keys.set(slot, key);
+    args.ranks.set(slot, args.counts.atomic_add(key, 1));
 }
 
-/// The sorted grid: slots ordered by cell, and each cell's run in that order.
+/// Arguments of [`place_in_cells`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PlaceArgs {
+    /// Each slot's bucket (from [`count_cells`]).
+    pub keys: DevSlice<u32>,
+    /// Each live slot's rank inside its bucket (from [`count_cells`]).
+    pub ranks: DevSlice<u32>,
+    /// Each bucket's first entry: the exclusive prefix sums of the counts.
+    pub start: DevSlice<u32>,
+    /// Output: the slots grouped by bucket, in arrival order inside a bucket.
+    pub unordered: DevSlice<u32>,
+}
+// SAFETY: repr(C) plain data.
+unsafe impl KernelArgs for PlaceArgs {}
+
+/// Thread `i` writes slot `i` into its bucket: each entry has exactly one writer, since the
+/// ranks of a bucket are distinct.
+#[inline(always)]
+pub fn place_in_cells(t: Thread, args: &PlaceArgs) {
+    let slot = t.global();
+    if slot >= args.keys.len() {
+        return;
+    }
+    let key = args.keys.get(slot);
+    if key != NO_BUCKET {
+        args.unordered
+            .set(args.start.get(key) + args.ranks.get(slot), slot);
+    }
+}
+
+/// Arguments of [`order_cells`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct OrderArgs {
+    /// Each slot's bucket.
+    pub keys: DevSlice<u32>,
+    /// Each bucket's first entry; the last element is the number of live bodies.
+    pub start: DevSlice<u32>,
+    /// The slots of each bucket in arrival order (from [`place_in_cells`]).
+    pub unordered: DevSlice<u32>,
+    /// Output: the same slots in increasing order inside each bucket.
+    pub slots: DevSlice<u32>,
+}
+// SAFETY: repr(C) plain data.
+unsafe impl KernelArgs for OrderArgs {}
+
+/// Thread `j` takes entry `j`: its slot's rank among its bucket's slots is the number of
+/// smaller slots there, and it moves there. The ranks of a bucket are a permutation (slots
+/// are distinct), so each output entry has one writer, whatever order the entries arrived in.
+#[inline(always)]
+pub fn order_cells(t: Thread, args: &OrderArgs) {
+    let j = t.global();
+    let live = args.start.get(args.start.len() - 1);
+    if j >= live {
+        return;
+    }
+    let slot = args.unordered.get(j);
+    let key = args.keys.get(slot);
+    let (first, end) = (args.start.get(key), args.start.get(key + 1));
+    let mut rank = 0;
+    args.unordered.for_each_in::<4>(first, end, |_, other| {
+        rank += u32::from(other < slot);
+    });
+    args.slots.set(first + rank, slot);
+}
+
+/// The grid: the live slots bucketed by (cell, kind), each bucket in increasing slot order.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CellIndex {
-    /// Slots sorted by cell, then by slot.
+    /// Slots by bucket, then by slot.
     pub slots: DevSlice<u32>,
-    /// The cell of each entry of `slots` (the sorted keys).
-    pub keys: DevSlice<u32>,
-    /// First entry of each cell in `slots` (stale for an empty cell).
+    /// First entry of each bucket in `slots`, and one more element: the number of entries.
+    /// Bucket `b` is `slots[start[b] .. start[b + 1]]`.
     pub start: DevSlice<u32>,
-    /// One past the last entry of each cell (0 for an empty cell, so its run is empty).
-    pub end: DevSlice<u32>,
+    /// Number of kinds (buckets per cell).
+    pub kinds: u32,
+    /// Keeps the struct free of implicit padding.
+    pub reserved: u32,
 }
 
 impl CellIndex {
-    /// Calls `visit(slot)` for every live body in the 3×3 cells around `pos`: each body once,
-    /// cell by cell in row order, by increasing slot inside a cell.
+    /// Calls `visit(slot)` for every body of a kind in `mask` (bit `k`: kind `k`) in the 3×3
+    /// cells around `pos`: each body once, cell by cell in row order, by increasing slot
+    /// inside a cell.
     #[inline(always)]
-    pub fn for_each_near(&self, space: &Space, pos: Vec2, mut visit: impl FnMut(u32)) {
+    pub fn for_each_near(&self, space: &Space, pos: Vec2, mask: u32, mut visit: impl FnMut(u32)) {
+        let mask = mask & kinds_mask(self.kinds);
         space.for_each_neighbour_cell(pos, |cell| {
-            let (start, end) = (self.start.get(cell), self.end.get(cell));
-            for entry in start..end {
-                visit(self.slots.get(entry));
+            let base = cell * self.kinds;
+            // Each run of consecutive kinds in the mask is one contiguous stretch of entries.
+            let mut rest = mask;
+            while rest != 0 {
+                let first = rest.trailing_zeros();
+                let last = first + (!(rest >> first)).trailing_zeros();
+                let (start, end) = (self.start.get(base + first), self.start.get(base + last));
+                for entry in start..end {
+                    visit(self.slots.get(entry));
+                }
+                rest = if last >= u32::BITS {
+                    0
+                } else {
+                    rest & !((1u32 << last) - 1)
+                };
             }
         });
     }
 }
 
-/// Arguments of [`cell_bounds`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug)]
-pub struct BoundsArgs {
-    /// The sorted grid; `start` and `end` are the outputs, and `end` must be zeroed before.
-    pub grid: CellIndex,
-    /// Number of cells; keys not below it (free slots) are skipped.
-    pub cells: u32,
-    /// Keeps the struct free of implicit padding.
-    pub reserved: u32,
-}
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for BoundsArgs {}
-
-/// Thread `j` looks at sorted entry `j`: the first entry of a cell writes the cell's start,
-/// the last writes its end. Each cell's bounds have exactly one writer.
+/// The mask bit of kind `kind` (none past the 32 kinds a mask can hold).
 #[inline(always)]
-pub fn cell_bounds(t: Thread, args: &BoundsArgs) {
-    let keys = &args.grid.keys;
-    let j = t.global();
-    if j >= keys.len() {
-        return;
-    }
-    let key = keys.get(j);
-    if key >= args.cells {
-        return;
-    }
-    if j == 0 || keys.get(j - 1) != key {
-        args.grid.start.set(key, j);
-    }
-    if j + 1 == keys.len() || keys.get(j + 1) != key {
-        args.grid.end.set(key, j + 1);
+pub fn kind_bit(kind: u32) -> u32 {
+    1u32.checked_shl(kind).unwrap_or(0)
+}
+
+/// The mask of every kind of a world with `kinds` kinds.
+#[inline(always)]
+pub fn kinds_mask(kinds: u32) -> u32 {
+    if kinds >= u32::BITS {
+        u32::MAX
+    } else {
+        (1u32 << kinds) - 1
     }
 }

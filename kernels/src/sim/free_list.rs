@@ -13,6 +13,16 @@ use super::bodies::Bodies;
 use super::kinds::SlotRange;
 use crate::{DevSlice, KernelArgs, Thread};
 
+/// Each kind's free slots, as the free-list rebuild leaves them.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct FreeSlots {
+    /// Kind `k`'s free slots in order, from its range's start.
+    pub list: DevSlice<u32>,
+    /// Free slots per kind.
+    pub count: DevSlice<u32>,
+}
+
 /// Arguments of [`mark_free`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]

@@ -58,7 +58,7 @@ pub fn limit_speed(vel: Vec2, max_speed: f32) -> Vec2 {
 pub fn integrate(t: Thread, args: &IntegrateArgs) {
     let bodies = &args.bodies;
     let slot = t.global();
-    if slot >= bodies.slots() || !bodies.is_alive(slot) {
+    if slot >= bodies.slots() || bodies.is_frozen() || !bodies.is_alive(slot) {
         return;
     }
     let info = args.kinds.get(bodies.kind.get(slot));

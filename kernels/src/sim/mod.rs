@@ -2,20 +2,22 @@
 //! uniform-grid broad phase, the narrow phase with collision response, and the Euler
 //! integrator. A step runs, in order:
 //!
-//! 1. [`broad::assign_cells`]: the grid cell of every live body (dead slots get a key past
-//!    the last cell);
-//! 2. the counting sort of (cell, slot) pairs (`crate::primitives::sort`), which keeps slot
-//!    order inside a cell;
-//! 3. [`broad::cell_bounds`]: where each cell's run starts and ends in the sorted order;
-//! 4. [`narrow::collide`]: each body tests the bodies of its 3×3 cell neighbourhood and sums
-//!    its own response (position push, velocity kick, energy loss);
+//! 1. [`broad::count_cells`]: the (cell, kind) bucket of every live body, counted with
+//!    atomic adds;
+//! 2. a prefix sum of the counts (`crate::primitives::scan`): where each bucket starts;
+//! 3. [`broad::place_in_cells`] and [`broad::order_cells`]: every body in its bucket, each
+//!    bucket in increasing slot order whatever order the threads ran in;
+//! 4. [`narrow::collide`]: each body tests the bodies of the kinds it collides with in its 3×3
+//!    cell neighbourhood and sums its own response (position push, velocity kick, energy loss);
 //! 5. [`integrate::integrate`]: explicit Euler and the world's boundary rule; bodies out of
 //!    energy die;
 //! 6. [`free_list::mark_free`], a prefix sum, [`free_list::gather_free`]: the free slots of
 //!    each kind's range, in slot order, for the master thread to hand out.
 //!
 //! Every kernel writes only its own slot's elements, and reads what others write only in a
-//! later launch: no barriers, no float atomics, the same bits on every backend.
+//! later launch: no barriers, no float atomics, the same bits on every backend. The one
+//! order that depends on scheduling (the arrival ranks of the bucket counts) is made
+//! canonical by [`broad::order_cells`] before anything reads it.
 
 pub mod bodies;
 pub mod broad;

@@ -106,7 +106,7 @@ fn collide_bounds<const RECTS: bool>(t: Thread, args: &CollideArgs) {
     let bodies = &args.bodies;
     let out = &args.contacts;
     let slot = t.global();
-    if slot >= bodies.slots() {
+    if slot >= bodies.slots() || bodies.is_frozen() {
         return;
     }
     let mut push = Vec2::ZERO;
@@ -119,28 +119,31 @@ fn collide_bounds<const RECTS: bool>(t: Thread, args: &CollideArgs) {
         let pos = bodies.pos.get(slot);
         let vel = bodies.vel.get(slot);
         let inv = inverse_mass(bodies.mass.get(slot));
-        args.grid.for_each_near(&args.space, pos, |other| {
-            let other_kind = bodies.kind.get(other);
-            if other == slot || !info.collides_with(other_kind) {
-                return;
-            }
-            let other_info = args.kinds.get(other_kind);
-            let d = args.space.offset(pos, bodies.pos.get(other));
-            let tie = tie_break(slot, other);
-            if let Some(c) = contact(bound::<RECTS>(&info), bound::<RECTS>(&other_info), d, tie) {
-                let r = respond(
-                    c.normal,
-                    c.depth,
-                    (inv, inverse_mass(bodies.mass.get(other))),
-                    (vel, bodies.vel.get(other)),
-                    info.restitution.max(other_info.restitution),
-                );
-                push += r.push;
-                kick += r.kick;
-                count += 1;
-                damage = damage.saturating_add(other_info.damage);
-            }
-        });
+        // Only the kinds it collides with: the grid's buckets skip the others unread.
+        args.grid
+            .for_each_near(&args.space, pos, info.collides_with, |other| {
+                let other_kind = bodies.kind.get(other);
+                if other == slot {
+                    return;
+                }
+                let other_info = args.kinds.get(other_kind);
+                let d = args.space.offset(pos, bodies.pos.get(other));
+                let tie = tie_break(slot, other);
+                if let Some(c) = contact(bound::<RECTS>(&info), bound::<RECTS>(&other_info), d, tie)
+                {
+                    let r = respond(
+                        c.normal,
+                        c.depth,
+                        (inv, inverse_mass(bodies.mass.get(other))),
+                        (vel, bodies.vel.get(other)),
+                        info.restitution.max(other_info.restitution),
+                    );
+                    push += r.push;
+                    kick += r.kick;
+                    count += 1;
+                    damage = damage.saturating_add(other_info.damage);
+                }
+            });
         if damage != 0 {
             let energy = bodies.energy.get(slot);
             bodies.energy.set(slot, energy.saturating_sub(damage));

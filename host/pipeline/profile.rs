@@ -1,0 +1,93 @@
+//! Per-stage times of the step: what `gpuwars demo --profile` reports.
+
+use serde::Serialize;
+
+use super::Stage;
+
+/// Time, launches and bytes of one stage, summed over the profiled steps.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct StageTimes {
+    /// The stage's name.
+    pub stage: &'static str,
+    /// Kernel launches per step.
+    pub launches: usize,
+    /// Bytes of device memory moved per step, by our count: every array element the
+    /// stage's kernels must read or write, once (neighbour lookups not counted).
+    pub bytes: u64,
+    /// Seconds spent in the stage over all profiled steps.
+    pub seconds: f64,
+}
+
+/// Stage times over some steps.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Profile {
+    /// Steps profiled.
+    pub steps: u64,
+    /// One entry per stage, in step order.
+    pub stages: Vec<StageTimes>,
+}
+
+impl Profile {
+    /// Adds `seconds` of one step to `stage`'s entry.
+    pub(super) fn add(&mut self, stage: &Stage, seconds: f64) {
+        let entry = match self.stages.iter_mut().position(|s| s.stage == stage.name) {
+            Some(i) => &mut self.stages[i],
+            None => {
+                self.stages.push(StageTimes {
+                    stage: stage.name,
+                    launches: stage.launches(),
+                    bytes: stage.bytes(),
+                    seconds: 0.0,
+                });
+                self.stages.last_mut().expect("just pushed")
+            }
+        };
+        entry.seconds += seconds;
+    }
+
+    /// Mean seconds per step of all stages together.
+    pub fn step_seconds(&self) -> f64 {
+        self.stages.iter().map(|s| s.seconds).sum::<f64>() / self.steps.max(1) as f64
+    }
+
+    /// The profile as an aligned table: per stage, microseconds per step, share of the step,
+    /// launches, bytes and the bandwidth they make; with `copy_bandwidth` (bytes per second,
+    /// measured in the same run), the fraction of it each stage achieves.
+    pub fn to_table(&self, copy_bandwidth: Option<f64>) -> String {
+        let steps = self.steps.max(1) as f64;
+        let total: f64 = self.stages.iter().map(|s| s.seconds).sum();
+        let mut out = format!(
+            "{:<10} {:>10} {:>7} {:>8} {:>12} {:>10} {:>9}\n",
+            "stage", "us/step", "share", "launches", "bytes/step", "GB/s", "of copy"
+        );
+        for s in &self.stages {
+            let per_step = s.seconds / steps;
+            let rate = if per_step > 0.0 {
+                s.bytes as f64 / per_step
+            } else {
+                0.0
+            };
+            let of_copy =
+                copy_bandwidth.map_or("-".to_string(), |bw| format!("{:.1}%", 100.0 * rate / bw));
+            out += &format!(
+                "{:<10} {:>10.2} {:>6.1}% {:>8} {:>12} {:>10.1} {:>9}\n",
+                s.stage,
+                per_step * 1e6,
+                100.0 * s.seconds / total.max(f64::MIN_POSITIVE),
+                s.launches,
+                s.bytes,
+                rate / 1e9,
+                of_copy
+            );
+        }
+        out += &format!(
+            "{:<10} {:>10.2} {:>6.1}% {:>8} {:>12}\n",
+            "step",
+            total / steps * 1e6,
+            100.0,
+            self.stages.iter().map(|s| s.launches).sum::<usize>(),
+            self.stages.iter().map(|s| s.bytes).sum::<u64>()
+        );
+        out
+    }
+}
