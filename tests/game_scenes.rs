@@ -4,9 +4,12 @@
 mod common;
 
 use gpuwars::Device;
+use gpuwars::backend::Schedule;
+use gpuwars::game::Options;
 use gpuwars::game::demo::RunOptions;
 use gpuwars::game::scene::built_in;
 use gpuwars::game::{Game, Scene, demo};
+use gpuwars::kernels::game::control::{Input, Status};
 use gpuwars::kernels::registry;
 
 fn scene(name: &str) -> Scene {
@@ -105,6 +108,72 @@ fn buffers_are_sized_from_the_scene() {
 }
 
 #[test]
+fn the_game_hash_does_not_depend_on_the_emulators_schedule() {
+    // Blocks and threads in shuffled orders: a result that depended on which thread ran
+    // first (the grid's atomic bucket counts hand out ranks in arrival order) would move.
+    let scene = scene("paper");
+    let in_order = hash_after(common::cpu(), &scene, 1, 120);
+    for seed in [1, 2] {
+        let device = Device::cpu_scheduled(Some(2), Schedule::Shuffled { seed }, "tests").unwrap();
+        assert_eq!(
+            hash_after(&device, &scene, 1, 120),
+            in_order,
+            "shuffle seed {seed}"
+        );
+    }
+}
+
+/// A scene that a still ship loses fast: kamikazes that see the whole field, are born close
+/// to it and outlive their hits.
+fn doomed() -> Scene {
+    let text = gpuwars::game::scene::BUILT_IN
+        .iter()
+        .find(|b| b.name == "kamikaze")
+        .unwrap()
+        .source
+        .replace("distance = 300.0", "distance = 60.0")
+        .replace("vision = 100.0", "vision = 700.0")
+        .replace("energy = 1\ndamage = 10", "energy = 100000\ndamage = 10");
+    Scene::from_toml(&text, "doomed").unwrap()
+}
+
+/// Plays a still ship with statuses read `lag` steps late until a status says the game is
+/// over; returns the step it ended at and the final state hash.
+fn play_until_over(device: &Device, lag: usize) -> (u32, u64) {
+    let options = Options { lag, graphs: true };
+    let mut game = Game::with_options(device, &doomed(), 5, options).unwrap();
+    let mut end: Option<u32> = None;
+    let note = |end: &mut Option<u32>, status: Status| {
+        if status.is_over() && end.is_none() {
+            *end = Some(status.step);
+        }
+    };
+    for _ in 0..3000 {
+        game.submit(Some(Input::default())).unwrap();
+        while let Some(status) = game.ready_status() {
+            note(&mut end, status);
+        }
+        if end.is_some() {
+            break;
+        }
+    }
+    while let Some(status) = game.next_status().unwrap() {
+        note(&mut end, status);
+    }
+    (
+        end.expect("the doomed game ends"),
+        game.state_hash().unwrap(),
+    )
+}
+
+fn the_game_ends_at_the_same_step_whatever_the_lag(device: &Device) {
+    let reference = play_until_over(common::cpu(), 1);
+    for lag in [1, 3, 17] {
+        assert_eq!(play_until_over(device, lag), reference, "lag {lag}");
+    }
+}
+
+#[test]
 fn the_game_hash_does_not_depend_on_the_emulators_thread_count() {
     let scene = scene("paper");
     let hashes: Vec<u64> = [1, 2, 7]
@@ -119,15 +188,29 @@ fn the_game_hash_does_not_depend_on_the_emulators_thread_count() {
     assert_ne!(other_seed, hashes[0]);
 }
 
+/// Steps each built-in scene is played for the CPU-against-GPU comparison: the large scenes
+/// fewer, since the emulation plays them too.
+fn comparison_steps(name: &str) -> u32 {
+    match name {
+        "scale-1m" => 20,
+        "scale-16m" => 3,
+        _ => 300,
+    }
+}
+
 #[test]
 fn the_gpu_plays_the_same_game_as_the_cpu() {
     let Some(gpu) = common::gpu() else { return };
-    for name in ["paper", "arena", "tricky", "group"] {
-        let scene = scene(name);
-        let cpu = hash_after(common::cpu(), &scene, 1, 300);
-        let gpu = hash_after(gpu, &scene, 1, 300);
-        println!("{name}: cpu {cpu:#018x}, gpu {gpu:#018x}");
-        assert_eq!(cpu, gpu, "{name}");
+    for built in gpuwars::game::scene::BUILT_IN {
+        let scene = scene(built.name);
+        let steps = comparison_steps(built.name);
+        let cpu = hash_after(common::cpu(), &scene, 1, steps);
+        let gpu = hash_after(gpu, &scene, 1, steps);
+        println!(
+            "{}: {steps} steps: cpu {cpu:#018x}, gpu {gpu:#018x}",
+            built.name
+        );
+        assert_eq!(cpu, gpu, "{}", built.name);
     }
 }
 
@@ -158,5 +241,6 @@ fn the_autopilot_survives_a_minute_of_the_paper_scene(device: &Device) {
 
 on_both_backends!(
     a_replay_reproduces_the_game,
+    the_game_ends_at_the_same_step_whatever_the_lag,
     the_autopilot_survives_a_minute_of_the_paper_scene,
 );

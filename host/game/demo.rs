@@ -28,6 +28,8 @@ pub struct Report {
     pub steps: u64,
     /// Game seconds played.
     pub game_seconds: f64,
+    /// Seconds to set the game up on the device (buffers, generators, plans).
+    pub setup_s: f64,
     /// Steps per wall-clock second, status read-back included.
     pub sim_steps_per_s: f64,
     /// Kernel launches per step.
@@ -80,6 +82,7 @@ impl Report {
             "steps:",
             format!("{} ({:.1} s of game time)", self.steps, self.game_seconds),
         );
+        line("setup_s:", format!("{:.3}", self.setup_s));
         line("sim_steps_per_s:", format!("{:.1}", self.sim_steps_per_s));
         line(
             "launches:",
@@ -164,6 +167,7 @@ impl Record {
 /// the game ends at the same step whatever the lag, since the device decides it.
 fn play(
     game: &mut Game,
+    setup_s: f64,
     seed: u32,
     steps: u64,
     options: RunOptions,
@@ -207,6 +211,7 @@ fn play(
         seed,
         steps: played,
         game_seconds: played as f64 * f64::from(game.scene().world.dt),
+        setup_s,
         sim_steps_per_s: played as f64 / seconds.max(f64::MIN_POSITIVE),
         launches_per_step: pipeline.launches_per_step(),
         graphs: pipeline.uses_graphs() && !options.profile,
@@ -237,8 +242,10 @@ pub fn demo(
     steps: u64,
     options: RunOptions,
 ) -> Result<(Report, Replay), Error> {
+    let start = Instant::now();
     let mut game = Game::with_options(device, scene, seed, options.game)?;
-    let (report, inputs, state_hash) = play(&mut game, seed, steps, options, |_| None)?;
+    let setup_s = start.elapsed().as_secs_f64();
+    let (report, inputs, state_hash) = play(&mut game, setup_s, seed, steps, options, |_| None)?;
     let replay = Replay {
         scene: scene.name.clone(),
         scene_toml: scene.source.clone(),
@@ -258,10 +265,17 @@ pub fn replay(
     replay: &Replay,
     options: RunOptions,
 ) -> Result<Report, Error> {
+    let start = Instant::now();
     let mut game = Game::with_options(device, scene, replay.seed, options.game)?;
+    let setup_s = start.elapsed().as_secs_f64();
     let inputs = &replay.inputs;
-    let (report, _, _) = play(&mut game, replay.seed, inputs.len() as u64, options, |i| {
-        Some(inputs[i as usize])
-    })?;
+    let (report, _, _) = play(
+        &mut game,
+        setup_s,
+        replay.seed,
+        inputs.len() as u64,
+        options,
+        |i| Some(inputs[i as usize]),
+    )?;
     Ok(report)
 }

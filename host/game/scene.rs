@@ -74,6 +74,14 @@ pub const BUILT_IN: &[BuiltIn] = &[
         name: "arena",
         source: include_str!("../../scenes/arena.toml"),
     },
+    BuiltIn {
+        name: "scale-1m",
+        source: include_str!("../../scenes/scale-1m.toml"),
+    },
+    BuiltIn {
+        name: "scale-16m",
+        source: include_str!("../../scenes/scale-16m.toml"),
+    },
 ];
 
 /// The built-in scene called `name`: `None` if there is none, `Some(Err(_))` if it does not

@@ -243,6 +243,7 @@ impl<'d> Pipeline<'d> {
         }
         pipeline.step = device.plan(all, graphs)?;
         pipeline.run_stage("free")?;
+        device.synchronize()?;
         Ok(pipeline)
     }
 
