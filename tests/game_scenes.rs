@@ -49,15 +49,10 @@ fn a_scene_launches_only_the_stages_it_uses() {
     let count = |counts: &std::collections::BTreeMap<&str, u64>, name: &str| {
         counts.get(name).copied().unwrap_or(0)
     };
-    let (think_k, think_g, think_t) = (
-        registry::THINK_KAMIKAZE.name,
-        registry::THINK_GROUP.name,
-        registry::THINK_TRICKY.name,
-    );
+    let think = registry::THINK.name;
     // Kamikazes only, circles only, one wave at the start (then one every 5 s).
     let k = launches(&scene("kamikaze"), 10, true);
-    assert_eq!(count(&k, think_k), 10);
-    assert_eq!(count(&k, think_g) + count(&k, think_t), 0, "{k:?}");
+    assert_eq!(count(&k, think), 10);
     assert_eq!(count(&k, registry::COLLIDE_CIRCLES.name), 10);
     assert_eq!(
         count(&k, registry::COLLIDE.name),
@@ -77,19 +72,20 @@ fn a_scene_launches_only_the_stages_it_uses() {
     // Given input: the same launches.
     let still = launches(&scene("kamikaze"), 10, false);
     assert_eq!(still, k);
-    // Tricky enemies only.
-    let t = launches(&scene("tricky"), 4, true);
-    assert_eq!(count(&t, think_t), 4);
-    assert_eq!(count(&t, think_k) + count(&t, think_g), 0, "{t:?}");
     // Rectangles: the full narrow phase.
     let a = launches(&scene("arena"), 4, true);
     assert_eq!(count(&a, registry::COLLIDE.name), 4);
     assert_eq!(count(&a, registry::COLLIDE_CIRCLES.name), 0);
-    // The paper's seven kinds: one AI launch per kind and step.
+    // The paper's seven kinds: their machines in one launch per step.
     let p = launches(&scene("paper"), 2, true);
-    assert_eq!(count(&p, think_k), 2 * 2);
-    assert_eq!(count(&p, think_g), 3 * 2);
-    assert_eq!(count(&p, think_t), 2 * 2);
+    assert_eq!(count(&p, think), 2);
+    // A world without machines has no think stage at all.
+    let mut calm = scene("kamikaze");
+    for kind in &mut calm.world.kinds {
+        kind.behaviour = None;
+    }
+    let c = launches(&calm, 3, true);
+    assert_eq!(count(&c, think), 0, "{c:?}");
 }
 
 #[test]

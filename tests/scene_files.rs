@@ -51,7 +51,18 @@ fn assert_error(text: &str, line: usize, field: &str, says: &[&str]) {
 #[test]
 fn every_built_in_reads() {
     let names: Vec<_> = BUILT_IN.iter().map(|b| b.name).collect();
-    assert_eq!(names, ["paper", "kamikaze", "group", "tricky", "arena"]);
+    assert_eq!(
+        names,
+        [
+            "paper",
+            "kamikaze",
+            "group",
+            "tricky",
+            "arena",
+            "scale-1m",
+            "scale-16m"
+        ]
+    );
     for b in BUILT_IN {
         let scene = b.scene().unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(scene.name, b.name);

@@ -4,7 +4,8 @@
 //! this backend then fails with [`Error::CudaUnavailable`] and a reason, never a panic.
 
 use std::collections::HashMap;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
+use std::thread::ThreadId;
 
 use cudarc::driver::{
     CudaContext, CudaEvent, CudaFunction, CudaGraph, CudaSlice, CudaStream, DevicePtr, DeviceRepr,
@@ -36,6 +37,8 @@ pub struct GpuProperties {
 pub(super) struct Gpu {
     ctx: Arc<CudaContext>,
     stream: Arc<CudaStream>,
+    /// The capture in progress, if any: the thread recording and its private stream.
+    capture: Mutex<Option<(ThreadId, Arc<CudaStream>)>>,
     functions: HashMap<&'static str, CudaFunction>,
     properties: GpuProperties,
 }
@@ -94,6 +97,7 @@ impl Gpu {
         Ok(Gpu {
             ctx,
             stream,
+            capture: Mutex::new(None),
             functions,
             properties,
         })
@@ -169,7 +173,8 @@ impl Gpu {
             shared_mem_bytes: 0,
         };
         let param = Param(*args);
-        let mut launch = self.stream.launch_builder(function);
+        let stream = self.launch_stream();
+        let mut launch = stream.launch_builder(function);
         launch.arg(&param);
         // SAFETY: the parameter is the kernel's argument struct; the caller vouches for the
         // buffers it views.
@@ -186,34 +191,62 @@ impl Gpu {
     /// # Safety
     /// The bytes belong to a live allocation that nothing else uses meanwhile.
     pub(super) unsafe fn clear(&self, addr: u64, bytes: usize) -> Result<(), Error> {
+        self.bind()?;
         // SAFETY: forwarded from the caller.
-        unsafe { result::memset_d8_async(addr, 0, bytes, self.stream.cu_stream()) }
+        unsafe { result::memset_d8_async(addr, 0, bytes, self.launch_stream().cu_stream()) }
             .map_err(driver("clearing device memory"))
     }
 
-    /// Records what `issue` queues on the stream as a graph instead of running it.
+    /// The stream this thread's launches and clears go to: the device's stream, or the
+    /// private stream of a capture this thread is recording.
+    fn launch_stream(&self) -> Arc<CudaStream> {
+        let capture = self.capture.lock().unwrap_or_else(|e| e.into_inner());
+        match &*capture {
+            Some((thread, stream)) if *thread == std::thread::current().id() => stream.clone(),
+            _ => self.stream.clone(),
+        }
+    }
+
+    /// Records what `issue` launches as a graph instead of running it. The recording uses a
+    /// private stream, so that work other threads queue meanwhile (a buffer freed, another
+    /// launch) neither lands in the graph nor breaks the capture; one capture at a time.
     pub(super) fn capture(
         &self,
         issue: impl FnOnce() -> Result<(), Error>,
     ) -> Result<CudaGraph, Error> {
-        self.stream
+        let mut capture = self.capture.lock().unwrap_or_else(|e| e.into_inner());
+        while capture.is_some() {
+            drop(capture);
+            std::thread::yield_now();
+            capture = self.capture.lock().unwrap_or_else(|e| e.into_inner());
+        }
+        let stream = self.ctx.new_stream().map_err(driver("creating a stream"))?;
+        stream
             .begin_capture(sys::CUstreamCaptureMode::CU_STREAM_CAPTURE_MODE_THREAD_LOCAL)
             .map_err(driver("starting a graph capture"))?;
+        *capture = Some((std::thread::current().id(), stream.clone()));
+        drop(capture);
         let issued = issue();
         // End the capture whatever happened, so that the stream is usable again.
-        let graph = self
-            .stream
+        let graph = stream
             .end_capture(sys::CUgraphInstantiate_flags(0))
             .map_err(driver("capturing a graph"));
+        *self.capture.lock().unwrap_or_else(|e| e.into_inner()) = None;
         issued?;
         let graph = graph?.ok_or_else(|| Error::Invalid("an empty graph was captured".into()))?;
-        graph.upload().map_err(driver("uploading a graph"))?;
+        self.bind()?;
+        // SAFETY: the executable graph is alive (owned by `graph`); the stream is ours.
+        unsafe { result::graph::upload(graph.cu_graph_exec(), self.stream.cu_stream()) }
+            .map_err(driver("uploading a graph"))?;
         Ok(graph)
     }
 
-    /// Queues one replay of `graph`.
+    /// Queues one replay of `graph` on the device's stream (not the one it was recorded on).
     pub(super) fn replay(&self, graph: &CudaGraph) -> Result<(), Error> {
-        graph.launch().map_err(driver("launching a graph"))
+        self.bind()?;
+        // SAFETY: as in `capture`.
+        unsafe { result::graph::launch(graph.cu_graph_exec(), self.stream.cu_stream()) }
+            .map_err(driver("launching a graph"))
     }
 
     /// A new event, with timing when `timed`.
@@ -237,9 +270,7 @@ impl Gpu {
 
     /// Page-locked host memory of `bytes` bytes, for asynchronous copies.
     pub(super) fn pinned(&self, bytes: usize) -> Result<Pinned, Error> {
-        self.ctx
-            .bind_to_thread()
-            .map_err(driver("binding the context"))?;
+        self.bind()?;
         // SAFETY: a plain allocation; freed in `Pinned::drop`.
         let ptr = unsafe { result::malloc_host(bytes.max(1), 0) }
             .map_err(driver("allocating pinned host memory"))?;
@@ -296,11 +327,16 @@ impl Gpu {
         .map_err(driver("copying from the device"))
     }
 
-    /// Free and total device memory in bytes.
-    pub(super) fn memory(&self) -> Result<(u64, u64), Error> {
+    /// Makes the context current on the calling thread, as raw driver calls need.
+    fn bind(&self) -> Result<(), Error> {
         self.ctx
             .bind_to_thread()
-            .map_err(driver("binding the context"))?;
+            .map_err(driver("binding the context"))
+    }
+
+    /// Free and total device memory in bytes.
+    pub(super) fn memory(&self) -> Result<(u64, u64), Error> {
+        self.bind()?;
         let (free, total) = result::mem_get_info().map_err(driver("querying device memory"))?;
         Ok((free as u64, total as u64))
     }

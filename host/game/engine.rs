@@ -3,15 +3,15 @@
 
 use std::collections::VecDeque;
 
+use bytemuck::Zeroable;
 use gpuwars_kernels::game::control::{Command, Input, Status};
 use gpuwars_kernels::game::fsm::Machine;
 use gpuwars_kernels::game::rules::{Brain, Rules, Wave};
-use gpuwars_kernels::registry;
 use xxhash_rust::xxh3::Xxh3;
 
 use super::spec::Scene;
 use crate::backend::Ring;
-use crate::pipeline::{GameConfig, Mind, Pipeline, Profile};
+use crate::pipeline::{GameConfig, Pipeline, Profile};
 use crate::sim::Snapshot;
 use crate::sim::layout::{Layout, steps};
 use crate::{Device, Error};
@@ -95,36 +95,29 @@ fn waves(scene: &Scene) -> Vec<Wave> {
         .collect()
 }
 
-/// One AI launch per kind with a behaviour.
-fn minds(scene: &Scene, layout: &Layout) -> Vec<Mind> {
+/// Each kind's brain; kinds without a behaviour get machine 0 (none).
+fn brains(scene: &Scene) -> Vec<Brain> {
     let dt = scene.world.dt;
     scene
         .world
         .kinds
         .iter()
         .enumerate()
-        .filter_map(|(k, kind)| {
-            let b = kind.behaviour?;
-            let kernel = match b.machine {
-                Machine::None => return None,
-                Machine::Kamikaze => registry::THINK_KAMIKAZE,
-                Machine::Group => registry::THINK_GROUP,
-                Machine::Tricky => registry::THINK_TRICKY,
-            };
-            Some(Mind {
-                range: layout.ranges[k],
-                brain: Brain {
-                    machine: b.machine as u32,
-                    kind: k as u32,
-                    vision: b.vision,
-                    speed: b.speed,
-                    low_energy: b.low_energy,
-                    recover_every: steps(1.0 / b.recovery, dt),
-                    avoid_bullets: u32::from(b.avoid_bullets),
-                    reserved: 0,
-                },
-                kernel,
-            })
+        .map(|(k, kind)| match kind.behaviour {
+            Some(b) if b.machine != Machine::None => Brain {
+                machine: b.machine as u32,
+                kind: k as u32,
+                vision: b.vision,
+                speed: b.speed,
+                low_energy: b.low_energy,
+                recover_every: steps(1.0 / b.recovery, dt),
+                avoid_bullets: u32::from(b.avoid_bullets),
+                reserved: 0,
+            },
+            _ => Brain {
+                kind: k as u32,
+                ..Brain::zeroed()
+            },
         })
         .collect()
 }
@@ -149,7 +142,7 @@ impl<'d> Game<'d> {
         let layout = Layout::new(&world);
         let game = GameConfig {
             rules: rules(scene, &layout),
-            minds: minds(scene, &layout),
+            brains: brains(scene),
             waves: waves(scene),
         };
         let pipeline = Pipeline::new(device, &world, seed, Some(game), options.graphs)?;

@@ -10,7 +10,7 @@
 //! | `births` | the enemies the master thread ordered come alive | games |
 //! | `broad` | the grid: bucket counts, their prefix sum, placement, canonical order | worlds where something collides or looks around |
 //! | `narrow` | contacts and their response (`collide_circles` without rectangles) | worlds where something collides |
-//! | `think` | one launch per enemy kind with a machine | games with enemies |
+//! | `think` | every live enemy's machine, in one launch (threads in grid order) | games with enemies |
 //! | `integrate` | Euler, the boundary rule, deaths | always |
 //! | `free` | the free lists: flags, their prefix sum, gather | always |
 //! | `tally` | the master thread after the physics (one thread) | games |
@@ -35,12 +35,12 @@ use gpuwars_kernels::game::autopilot::AutopilotArgs;
 use gpuwars_kernels::game::control::{Command, Input, Status};
 use gpuwars_kernels::game::master::{BirthArgs, MasterArgs};
 use gpuwars_kernels::game::rules::{Brain, Rules, Wave};
+use gpuwars_kernels::sim::Space;
 use gpuwars_kernels::sim::broad::{CountArgs, OrderArgs, PlaceArgs};
 use gpuwars_kernels::sim::free_list::{GatherArgs, MarkArgs};
 use gpuwars_kernels::sim::integrate::IntegrateArgs;
 use gpuwars_kernels::sim::narrow::CollideArgs;
 use gpuwars_kernels::sim::scatter::ScatterArgs;
-use gpuwars_kernels::sim::{SlotRange, Space};
 use gpuwars_kernels::{Kernel, KernelArgs, registry};
 
 use crate::primitives::BLOCK;
@@ -66,31 +66,32 @@ pub const STAGES: [&str; 9] = [
     "tally",
 ];
 
-/// One enemy kind's AI launch: its slots, its brain, its machine's kernel.
-#[derive(Clone, Copy, Debug)]
-pub struct Mind {
-    /// The kind's slots.
-    pub range: SlotRange,
-    /// What drives it.
-    pub brain: Brain,
-    /// Its machine's kernel.
-    pub kernel: Kernel<ThinkArgs>,
-}
-
-/// What a game adds to a world: its rules, its enemies' minds and the spawn schedule.
+/// What a game adds to a world: its rules, its enemies' brains and the spawn schedule.
 #[derive(Clone, Debug)]
 pub struct GameConfig {
     /// The rules in the kernels' terms.
     pub rules: Rules,
-    /// One AI launch per enemy kind.
-    pub minds: Vec<Mind>,
+    /// Each kind's brain (machine 0 for kinds that have none).
+    pub brains: Vec<Brain>,
     /// The spawn schedule.
     pub waves: Vec<Wave>,
+}
+
+impl GameConfig {
+    /// The kinds `first .. end` that hold every kind with a machine, if any has one.
+    fn minds(&self) -> Option<(u32, u32)> {
+        let mut kinds =
+            (0..self.brains.len() as u32).filter(|&k| self.brains[k as usize].machine != 0);
+        let first = kinds.next()?;
+        let last = kinds.next_back().unwrap_or(first);
+        Some((first, last + 1))
+    }
 }
 
 /// The game's buffers on the device.
 struct GameState {
     config: GameConfig,
+    brains: Buffer<Brain>,
     waves: Buffer<Wave>,
     status: Buffer<Status>,
     command: Buffer<Command>,
@@ -207,6 +208,7 @@ impl<'d> Pipeline<'d> {
         let scratch = Scratch::new(device, &layout, &space, kinds)?;
         let game = match game {
             Some(config) => Some(GameState {
+                brains: device.upload(&config.brains)?,
                 waves: device.upload(&config.waves)?,
                 status: device.alloc_zeroed(1)?,
                 command: device.alloc_zeroed(1)?,
@@ -327,25 +329,25 @@ impl<'d> Pipeline<'d> {
                     })
                     .unwrap_or_default(),
                 "think" => game
-                    .map(|g| {
-                        g.config
-                            .minds
-                            .iter()
-                            .map(|mind| {
-                                let args = ThinkArgs {
-                                    bodies,
-                                    kinds,
-                                    space,
-                                    grid: cells,
-                                    contacts,
-                                    range: mind.range,
-                                    brain: mind.brain,
-                                    ship: g.config.rules.ship.start,
-                                    shot_kind: g.config.rules.shot_kind,
-                                };
-                                op(mind.kernel, mind.range.capacity, args, 56)
-                            })
-                            .collect()
+                    .and_then(|g| g.config.minds().map(|minds| (g, minds)))
+                    .map(|(g, (first_kind, end_kind))| {
+                        let args = ThinkArgs {
+                            bodies,
+                            kinds,
+                            space,
+                            grid: cells,
+                            contacts,
+                            brains: g.brains.view(),
+                            first_kind,
+                            end_kind,
+                            ship: g.config.rules.ship.start,
+                            shot_kind: g.config.rules.shot_kind,
+                        };
+                        // A thread for every slot the enemies could hold; those past the
+                        // live ones return at once.
+                        let ranges = &self.layout.ranges[first_kind as usize..end_kind as usize];
+                        let threads = ranges.iter().map(|r| r.capacity).sum();
+                        vec![op(registry::THINK, threads, args, 56)]
                     })
                     .unwrap_or_default(),
                 "integrate" => {
@@ -382,8 +384,6 @@ impl<'d> Pipeline<'d> {
             keys: g.keys.view(),
             ranks: g.ranks.view(),
             counts: start,
-            kinds: g.kinds,
-            reserved: 0,
         };
         let place = PlaceArgs {
             keys: g.keys.view(),

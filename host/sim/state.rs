@@ -84,6 +84,7 @@ pub(crate) struct GridBuffers {
     pub slots: Buffer<u32>,
     pub scan: PrefixSum,
     pub kinds: u32,
+    pub cells: u32,
 }
 
 /// The free-list rebuild's flags and ranks.
@@ -93,7 +94,7 @@ pub(crate) struct FreeScratch {
     pub scan: PrefixSum,
 }
 
-/// Buckets of a grid: one per (cell, kind), and one more for the total.
+/// Buckets of a grid: one per (kind, cell), and one more for the total.
 fn buckets(space: &Space, kinds: usize) -> usize {
     space.cells() as usize * kinds + 1
 }
@@ -234,6 +235,7 @@ impl Scratch {
                 slots: device.alloc_zeroed(n)?,
                 scan: PrefixSum::new(device, buckets)?,
                 kinds: kinds as u32,
+                cells: space.cells(),
             },
             free: FreeScratch {
                 flags: device.alloc_zeroed(n)?,
@@ -260,7 +262,7 @@ impl Scratch {
             slots: self.grid.slots.view(),
             start: self.grid.start.view(),
             kinds: self.grid.kinds,
-            reserved: 0,
+            cells: self.grid.cells,
         }
     }
 }

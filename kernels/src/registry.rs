@@ -74,12 +74,8 @@ kernels! {
     TALLY = tally(master::MasterArgs) => master::tally;
     /// Brings the enemies the master thread ordered to life at random places.
     BIRTHS = births(master::BirthArgs) => master::births;
-    /// The kamikaze machine for one kind's slots: perceive, transition, steer.
-    THINK_KAMIKAZE = think_kamikaze(ai::ThinkArgs) => ai::think_kamikaze;
-    /// The group machine for one kind's slots: perceive, transition, steer.
-    THINK_GROUP = think_group(ai::ThinkArgs) => ai::think_group;
-    /// The tricky machine for one kind's slots: perceive, transition, steer, recover.
-    THINK_TRICKY = think_tricky(ai::ThinkArgs) => ai::think_tricky;
+    /// The enemies' machines, every live enemy in grid order: perceive, transition, steer.
+    THINK = think(ai::ThinkArgs) => ai::think;
     /// The autopilot: the ship's input from what lies around it (one thread).
     AUTOPILOT = autopilot(autopilot::AutopilotArgs) => autopilot::autopilot;
 }

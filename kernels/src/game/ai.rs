@@ -2,16 +2,19 @@
 //! moves its finite-state machine ([`super::fsm`]) one step, and acts: a steering force for
 //! the integrator, and, for the tricky kind, energy recovered while escaping.
 //!
-//! One launch per enemy kind over that kind's slot range, so a warp runs one kind's code and
-//! a scene without tricky enemies never runs the tricky machine. It runs after the narrow
-//! phase, so that a hit is seen in the step it happens.
+//! One launch for every enemy kind: thread `i` takes the `i`-th live enemy in the grid's
+//! kind-major, cell-ordered entries, so only live enemies get a thread, a warp runs one
+//! kind's machine (except where one kind's entries end and the next's begin), and
+//! neighbouring threads look at neighbouring places. The kinds' machines run side by side
+//! rather than one launch after another. It runs after the narrow phase, so that a hit is
+//! seen in the step it happens.
 
 use glam::Vec2;
 
 use super::fsm::{Machine, Percept, State, next_state};
 use super::rules::Brain;
 use crate::sim::broad::{CellIndex, kind_bit};
-use crate::sim::{Bodies, Contacts, KindInfo, SlotRange, Space};
+use crate::sim::{Bodies, Contacts, KindInfo, Space};
 use crate::{DevSlice, KernelArgs, Thread};
 
 /// Seconds a steering force takes to bring the velocity to the wanted one.
@@ -31,7 +34,7 @@ pub const PERSONAL_SPACE_RADII: f32 = 3.0;
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct ThinkArgs {
-    /// The bodies (force, state, energy and liveness of the kind's slots are written).
+    /// The bodies (force, state, energy and liveness of the enemies are written).
     pub bodies: Bodies,
     /// Kind table.
     pub kinds: DevSlice<KindInfo>,
@@ -41,10 +44,12 @@ pub struct ThinkArgs {
     pub grid: CellIndex,
     /// This step's narrow-phase results (the hits).
     pub contacts: Contacts,
-    /// The slots of the kind.
-    pub range: SlotRange,
-    /// The kind's brain.
-    pub brain: Brain,
+    /// Each kind's brain (machine 0 for kinds without one).
+    pub brains: DevSlice<Brain>,
+    /// The first kind with a machine.
+    pub first_kind: u32,
+    /// One past the last kind with a machine.
+    pub end_kind: u32,
     /// The ship's slot.
     pub ship: u32,
     /// The kind of the ship's shots.
@@ -89,25 +94,25 @@ pub fn threat(d: Vec2, rel: Vec2, radius: f32) -> Option<(f32, Vec2)> {
     Some((time, away))
 }
 
-/// What slot `slot` of a `machine` body sees: only bodies within `brain.vision`, found
+/// What slot `slot`, a `machine` body driven by `brain`, sees: only bodies within its vision, found
 /// through the grid's 3×3 neighbourhood. A kamikaze looks only for the ship.
 #[inline(always)]
-pub fn look(args: &ThinkArgs, machine: Machine, slot: u32) -> Sight {
+pub fn look(args: &ThinkArgs, brain: &Brain, machine: Machine, slot: u32) -> Sight {
     let b = &args.bodies;
     let pos = b.pos.get(slot);
     let vel = b.vel.get(slot);
-    let radius = args.kinds.get(args.brain.kind).radius;
-    let vision2 = args.brain.vision * args.brain.vision;
+    let radius = args.kinds.get(brain.kind).radius;
+    let vision2 = brain.vision * brain.vision;
     let personal = PERSONAL_SPACE_RADII * radius;
     let social = machine != Machine::Kamikaze;
-    let dodges = social && args.brain.avoid_bullets != 0;
+    let dodges = social && brain.avoid_bullets != 0;
     let mut sight = Sight::default();
     let (mut sum, mut similar) = (Vec2::ZERO, 0u32);
     let mut soonest = f32::INFINITY;
     // Only the kinds this machine reacts to: the ship, its own kind, the shots it dodges.
     let mut mask = kind_bit(b.kind.get(args.ship));
     if social {
-        mask |= kind_bit(args.brain.kind);
+        mask |= kind_bit(brain.kind);
     }
     if dodges {
         mask |= kind_bit(args.shot_kind);
@@ -124,7 +129,7 @@ pub fn look(args: &ThinkArgs, machine: Machine, slot: u32) -> Sight {
         let kind = b.kind.get(other);
         if other == args.ship {
             sight.ship = Some(d);
-        } else if social && kind == args.brain.kind {
+        } else if social && kind == brain.kind {
             sum += d;
             similar += 1;
             if dist2 < personal * personal {
@@ -147,9 +152,15 @@ pub fn look(args: &ThinkArgs, machine: Machine, slot: u32) -> Sight {
 
 /// The velocity a body in `state` wants, and the wandering heading it keeps.
 #[inline(always)]
-fn wanted_velocity(args: &ThinkArgs, slot: u32, state: State, sight: &Sight) -> Vec2 {
+fn wanted_velocity(
+    args: &ThinkArgs,
+    brain: &Brain,
+    slot: u32,
+    state: State,
+    sight: &Sight,
+) -> Vec2 {
     let b = &args.bodies;
-    let speed = args.brain.speed;
+    let speed = brain.speed;
     let toward = |d: Option<Vec2>| d.and_then(Vec2::try_normalize);
     match state {
         State::Attacking => toward(sight.ship).unwrap_or(Vec2::ZERO) * speed,
@@ -173,21 +184,36 @@ fn wanted_velocity(args: &ThinkArgs, slot: u32, state: State, sight: &Sight) -> 
     }
 }
 
-/// Thread `i` runs slot `range.start + i` of the kind: perceive, transition, act.
+/// Thread `i` takes the `i`-th live body of the kinds `first_kind .. end_kind` in the grid's
+/// order and runs its kind's machine on it: perceive, transition, act.
 #[inline(always)]
-pub fn think<const MACHINE: u32>(t: Thread, args: &ThinkArgs) {
-    let i = t.global();
-    if i >= args.range.capacity {
+pub fn think(t: Thread, args: &ThinkArgs) {
+    let grid = &args.grid;
+    let first = grid.start.get(args.first_kind * grid.cells);
+    let end = grid.start.get(args.end_kind * grid.cells);
+    let entry = first.wrapping_add(t.global());
+    if entry >= end || entry < first {
         return;
     }
-    let slot = args.range.start + i;
+    let slot = grid.slots.get(entry);
+    let brain = args.brains.get(args.bodies.kind.get(slot));
+    match Machine::from_u32(brain.machine) {
+        Machine::Kamikaze => think_as::<{ Machine::Kamikaze as u32 }>(args, &brain, slot),
+        Machine::Group => think_as::<{ Machine::Group as u32 }>(args, &brain, slot),
+        Machine::Tricky => think_as::<{ Machine::Tricky as u32 }>(args, &brain, slot),
+        Machine::None => {}
+    }
+}
+
+/// One body of a `MACHINE` kind driven by `brain`: perceive, transition, act.
+#[inline(always)]
+fn think_as<const MACHINE: u32>(args: &ThinkArgs, brain: &Brain, slot: u32) {
     let b = &args.bodies;
     if b.is_frozen() || !b.is_alive(slot) {
         return;
     }
     let machine = Machine::from_u32(MACHINE);
-    let brain = &args.brain;
-    let sight = look(args, machine, slot);
+    let sight = look(args, brain, machine, slot);
     let energy = b.energy.get(slot);
     let full = args.kinds.get(brain.kind).energy;
     let percept = Percept {
@@ -211,25 +237,7 @@ pub fn think<const MACHINE: u32>(t: Thread, args: &ThinkArgs) {
     {
         b.energy.set(slot, (energy + 1).min(full));
     }
-    let want = wanted_velocity(args, slot, state, &sight);
+    let want = wanted_velocity(args, brain, slot, state, &sight);
     let force = (want - b.vel.get(slot)) * (b.mass.get(slot) / STEER_TIME);
     b.force.set(slot, force);
-}
-
-/// [`think`] for kamikaze kinds.
-#[inline(always)]
-pub fn think_kamikaze(t: Thread, args: &ThinkArgs) {
-    think::<{ Machine::Kamikaze as u32 }>(t, args);
-}
-
-/// [`think`] for group kinds.
-#[inline(always)]
-pub fn think_group(t: Thread, args: &ThinkArgs) {
-    think::<{ Machine::Group as u32 }>(t, args);
-}
-
-/// [`think`] for tricky kinds.
-#[inline(always)]
-pub fn think_tricky(t: Thread, args: &ThinkArgs) {
-    think::<{ Machine::Tricky as u32 }>(t, args);
 }

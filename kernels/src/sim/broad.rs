@@ -1,11 +1,14 @@
 //! The broad phase (paper 6.1): a uniform grid rebuilt every step. The same grid answers the
 //! narrow phase's "who is near me" and the enemies' vision.
 //!
-//! The grid is bucketed by (cell, kind): bucket `cell · kinds + kind` holds the live bodies of
+//! The grid is bucketed by (kind, cell): bucket `kind · cells + cell` holds the live bodies of
 //! that kind in that cell, in increasing slot order, so that a query reads only the kinds it
 //! cares about (an enemy's contacts are with the ship and the shots, not with the thousands
 //! of enemies around it). Kinds own contiguous slot ranges in kind order, so reading a cell's
-//! buckets in kind order visits its bodies in plain slot order.
+//! buckets in kind order visits its bodies in plain slot order. And since buckets are
+//! kind-major, each kind's live bodies are one stretch of entries in cell order: a kernel
+//! that gives thread `i` the `i`-th of them runs only live bodies, with neighbouring threads
+//! looking at neighbouring places (and a warp still runs one kind's code).
 //!
 //! Build, with no sort and work that grows with the live bodies:
 //! 1. [`count_cells`]: each live body adds itself to its bucket's count with an atomic add,
@@ -40,12 +43,8 @@ pub struct CountArgs {
     pub keys: DevSlice<u32>,
     /// Output: each live slot's arrival rank inside its bucket.
     pub ranks: DevSlice<u32>,
-    /// Bodies per bucket, zeroed before; `cells · kinds` buckets.
+    /// Bodies per bucket, zeroed before; `kinds · cells` buckets.
     pub counts: DevSlice<u32>,
-    /// Number of kinds.
-    pub kinds: u32,
-    /// Keeps the struct free of implicit padding.
-    pub reserved: u32,
 }
 // SAFETY: repr(C) plain data.
 unsafe impl KernelArgs for CountArgs {}
@@ -62,7 +61,7 @@ pub fn count_cells(t: Thread, args: &CountArgs) {
         args.keys.set(slot, NO_BUCKET);
         return;
     }
-    let key = args.space.cell_of(b.pos.get(slot)) * args.kinds + b.kind.get(slot);
+    let key = b.kind.get(slot) * args.space.cells() + args.space.cell_of(b.pos.get(slot));
     args.keys.set(slot, key);
     args.ranks.set(slot, args.counts.atomic_add(key, 1));
 }
@@ -134,7 +133,7 @@ pub fn order_cells(t: Thread, args: &OrderArgs) {
     args.slots.set(first + rank, slot);
 }
 
-/// The grid: the live slots bucketed by (cell, kind), each bucket in increasing slot order.
+/// The grid: the live slots bucketed by (kind, cell), each bucket in increasing slot order.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CellIndex {
@@ -143,35 +142,29 @@ pub struct CellIndex {
     /// First entry of each bucket in `slots`, and one more element: the number of entries.
     /// Bucket `b` is `slots[start[b] .. start[b + 1]]`.
     pub start: DevSlice<u32>,
-    /// Number of kinds (buckets per cell).
+    /// Number of kinds.
     pub kinds: u32,
-    /// Keeps the struct free of implicit padding.
-    pub reserved: u32,
+    /// Number of cells (buckets per kind).
+    pub cells: u32,
 }
 
 impl CellIndex {
     /// Calls `visit(slot)` for every body of a kind in `mask` (bit `k`: kind `k`) in the 3×3
     /// cells around `pos`: each body once, cell by cell in row order, by increasing slot
-    /// inside a cell.
+    /// inside a cell (kinds in increasing order are slots in increasing order).
     #[inline(always)]
     pub fn for_each_near(&self, space: &Space, pos: Vec2, mask: u32, mut visit: impl FnMut(u32)) {
         let mask = mask & kinds_mask(self.kinds);
         space.for_each_neighbour_cell(pos, |cell| {
-            let base = cell * self.kinds;
-            // Each run of consecutive kinds in the mask is one contiguous stretch of entries.
             let mut rest = mask;
             while rest != 0 {
-                let first = rest.trailing_zeros();
-                let last = first + (!(rest >> first)).trailing_zeros();
-                let (start, end) = (self.start.get(base + first), self.start.get(base + last));
+                let kind = rest.trailing_zeros();
+                rest &= rest - 1;
+                let bucket = kind * self.cells + cell;
+                let (start, end) = (self.start.get(bucket), self.start.get(bucket + 1));
                 for entry in start..end {
                     visit(self.slots.get(entry));
                 }
-                rest = if last >= u32::BITS {
-                    0
-                } else {
-                    rest & !((1u32 << last) - 1)
-                };
             }
         });
     }
