@@ -392,10 +392,12 @@ impl<'d> Pipeline<'d> {
             unordered: g.unordered.view(),
         };
         let order = OrderArgs {
+            pos: self.state.bodies.pos.view(),
             keys: g.keys.view(),
             start,
             unordered: g.unordered.view(),
             slots: g.slots.view(),
+            entry_pos: g.pos.view(),
         };
         // SAFETY: as in `ops`; the scan runs in place over the starts.
         unsafe {
@@ -409,7 +411,7 @@ impl<'d> Pipeline<'d> {
                     .expect("the scan was made for the buckets"),
             );
             ops.push(op(registry::PLACE_IN_CELLS, slots, place, 16));
-            ops.push(op(registry::ORDER_CELLS, slots, order, 20));
+            ops.push(op(registry::ORDER_CELLS, slots, order, 36));
             ops
         }
     }

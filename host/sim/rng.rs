@@ -1,7 +1,9 @@
-//! The slots' generators: parameter sets from the committed dcmt table, seeds from MT19937.
+//! The slots' generators: parameter sets from the committed dcmt table (slot `i` takes set
+//! `i mod` the table's length, on the device: `gpuwars_kernels::rng::streams::seed_streams`),
+//! seeds from MT19937.
 
 use gpuwars_kernels::rng::Mt19937;
-use gpuwars_kernels::rng::mt607::{self, Mt607Params};
+use gpuwars_kernels::rng::mt607::Mt607Params;
 
 /// dcmt's `init_dc` seed the table was made with.
 pub const TABLE_SEED: u32 = 4172;
@@ -18,29 +20,9 @@ pub fn table_params(id: usize) -> Mt607Params {
     Mt607Params::new(a, b, c)
 }
 
-/// The parameters of each of `slots` generators: slot `i` gets table entry `i`, or entry
-/// `i mod TABLE.len()` past the table's end (such slots differ by seed only).
-pub fn slot_params(slots: u32) -> Vec<Mt607Params> {
-    (0..slots as usize)
-        .map(|i| table_params(i % TABLE.len()))
-        .collect()
-}
-
 /// The seed of each of `slots` generators: the first outputs of MT19937 seeded with the
 /// world's seed, one per slot.
 pub fn slot_seeds(seed: u32, slots: u32) -> Vec<u32> {
     let mut mt = Mt19937::new(seed);
     (0..slots).map(|_| mt.next_u32()).collect()
-}
-
-/// The state words of generators seeded with `seeds`, laid out word-major as
-/// `gpuwars_kernels::rng::RngStreams` expects.
-pub fn word_major_states(seeds: &[u32]) -> Vec<u32> {
-    let mut words = vec![0u32; mt607::N * seeds.len()];
-    for (slot, &seed) in seeds.iter().enumerate() {
-        for (k, word) in mt607::seed_state(seed).into_iter().enumerate() {
-            words[k * seeds.len() + slot] = word;
-        }
-    }
-    words
 }

@@ -3,7 +3,9 @@
 //! the world's layout and grid; a step allocates nothing.
 
 use glam::Vec2;
-use gpuwars_kernels::rng::{Mt607Params, RngStreams};
+use gpuwars_kernels::registry;
+use gpuwars_kernels::rng::streams::SeedArgs;
+use gpuwars_kernels::rng::{Mt607Params, RngStreams, mt607};
 use gpuwars_kernels::sim::broad::CellIndex;
 use gpuwars_kernels::sim::free_list::FreeSlots;
 use gpuwars_kernels::sim::{Bodies, Contacts, KindInfo, SlotRange, Space};
@@ -12,7 +14,7 @@ use super::layout::{self, Layout};
 use super::rng;
 use super::snapshot::Snapshot;
 use super::spec::WorldSpec;
-use crate::primitives::PrefixSum;
+use crate::primitives::{BLOCK, PrefixSum};
 use crate::{Buffer, Device, Error};
 
 /// Bytes per slot of every per-slot buffer below (the generators' 19 words included).
@@ -21,7 +23,7 @@ const SLOT_BYTES: u64 = {
     let word = 4;
     let bodies = 4 * vec2 + 6 * word + size_of::<Mt607Params>() as u64 + 20 * word;
     let contacts = 2 * vec2 + 2 * word;
-    let grid = 4 * word;
+    let grid = 4 * word + vec2;
     let free = 3 * word;
     bodies + contacts + grid + free
 };
@@ -82,6 +84,8 @@ pub(crate) struct GridBuffers {
     pub unordered: Buffer<u32>,
     /// Slots by bucket, in slot order.
     pub slots: Buffer<u32>,
+    /// Each entry's position.
+    pub pos: Buffer<Vec2>,
     pub scan: PrefixSum,
     pub kinds: u32,
     pub cells: u32,
@@ -125,8 +129,10 @@ impl WorldState {
             .iter()
             .map(|&k| spec.kinds[k as usize].mass)
             .collect();
-        let seeds = rng::slot_seeds(seed, layout.slots);
-        Ok(WorldState {
+        let seeds = device.upload(&rng::slot_seeds(seed, layout.slots))?;
+        let table: Vec<Mt607Params> = (0..rng::TABLE.len()).map(rng::table_params).collect();
+        let table = device.upload(&table)?;
+        let state = WorldState {
             bodies: BodyBuffers {
                 pos: device.alloc_zeroed(n)?,
                 vel: device.alloc_zeroed(n)?,
@@ -138,8 +144,8 @@ impl WorldState {
                 alive: device.alloc_zeroed(n)?,
                 state: device.alloc_zeroed(n)?,
                 age: device.alloc_zeroed(n)?,
-                rng_params: device.upload(&rng::slot_params(layout.slots))?,
-                rng_words: device.upload(&rng::word_major_states(&seeds))?,
+                rng_params: device.alloc_zeroed(n)?,
+                rng_words: device.alloc_zeroed(n * mt607::N)?,
                 rng_index: device.alloc_zeroed(n)?,
                 frozen: device.alloc_zeroed(1)?,
             },
@@ -147,7 +153,19 @@ impl WorldState {
             ranges: device.upload(&layout.ranges)?,
             free_list: device.alloc_zeroed(n)?,
             free_count: device.alloc_zeroed(spec.kinds.len())?,
-        })
+        };
+        // The generators are set up on the device: the host only draws the seeds.
+        let args = SeedArgs {
+            streams: state.bodies().rng,
+            seeds: seeds.view(),
+            table: table.view(),
+        };
+        let threads = layout.slots.div_ceil(BLOCK);
+        // SAFETY: the views are of buffers allocated above for `slots` generators, alive
+        // until the launch is done (synchronised below).
+        unsafe { device.launch(registry::SEED_STREAMS, threads, BLOCK, &args)? };
+        device.synchronize()?;
+        Ok(state)
     }
 
     /// The bodies as kernels take them.
@@ -233,6 +251,7 @@ impl Scratch {
                 start: device.alloc_zeroed(buckets)?,
                 unordered: device.alloc_zeroed(n)?,
                 slots: device.alloc_zeroed(n)?,
+                pos: device.alloc_zeroed(n)?,
                 scan: PrefixSum::new(device, buckets)?,
                 kinds: kinds as u32,
                 cells: space.cells(),
@@ -260,6 +279,7 @@ impl Scratch {
     pub fn grid(&self) -> CellIndex {
         CellIndex {
             slots: self.grid.slots.view(),
+            pos: self.grid.pos.view(),
             start: self.grid.start.view(),
             kinds: self.grid.kinds,
             cells: self.grid.cells,

@@ -6,6 +6,7 @@
 
 use crate::game::{ai, autopilot, master};
 use crate::primitives::{histogram, scan, sort};
+use crate::rng::streams;
 use crate::sim::{broad, free_list, integrate, narrow, scatter};
 use crate::{Kernel, KernelInfo};
 
@@ -76,6 +77,8 @@ kernels! {
     BIRTHS = births(master::BirthArgs) => master::births;
     /// The enemies' machines, every live enemy in grid order: perceive, transition, steer.
     THINK = think(ai::ThinkArgs) => ai::think;
+    /// Sets up every slot's generator from its seed and the parameter table.
+    SEED_STREAMS = seed_streams(streams::SeedArgs) => streams::seed_streams;
     /// The autopilot: the ship's input from what lies around it (one thread).
     AUTOPILOT = autopilot(autopilot::AutopilotArgs) => autopilot::autopilot;
 }

@@ -117,33 +117,33 @@ pub fn look(args: &ThinkArgs, brain: &Brain, machine: Machine, slot: u32) -> Sig
     if dodges {
         mask |= kind_bit(args.shot_kind);
     }
-    args.grid.for_each_near(&args.space, pos, mask, |other| {
-        if other == slot {
-            return;
-        }
-        let d = args.space.offset(pos, b.pos.get(other));
-        let dist2 = d.length_squared();
-        if dist2 > vision2 {
-            return;
-        }
-        let kind = b.kind.get(other);
-        if other == args.ship {
-            sight.ship = Some(d);
-        } else if social && kind == brain.kind {
-            sum += d;
-            similar += 1;
-            if dist2 < personal * personal {
-                sight.crowd -= d.normalize_or_zero();
+    args.grid
+        .for_each_near(&args.space, pos, mask, |other, kind, at| {
+            if other == slot {
+                return;
             }
-        } else if dodges
-            && kind == args.shot_kind
-            && let Some((time, away)) = threat(d, b.vel.get(other) - vel, radius)
-            && time < soonest
-        {
-            soonest = time;
-            sight.dodge = Some(away);
-        }
-    });
+            let d = args.space.offset(pos, at);
+            let dist2 = d.length_squared();
+            if dist2 > vision2 {
+                return;
+            }
+            if other == args.ship {
+                sight.ship = Some(d);
+            } else if social && kind == brain.kind {
+                sum += d;
+                similar += 1;
+                if dist2 < personal * personal {
+                    sight.crowd -= d.normalize_or_zero();
+                }
+            } else if dodges
+                && kind == args.shot_kind
+                && let Some((time, away)) = threat(d, b.vel.get(other) - vel, radius)
+                && time < soonest
+            {
+                soonest = time;
+                sight.dodge = Some(away);
+            }
+        });
     if similar > 0 {
         sight.group = Some(sum / similar as f32);
     }

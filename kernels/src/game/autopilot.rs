@@ -70,7 +70,8 @@ pub fn autopilot(t: Thread, args: &AutopilotArgs) {
             enemies |= kind_bit(k);
         }
     }
-    args.grid.for_each_near(space, pos, enemies, |other| {
+    // The grid is the previous step's; the enemies have moved since: their places now.
+    args.grid.for_each_near(space, pos, enemies, |other, _, _| {
         if !b.is_alive(other) {
             return;
         }

@@ -7,7 +7,7 @@
 //! whole state.
 
 use super::mt607::{self, Mt607Params};
-use crate::DevSlice;
+use crate::{DevSlice, KernelArgs, Thread};
 
 /// The generators of every slot: parameters, state words and positions.
 #[repr(C)]
@@ -85,4 +85,41 @@ impl Drop for SlotRng<'_> {
     fn drop(&mut self) {
         self.streams.index.set(self.slot, self.index);
     }
+}
+
+/// Arguments of [`seed_streams`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct SeedArgs {
+    /// Output: every slot's generator.
+    pub streams: RngStreams,
+    /// Each slot's seed.
+    pub seeds: DevSlice<u32>,
+    /// The parameter sets; slot `i` takes set `i mod len`.
+    pub table: DevSlice<Mt607Params>,
+}
+// SAFETY: repr(C) plain data.
+unsafe impl KernelArgs for SeedArgs {}
+
+/// Thread `i` sets up slot `i`'s generator: parameter set `i mod len`, the state
+/// [`mt607::seed_state`] makes from its seed, at position 0. Start-up work that grows with
+/// the slots is done on the device rather than on the host.
+#[inline(always)]
+pub fn seed_streams(t: Thread, args: &SeedArgs) {
+    let slot = t.global();
+    let streams = &args.streams;
+    if slot >= args.seeds.len() || args.table.is_empty() {
+        return;
+    }
+    streams
+        .params
+        .set(slot, args.table.get(slot % args.table.len()));
+    let slots = streams.index.len();
+    for (k, word) in mt607::seed_state(args.seeds.get(slot))
+        .into_iter()
+        .enumerate()
+    {
+        streams.words.set(k as u32 * slots + slot, word);
+    }
+    streams.index.set(slot, 0);
 }

@@ -101,6 +101,8 @@ pub fn place_in_cells(t: Thread, args: &PlaceArgs) {
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct OrderArgs {
+    /// The bodies' positions.
+    pub pos: DevSlice<Vec2>,
     /// Each slot's bucket.
     pub keys: DevSlice<u32>,
     /// Each bucket's first entry; the last element is the number of live bodies.
@@ -109,6 +111,9 @@ pub struct OrderArgs {
     pub unordered: DevSlice<u32>,
     /// Output: the same slots in increasing order inside each bucket.
     pub slots: DevSlice<u32>,
+    /// Output: each entry's position, so that a query reads its neighbours' places in a
+    /// row instead of one scattered load per neighbour.
+    pub entry_pos: DevSlice<Vec2>,
 }
 // SAFETY: repr(C) plain data.
 unsafe impl KernelArgs for OrderArgs {}
@@ -131,6 +136,7 @@ pub fn order_cells(t: Thread, args: &OrderArgs) {
         rank += u32::from(other < slot);
     });
     args.slots.set(first + rank, slot);
+    args.entry_pos.set(first + rank, args.pos.get(slot));
 }
 
 /// The grid: the live slots bucketed by (kind, cell), each bucket in increasing slot order.
@@ -139,6 +145,8 @@ pub fn order_cells(t: Thread, args: &OrderArgs) {
 pub struct CellIndex {
     /// Slots by bucket, then by slot.
     pub slots: DevSlice<u32>,
+    /// The position of each entry's body when the grid was built.
+    pub pos: DevSlice<Vec2>,
     /// First entry of each bucket in `slots`, and one more element: the number of entries.
     /// Bucket `b` is `slots[start[b] .. start[b + 1]]`.
     pub start: DevSlice<u32>,
@@ -149,11 +157,18 @@ pub struct CellIndex {
 }
 
 impl CellIndex {
-    /// Calls `visit(slot)` for every body of a kind in `mask` (bit `k`: kind `k`) in the 3×3
-    /// cells around `pos`: each body once, cell by cell in row order, by increasing slot
-    /// inside a cell (kinds in increasing order are slots in increasing order).
+    /// Calls `visit(slot, kind, position)` for every body of a kind in `mask` (bit `k`: kind
+    /// `k`) in the 3×3 cells around `pos`, with its position when the grid was built: each
+    /// body once, cell by cell in row order, by increasing slot inside a cell (kinds in
+    /// increasing order are slots in increasing order).
     #[inline(always)]
-    pub fn for_each_near(&self, space: &Space, pos: Vec2, mask: u32, mut visit: impl FnMut(u32)) {
+    pub fn for_each_near(
+        &self,
+        space: &Space,
+        pos: Vec2,
+        mask: u32,
+        mut visit: impl FnMut(u32, u32, Vec2),
+    ) {
         let mask = mask & kinds_mask(self.kinds);
         space.for_each_neighbour_cell(pos, |cell| {
             let mut rest = mask;
@@ -163,7 +178,7 @@ impl CellIndex {
                 let bucket = kind * self.cells + cell;
                 let (start, end) = (self.start.get(bucket), self.start.get(bucket + 1));
                 for entry in start..end {
-                    visit(self.slots.get(entry));
+                    visit(self.slots.get(entry), kind, self.pos.get(entry));
                 }
             }
         });

@@ -120,14 +120,16 @@ fn collide_bounds<const RECTS: bool>(t: Thread, args: &CollideArgs) {
         let vel = bodies.vel.get(slot);
         let inv = inverse_mass(bodies.mass.get(slot));
         // Only the kinds it collides with: the grid's buckets skip the others unread.
-        args.grid
-            .for_each_near(&args.space, pos, info.collides_with, |other| {
-                let other_kind = bodies.kind.get(other);
+        args.grid.for_each_near(
+            &args.space,
+            pos,
+            info.collides_with,
+            |other, other_kind, at| {
                 if other == slot {
                     return;
                 }
                 let other_info = args.kinds.get(other_kind);
-                let d = args.space.offset(pos, bodies.pos.get(other));
+                let d = args.space.offset(pos, at);
                 let tie = tie_break(slot, other);
                 if let Some(c) = contact(bound::<RECTS>(&info), bound::<RECTS>(&other_info), d, tie)
                 {
@@ -143,7 +145,8 @@ fn collide_bounds<const RECTS: bool>(t: Thread, args: &CollideArgs) {
                     count += 1;
                     damage = damage.saturating_add(other_info.damage);
                 }
-            });
+            },
+        );
         if damage != 0 {
             let energy = bodies.energy.get(slot);
             bodies.energy.set(slot, energy.saturating_sub(damage));
