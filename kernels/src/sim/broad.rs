@@ -158,9 +158,11 @@ pub struct CellIndex {
 
 impl CellIndex {
     /// Calls `visit(slot, kind, position)` for every body of a kind in `mask` (bit `k`: kind
-    /// `k`) in the 3×3 cells around `pos`, with its position when the grid was built: each
-    /// body once, cell by cell in row order, by increasing slot inside a cell (kinds in
-    /// increasing order are slots in increasing order).
+    /// `k`) in the 3×3 cells around `pos`, with its position when the grid was built. Each
+    /// body once, in a fixed order: kind by kind in increasing order, then row by row of the
+    /// block, each row's cells from left to right (as the block wraps), by increasing slot
+    /// inside a cell. Since buckets are kind-major, the cells of a row that are neighbours
+    /// in the grid too are one run of entries: three runs per kind, not nine.
     #[inline(always)]
     pub fn for_each_near(
         &self,
@@ -169,19 +171,33 @@ impl CellIndex {
         mask: u32,
         mut visit: impl FnMut(u32, u32, Vec2),
     ) {
-        let mask = mask & kinds_mask(self.kinds);
-        space.for_each_neighbour_cell(pos, |cell| {
-            let mut rest = mask;
-            while rest != 0 {
-                let kind = rest.trailing_zeros();
-                rest &= rest - 1;
-                let bucket = kind * self.cells + cell;
-                let (start, end) = (self.start.get(bucket), self.start.get(bucket + 1));
-                for entry in start..end {
-                    visit(self.slots.get(entry), kind, self.pos.get(entry));
+        let ((rows, row_count), (cols, col_count)) = space.neighbourhood(pos);
+        // The block's columns as runs of consecutive columns, in visiting order.
+        let mut runs = [(0u32, 0u32); 3];
+        let mut run_count = 0;
+        for &c in &cols[..col_count] {
+            if run_count > 0 && runs[run_count - 1].1 + 1 == c {
+                runs[run_count - 1].1 = c;
+            } else {
+                runs[run_count] = (c, c);
+                run_count += 1;
+            }
+        }
+        let mut rest = mask & kinds_mask(self.kinds);
+        while rest != 0 {
+            let kind = rest.trailing_zeros();
+            rest &= rest - 1;
+            for &r in &rows[..row_count] {
+                let row = kind * self.cells + r * space.cols;
+                for &(first, last) in &runs[..run_count] {
+                    let (start, end) =
+                        (self.start.get(row + first), self.start.get(row + last + 1));
+                    for entry in start..end {
+                        visit(self.slots.get(entry), kind, self.pos.get(entry));
+                    }
                 }
             }
-        });
+        }
     }
 }
 

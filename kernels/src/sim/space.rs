@@ -83,14 +83,24 @@ impl Space {
         }
     }
 
+    /// The rows and the columns of the 3×3 block around the cell of `pos`, each as its
+    /// distinct indices in order of offset (-1, 0, +1) and their count: on a wrapping world
+    /// the block wraps around (and a grid narrower than three cells lists each index once),
+    /// otherwise it stops at the edges.
+    #[inline(always)]
+    pub fn neighbourhood(&self, pos: Vec2) -> (([u32; 3], usize), ([u32; 3], usize)) {
+        let (col, row) = self.cell_coords(pos);
+        (
+            around(row, self.rows, self.wraps()),
+            around(col, self.cols, self.wraps()),
+        )
+    }
+
     /// Calls `visit(cell)` once for each distinct cell of the 3×3 block around the cell of
-    /// `pos`, row by row: on a wrapping world the block wraps around (and a grid narrower
-    /// than three cells is visited once per cell), otherwise it stops at the edges.
+    /// `pos` (see [`Space::neighbourhood`]), row by row.
     #[inline(always)]
     pub fn for_each_neighbour_cell(&self, pos: Vec2, mut visit: impl FnMut(u32)) {
-        let (col, row) = self.cell_coords(pos);
-        let (rows, row_count) = around(row, self.rows, self.wraps());
-        let (cols, col_count) = around(col, self.cols, self.wraps());
+        let ((rows, row_count), (cols, col_count)) = self.neighbourhood(pos);
         for &r in &rows[..row_count] {
             for &c in &cols[..col_count] {
                 visit(r * self.cols + c);
