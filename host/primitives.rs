@@ -152,6 +152,8 @@ impl PrefixSum {
     ) {
         let n = input.len();
         let tiles = scan::tiles(n);
+        // Few tiles: each adds up the sums before its own (two launches); else recurse.
+        let flat = n > scan::TILE && tiles <= scan::FLAT_TILES;
         let tile_offsets = if n <= scan::TILE {
             DevSlice::EMPTY
         } else {
@@ -171,7 +173,9 @@ impl PrefixSum {
                     args,
                     bytes,
                 ));
-                self.push_ops(sums, sums, level + 1, ops);
+                if !flat {
+                    self.push_ops(sums, sums, level + 1, ops);
+                }
             }
             sums
         };
@@ -182,8 +186,13 @@ impl PrefixSum {
             n,
         };
         let bytes = 4 * u64::from(2 * n + tile_offsets.len());
+        let kernel = if flat {
+            registry::SCAN_TILES_AFTER_SUMS
+        } else {
+            registry::SCAN_TILES
+        };
         // SAFETY: forwarded.
-        ops.push(unsafe { Op::launch(registry::SCAN_TILES, grid(tiles), BLOCK, args, bytes) });
+        ops.push(unsafe { Op::launch(kernel, grid(tiles), BLOCK, args, bytes) });
     }
 }
 

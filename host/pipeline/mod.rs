@@ -416,7 +416,8 @@ impl<'d> Pipeline<'d> {
         }
     }
 
-    /// The free lists: flags, their prefix sum into ranks, the lists and counts.
+    /// The free lists: flags, their prefix sum into ranks, the lists and counts (each kind's
+    /// last slot writes its count, so they need no clearing).
     ///
     /// # Safety
     /// As in [`Pipeline::ops`].
@@ -444,7 +445,6 @@ impl<'d> Pipeline<'d> {
                     .ops(f.flags.view(), f.ranks.view())
                     .expect("the scan was made for the slots"),
             );
-            ops.push(Op::clear(self.state.free_count.view()));
             ops.push(op(registry::GATHER_FREE, slots, gather, 16));
             ops
         }

@@ -45,6 +45,8 @@ kernels! {
     SCAN_REDUCE = scan_reduce(scan::ReduceArgs) => scan::reduce_tiles;
     /// Exclusive prefix sums inside each tile, from the tile's offset.
     SCAN_TILES = scan_tiles(scan::ScanArgs) => scan::scan_tiles;
+    /// Exclusive prefix sums inside each tile, from the sum of the tiles before it.
+    SCAN_TILES_AFTER_SUMS = scan_tiles_after_sums(scan::ScanArgs) => scan::scan_tiles_after_sums;
     /// Counts keys per bin with atomic adds.
     HISTOGRAM = histogram(histogram::HistogramArgs) => histogram::count_keys;
     /// Counts the digits of each tile of keys (one counting-sort pass).

@@ -4,11 +4,18 @@
 //! [`TILE`] elements; the host scans those sums (recursively, with the same two kernels) into
 //! per-tile starting offsets; [`scan_tiles`] then walks each tile once more from its offset.
 //! A problem of `n` elements takes `2·⌈log_TILE n⌉ - 1` launches and no barrier.
+//!
+//! Up to [`FLAT_TILES`] tiles, [`scan_tiles_after_sums`] replaces the recursion: each thread
+//! adds up the sums of the tiles before its own, so the scan takes two launches. Small scans
+//! are bound by launch latency, not by those few extra reads.
 
 use crate::{DevSlice, KernelArgs, Thread};
 
 /// Elements per thread. 32 keeps a tile in one 128-byte line and leaves 2^19 threads at n = 2^24.
 pub const TILE: u32 = 32;
+
+/// Most tiles [`scan_tiles_after_sums`] takes: a thread reads at most this many tile sums.
+pub const FLAT_TILES: u32 = 1024;
 
 /// Number of tiles covering `n` elements.
 #[inline(always)]
@@ -71,13 +78,35 @@ pub fn scan_tiles(t: Thread, args: &ScanArgs) {
     if tile >= tiles(args.n) {
         return;
     }
-    let start = tile * TILE;
-    let end = args.n.min(start + TILE);
-    let mut running = if args.tile_offsets.is_empty() {
+    let offset = if args.tile_offsets.is_empty() {
         0
     } else {
         args.tile_offsets.get(tile)
     };
+    scan_tile(args, tile, offset);
+}
+
+/// [`scan_tiles`] where `tile_offsets` holds the tile sums themselves (of [`reduce_tiles`],
+/// at most [`FLAT_TILES`] of them, not scanned): thread `t` adds up those of the tiles
+/// before its own for its offset.
+#[inline(always)]
+pub fn scan_tiles_after_sums(t: Thread, args: &ScanArgs) {
+    let tile = t.global();
+    if tile >= tiles(args.n) {
+        return;
+    }
+    let mut offset = 0u32;
+    for before in 0..tile {
+        offset = offset.wrapping_add(args.tile_offsets.get(before));
+    }
+    scan_tile(args, tile, offset);
+}
+
+/// Writes the exclusive prefix sums of tile `tile`, from `running`.
+#[inline(always)]
+fn scan_tile(args: &ScanArgs, tile: u32, mut running: u32) {
+    let start = tile * TILE;
+    let end = args.n.min(start + TILE);
     if end - start == TILE {
         let mut values: [u32; TILE as usize] = args.input.get_run(start);
         for value in &mut values {

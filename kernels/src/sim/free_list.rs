@@ -69,7 +69,8 @@ pub struct GatherArgs {
     pub ranks: DevSlice<u32>,
     /// Output: the free slots of kind `k` at `list[start_k ..][.. count_k]`; one per slot.
     pub list: DevSlice<u32>,
-    /// Output: the number of free slots of each kind (zeroed before, for empty ranges).
+    /// Output: the number of free slots of each kind. A kind without slots has no writer: its
+    /// count stays the 0 it was allocated with.
     pub count: DevSlice<u32>,
 }
 // SAFETY: repr(C) plain data.
