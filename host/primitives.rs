@@ -162,6 +162,7 @@ impl PrefixSum {
                 input,
                 tile_sums: sums,
                 n,
+                reserved: 0,
             };
             let bytes = 4 * u64::from(n + tiles);
             // SAFETY: forwarded; the scratch level holds `tiles` elements.
@@ -184,6 +185,7 @@ impl PrefixSum {
             tile_offsets,
             output,
             n,
+            reserved: 0,
         };
         let bytes = 4 * u64::from(2 * n + tile_offsets.len());
         let kernel = if flat {
@@ -210,6 +212,7 @@ pub fn histogram(
         keys: keys.view_prefix(n),
         counts: counts.view(),
         n,
+        reserved: 0,
     };
     // SAFETY: live buffers of `device`, `n` keys in view.
     unsafe { device.launch(registry::HISTOGRAM, grid(n), BLOCK, &args) }

@@ -16,6 +16,7 @@ fn launches_outside_the_block_limits_are_refused(device: &Device) {
         keys: keys.view(),
         counts: counts.view(),
         n: 1,
+        reserved: 0,
     };
     for block in [0, 1025] {
         // SAFETY: live buffers; the launch is refused before anything runs.
@@ -39,6 +40,7 @@ fn every_thread_of_the_grid_runs_once(device: &Device) {
         keys: keys.view(),
         counts: counts.view(),
         n,
+        reserved: 0,
     };
     // SAFETY: live buffers of n elements.
     unsafe { device.launch(registry::HISTOGRAM, 9, 128, &args) }.unwrap();
@@ -63,6 +65,7 @@ fn an_out_of_bounds_kernel_is_an_error() {
         keys: keys.view(),
         counts: counts.view(),
         n: 5,
+        reserved: 0,
     };
     // SAFETY: the views are right; only `n` is wrong, which the bounds checks catch.
     let err = unsafe { device.launch(registry::HISTOGRAM, 1, 8, &args) }.unwrap_err();

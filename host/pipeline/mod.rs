@@ -272,6 +272,7 @@ impl<'d> Pipeline<'d> {
             waves: g.waves.view(),
             space,
             rules: g.config.rules,
+            reserved: 0,
         });
         let game = self.game.as_ref();
         // SAFETY (every op below): each view is of a buffer owned by this pipeline (its
@@ -290,6 +291,7 @@ impl<'d> Pipeline<'d> {
                             command: g.command.view(),
                             input: g.input.view(),
                             rules: g.config.rules,
+                            reserved: 0,
                         };
                         vec![op(registry::AUTOPILOT, 1, args, 64)]
                     })
@@ -308,6 +310,7 @@ impl<'d> Pipeline<'d> {
                             birth_speed: g.birth_speed.view(),
                             space,
                             rules: g.config.rules,
+                            reserved: 0,
                         };
                         vec![op(registry::BIRTHS, slots, args, 8)]
                     }

@@ -53,10 +53,14 @@ impl Thread {
 
 /// A kernel argument struct: plain data passed by value as the kernel's single parameter.
 ///
+/// `NoUninit` is checked at compile time by its derive: the struct is `#[repr(C)]` and has
+/// no padding (whose bytes would be undefined in the parameter the GPU reads), and neither
+/// have its fields.
+///
 /// # Safety
-/// The type must be `#[repr(C)]`, hold no references or host-only pointers (device memory is
-/// passed as [`DevSlice`]), and be valid for any bit pattern the host writes into it.
-pub unsafe trait KernelArgs: Copy + Sync + Send + 'static {}
+/// The type must hold no references or host-only pointers (device memory is passed as
+/// [`DevSlice`]), and be valid for any bit pattern the host writes into it.
+pub unsafe trait KernelArgs: bytemuck::NoUninit + Sync + Send + 'static {}
 
 /// A typed kernel identity: the PTX entry point's name and the body both backends run.
 pub struct Kernel<A> {
@@ -105,6 +109,11 @@ impl<T> Clone for DevSlice<T> {
     }
 }
 impl<T> Copy for DevSlice<T> {}
+
+// SAFETY: `repr(C)`: a u64, two u32 and a zero-sized marker, 16 bytes with no padding
+// (checked below); every field is plain data.
+unsafe impl<T: 'static> bytemuck::NoUninit for DevSlice<T> {}
+const _: () = assert!(size_of::<DevSlice<u8>>() == 16);
 
 // SAFETY: a `DevSlice` is an address and a length; the data races it could allow are excluded
 // by each kernel's contract (disjoint writes, atomics for shared counters), stated at launch.

@@ -32,7 +32,7 @@ pub const PERSONAL_SPACE_RADII: f32 = 3.0;
 
 /// Arguments of [`think`].
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct ThinkArgs {
     /// The bodies (force, state, energy and liveness of the enemies are written).
     pub bodies: Bodies,

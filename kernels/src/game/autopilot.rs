@@ -19,7 +19,7 @@ use crate::{DevSlice, KernelArgs, Thread};
 
 /// Arguments of [`autopilot`].
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct AutopilotArgs {
     /// The bodies (read only).
     pub bodies: Bodies,
@@ -35,6 +35,8 @@ pub struct AutopilotArgs {
     pub input: DevSlice<Input>,
     /// The scene's rules.
     pub rules: Rules,
+    /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
+    pub reserved: u32,
 }
 // SAFETY: repr(C) plain data.
 unsafe impl KernelArgs for AutopilotArgs {}

@@ -23,7 +23,7 @@ use crate::{DevSlice, KernelArgs, Thread};
 
 /// Arguments of [`master`].
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct MasterArgs {
     /// The bodies (the ship and new shots are written).
     pub bodies: Bodies,
@@ -51,6 +51,8 @@ pub struct MasterArgs {
     pub space: Space,
     /// The scene's rules.
     pub rules: Rules,
+    /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
+    pub reserved: u32,
 }
 // SAFETY: repr(C) plain data.
 unsafe impl KernelArgs for MasterArgs {}
@@ -205,7 +207,7 @@ fn fire(args: &MasterArgs, input: &Input) {
 
 /// Arguments of [`births`].
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct BirthArgs {
     /// The bodies.
     pub bodies: Bodies,
@@ -223,6 +225,8 @@ pub struct BirthArgs {
     pub space: Space,
     /// The ship's slot and the spawn distance.
     pub rules: Rules,
+    /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
+    pub reserved: u32,
 }
 // SAFETY: repr(C) plain data.
 unsafe impl KernelArgs for BirthArgs {}

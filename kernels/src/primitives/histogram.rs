@@ -4,7 +4,7 @@ use crate::{DevSlice, KernelArgs, Thread};
 
 /// Arguments of [`count_keys`].
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct HistogramArgs {
     /// The keys, `n` of them used.
     pub keys: DevSlice<u32>,
@@ -13,6 +13,8 @@ pub struct HistogramArgs {
     pub counts: DevSlice<u32>,
     /// Number of keys.
     pub n: u32,
+    /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
+    pub reserved: u32,
 }
 // SAFETY: repr(C) plain data.
 unsafe impl KernelArgs for HistogramArgs {}

@@ -25,7 +25,7 @@ pub const fn tiles(n: u32) -> u32 {
 
 /// Arguments of [`reduce_tiles`].
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct ReduceArgs {
     /// The values to sum, `n` of them used.
     pub input: DevSlice<u32>,
@@ -33,6 +33,8 @@ pub struct ReduceArgs {
     pub tile_sums: DevSlice<u32>,
     /// Number of input elements.
     pub n: u32,
+    /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
+    pub reserved: u32,
 }
 // SAFETY: repr(C) plain data.
 unsafe impl KernelArgs for ReduceArgs {}
@@ -54,7 +56,7 @@ pub fn reduce_tiles(t: Thread, args: &ReduceArgs) {
 
 /// Arguments of [`scan_tiles`].
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct ScanArgs {
     /// The values to scan, `n` of them used.
     pub input: DevSlice<u32>,
@@ -65,6 +67,8 @@ pub struct ScanArgs {
     pub output: DevSlice<u32>,
     /// Number of elements.
     pub n: u32,
+    /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
+    pub reserved: u32,
 }
 // SAFETY: repr(C) plain data.
 unsafe impl KernelArgs for ScanArgs {}

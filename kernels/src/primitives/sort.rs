@@ -47,7 +47,7 @@ fn digit(key: u32, shift: u32) -> u32 {
 
 /// Arguments of [`count_digits`].
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct CountArgs {
     /// The keys of this pass, `n` of them used.
     pub keys: DevSlice<u32>,
@@ -83,7 +83,7 @@ pub fn count_digits(t: Thread, args: &CountArgs) {
 
 /// Arguments of [`scatter_digits`].
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct ScatterArgs {
     /// The keys of this pass.
     pub keys_in: DevSlice<u32>,

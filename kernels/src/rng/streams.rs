@@ -11,7 +11,7 @@ use crate::{DevSlice, KernelArgs, Thread};
 
 /// The generators of every slot: parameters, state words and positions.
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct RngStreams {
     /// dcmt parameters, one set per slot.
     pub params: DevSlice<Mt607Params>,
@@ -89,7 +89,7 @@ impl Drop for SlotRng<'_> {
 
 /// Arguments of [`seed_streams`].
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct SeedArgs {
     /// Output: every slot's generator.
     pub streams: RngStreams,

@@ -8,7 +8,7 @@ use crate::rng::RngStreams;
 /// Every per-body array, as one kernel argument. Slots of dead bodies keep their kind, mass
 /// and generator; only [`Bodies::alive`] says whether the rest means anything.
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct Bodies {
     /// Position.
     pub pos: DevSlice<Vec2>,
@@ -60,7 +60,7 @@ impl Bodies {
 
 /// What the narrow phase tells the integrator about each slot.
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct Contacts {
     /// Displacement that separates the body from those it overlaps.
     pub push: DevSlice<Vec2>,

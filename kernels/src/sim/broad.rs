@@ -33,7 +33,7 @@ pub const NO_BUCKET: u32 = u32::MAX;
 
 /// Arguments of [`count_cells`].
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct CountArgs {
     /// The bodies (positions, kinds and liveness are read).
     pub bodies: Bodies,
@@ -68,7 +68,7 @@ pub fn count_cells(t: Thread, args: &CountArgs) {
 
 /// Arguments of [`place_in_cells`].
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct PlaceArgs {
     /// Each slot's bucket (from [`count_cells`]).
     pub keys: DevSlice<u32>,
@@ -99,7 +99,7 @@ pub fn place_in_cells(t: Thread, args: &PlaceArgs) {
 
 /// Arguments of [`order_cells`].
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct OrderArgs {
     /// The bodies' positions.
     pub pos: DevSlice<Vec2>,
@@ -141,7 +141,7 @@ pub fn order_cells(t: Thread, args: &OrderArgs) {
 
 /// The grid: the live slots bucketed by (kind, cell), each bucket in increasing slot order.
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct CellIndex {
     /// Slots by bucket, then by slot.
     pub slots: DevSlice<u32>,

@@ -15,7 +15,7 @@ use crate::{DevSlice, KernelArgs, Thread};
 
 /// Each kind's free slots, as the free-list rebuild leaves them.
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct FreeSlots {
     /// Kind `k`'s free slots in order, from its range's start.
     pub list: DevSlice<u32>,
@@ -25,7 +25,7 @@ pub struct FreeSlots {
 
 /// Arguments of [`mark_free`].
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct MarkArgs {
     /// The bodies (kinds and liveness are read).
     pub bodies: Bodies,
@@ -57,7 +57,7 @@ pub fn mark_free(t: Thread, args: &MarkArgs) {
 
 /// Arguments of [`gather_free`].
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct GatherArgs {
     /// Kind of each slot.
     pub kind: DevSlice<u32>,

@@ -11,7 +11,7 @@ use crate::{DevSlice, KernelArgs, Thread};
 
 /// Arguments of [`integrate`].
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct IntegrateArgs {
     /// The bodies, advanced in place.
     pub bodies: Bodies,

@@ -18,7 +18,7 @@ use crate::{DevSlice, KernelArgs, Thread};
 
 /// Arguments of [`collide`].
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct CollideArgs {
     /// The bodies; energy is updated in place, the rest is read.
     pub bodies: Bodies,

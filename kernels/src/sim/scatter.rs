@@ -8,7 +8,7 @@ use crate::{DevSlice, KernelArgs, Thread};
 
 /// Arguments of [`scatter`].
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct ScatterArgs {
     /// The bodies; the chosen slots are (re)initialised.
     pub bodies: Bodies,
