@@ -34,7 +34,7 @@ pub struct Snapshot {
     pub rng_words: Vec<u32>,
     /// Generator positions.
     pub rng_index: Vec<u32>,
-    /// Contacts of each slot in the last step its body was alive (0 for slots never used).
+    /// Contacts of each slot in the last step.
     pub contacts: Vec<u32>,
     /// Free slots per kind.
     pub free_counts: Vec<u32>,

@@ -28,7 +28,7 @@ pub struct CollideArgs {
     pub space: Space,
     /// The sorted grid of this step.
     pub grid: CellIndex,
-    /// Output: each live body's response.
+    /// Output: each slot's response (zero for free slots).
     pub contacts: Contacts,
 }
 // SAFETY: repr(C) plain data.
@@ -77,10 +77,8 @@ pub fn respond(
     Response { push, kick }
 }
 
-/// Thread `j` takes the `j`-th live body in the grid's order (neighbouring threads at
-/// neighbouring places), sums its responses to every body it overlaps and applies the
-/// energy losses to its slot only. Any mix of circles and rectangles. A free slot keeps the
-/// contacts of the last step its body lived; nothing reads them.
+/// Thread `i` sums the responses of slot `i` to every body it overlaps and applies the
+/// energy losses to slot `i` only. Any mix of circles and rectangles.
 #[inline(always)]
 pub fn collide(t: Thread, args: &CollideArgs) {
     collide_bounds::<true>(t, args);
@@ -107,51 +105,52 @@ fn bound<const RECTS: bool>(info: &KindInfo) -> Bound {
 fn collide_bounds<const RECTS: bool>(t: Thread, args: &CollideArgs) {
     let bodies = &args.bodies;
     let out = &args.contacts;
-    let grid = &args.grid;
-    let entry = t.global();
-    if entry >= grid.start.get(grid.start.len() - 1) || bodies.is_frozen() {
+    let slot = t.global();
+    if slot >= bodies.slots() || bodies.is_frozen() {
         return;
     }
-    let slot = grid.slots.get(entry);
-    let pos = grid.pos.get(entry);
     let mut push = Vec2::ZERO;
     let mut kick = Vec2::ZERO;
     let mut count = 0u32;
     let mut damage = 0i32;
-    let kind = bodies.kind.get(slot);
-    let info = args.kinds.get(kind);
-    let vel = bodies.vel.get(slot);
-    let inv = inverse_mass(bodies.mass.get(slot));
-    // Only the kinds it collides with: the grid's buckets skip the others unread.
-    grid.for_each_near(
-        &args.space,
-        pos,
-        info.collides_with,
-        |other, other_kind, at| {
-            if other == slot {
-                return;
-            }
-            let other_info = args.kinds.get(other_kind);
-            let d = args.space.offset(pos, at);
-            let tie = tie_break(slot, other);
-            if let Some(c) = contact(bound::<RECTS>(&info), bound::<RECTS>(&other_info), d, tie) {
-                let r = respond(
-                    c.normal,
-                    c.depth,
-                    (inv, inverse_mass(bodies.mass.get(other))),
-                    (vel, bodies.vel.get(other)),
-                    info.restitution.max(other_info.restitution),
-                );
-                push += r.push;
-                kick += r.kick;
-                count += 1;
-                damage = damage.saturating_add(other_info.damage);
-            }
-        },
-    );
-    if damage != 0 {
-        let energy = bodies.energy.get(slot);
-        bodies.energy.set(slot, energy.saturating_sub(damage));
+    if bodies.is_alive(slot) {
+        let kind = bodies.kind.get(slot);
+        let info = args.kinds.get(kind);
+        let pos = bodies.pos.get(slot);
+        let vel = bodies.vel.get(slot);
+        let inv = inverse_mass(bodies.mass.get(slot));
+        // Only the kinds it collides with: the grid's buckets skip the others unread.
+        args.grid.for_each_near(
+            &args.space,
+            pos,
+            info.collides_with,
+            |other, other_kind, at| {
+                if other == slot {
+                    return;
+                }
+                let other_info = args.kinds.get(other_kind);
+                let d = args.space.offset(pos, at);
+                let tie = tie_break(slot, other);
+                if let Some(c) = contact(bound::<RECTS>(&info), bound::<RECTS>(&other_info), d, tie)
+                {
+                    let r = respond(
+                        c.normal,
+                        c.depth,
+                        (inv, inverse_mass(bodies.mass.get(other))),
+                        (vel, bodies.vel.get(other)),
+                        info.restitution.max(other_info.restitution),
+                    );
+                    push += r.push;
+                    kick += r.kick;
+                    count += 1;
+                    damage = damage.saturating_add(other_info.damage);
+                }
+            },
+        );
+        if damage != 0 {
+            let energy = bodies.energy.get(slot);
+            bodies.energy.set(slot, energy.saturating_sub(damage));
+        }
     }
     out.push.set(slot, push);
     out.kick.set(slot, kick);
