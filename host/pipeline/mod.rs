@@ -10,7 +10,7 @@
 //! | `births` | the enemies the master thread ordered come alive | games |
 //! | `broad` | the grid: bucket counts, their prefix sum, placement, canonical order | worlds where something collides or looks around |
 //! | `narrow` | contacts and their response (`collide_circles` without rectangles) | worlds where something collides |
-//! | `think` | every live enemy's machine, in one launch (threads in grid order) | games with enemies |
+//! | `think` | every enemy's machine, in one launch over the enemy kinds' slots | games with enemies |
 //! | `integrate` | Euler, the boundary rule, deaths | always |
 //! | `free` | the free lists: flags, their prefix sum, gather | always |
 //! | `tally` | the master thread after the physics (one thread) | games |
@@ -334,6 +334,9 @@ impl<'d> Pipeline<'d> {
                 "think" => game
                     .and_then(|g| g.config.minds().map(|minds| (g, minds)))
                     .map(|(g, (first_kind, end_kind))| {
+                        let ranges = &self.layout.ranges;
+                        let first_slot = ranges[first_kind as usize].start;
+                        let end_slot = ranges[end_kind as usize - 1].end();
                         let args = ThinkArgs {
                             bodies,
                             kinds,
@@ -341,15 +344,12 @@ impl<'d> Pipeline<'d> {
                             grid: cells,
                             contacts,
                             brains: g.brains.view(),
-                            first_kind,
-                            end_kind,
+                            first_slot,
+                            end_slot,
                             ship: g.config.rules.ship.start,
                             shot_kind: g.config.rules.shot_kind,
                         };
-                        // A thread for every slot the enemies could hold; those past the
-                        // live ones return at once.
-                        let ranges = &self.layout.ranges[first_kind as usize..end_kind as usize];
-                        let threads = ranges.iter().map(|r| r.capacity).sum();
+                        let threads = end_slot - first_slot;
                         vec![op(registry::THINK, threads, args, 56)]
                     })
                     .unwrap_or_default(),

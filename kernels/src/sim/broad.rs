@@ -5,10 +5,8 @@
 //! that kind in that cell, in increasing slot order, so that a query reads only the kinds it
 //! cares about (an enemy's contacts are with the ship and the shots, not with the thousands
 //! of enemies around it). Kinds own contiguous slot ranges in kind order, so reading a cell's
-//! buckets in kind order visits its bodies in plain slot order. And since buckets are
-//! kind-major, each kind's live bodies are one stretch of entries in cell order: a kernel
-//! that gives thread `i` the `i`-th of them runs only live bodies, with neighbouring threads
-//! looking at neighbouring places (and a warp still runs one kind's code).
+//! buckets in kind order visits its bodies in plain slot order. Buckets are kind-major, so
+//! the cells of one row of a query's 3×3 block are one run of entries per kind.
 //!
 //! Build, with no sort and work that grows with the live bodies:
 //! 1. [`count_cells`]: each live body adds itself to its bucket's count with an atomic add,
