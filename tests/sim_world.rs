@@ -8,6 +8,7 @@ use glam::Vec2;
 use gpuwars::Device;
 use gpuwars::pipeline::Simulation;
 use gpuwars::sim::layout::{Layout, WARP, space};
+use gpuwars::sim::state;
 use gpuwars::sim::{Boundary, WorldSpec};
 
 fn valid() -> WorldSpec {
@@ -193,7 +194,36 @@ fn placing_into_padding_or_missing_slots_is_an_error(device: &Device) {
     assert!(sim.scatter(1, 1, f32::NAN).is_err());
 }
 
+/// A world's buffers take exactly the bytes its memory check asks for: measured by the
+/// device's own count of what it allocated, on a device of its own.
+#[test]
+fn a_world_takes_the_bytes_its_memory_check_counts() {
+    let mut dense = common::sim::ten_thousand().0;
+    dense.vision = 3.0;
+    for spec in [valid(), dense] {
+        let device = Device::cpu(Some(1), "tests").unwrap();
+        let sim = Simulation::new(&device, &spec, 1).unwrap();
+        let expected = state::bytes_needed(sim.layout(), sim.space(), spec.kinds.len());
+        assert_eq!(device.allocated_bytes(), expected);
+    }
+}
+
+/// More than the device has free is refused with the bytes needed and the bytes free.
+fn a_world_too_large_for_the_device_is_refused(device: &Device) {
+    let (free, _) = device
+        .memory()
+        .unwrap()
+        .expect("this system reports its free memory");
+    let err = device.check_fits("a huge world", free + 1).unwrap_err();
+    let text = err.to_string();
+    assert!(text.starts_with("a huge world needs"), "{text}");
+    assert!(text.contains(&format!("{} bytes", free + 1)), "{text}");
+    assert!(text.contains("but only"), "{text}");
+    device.check_fits("a small world", 1).unwrap();
+}
+
 on_both_backends!(
     free_lists_follow_births_and_deaths,
     placing_into_padding_or_missing_slots_is_an_error,
+    a_world_too_large_for_the_device_is_refused,
 );

@@ -14,6 +14,7 @@ use std::collections::BTreeMap;
 use std::fmt;
 use std::marker::PhantomData;
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use gpuwars_kernels::{DevSlice, Kernel, KernelArgs};
 use serde::Serialize;
@@ -108,6 +109,8 @@ pub struct Device {
     reason: String,
     /// Launches per kernel, counted only while [`Device::count_launches`] is on.
     launches: Option<Mutex<BTreeMap<&'static str, u64>>>,
+    /// Bytes of buffers allocated since the device was opened (freed ones included).
+    allocated: AtomicU64,
 }
 
 enum Imp {
@@ -197,6 +200,7 @@ impl Device {
             imp: Imp::Cpu(cpu::Emulator::new(threads, schedule)?),
             reason: reason.to_string(),
             launches: None,
+            allocated: AtomicU64::new(0),
         })
     }
 
@@ -206,6 +210,7 @@ impl Device {
             imp: Imp::Cuda(cuda::Gpu::open()?),
             reason: reason.to_string(),
             launches: None,
+            allocated: AtomicU64::new(0),
         })
     }
 
@@ -241,6 +246,7 @@ impl Device {
     /// A buffer of `len` zeroed elements.
     pub fn alloc_zeroed<T: Element>(&self, len: usize) -> Result<Buffer<T>, Error> {
         check_len::<T>(len)?;
+        self.note_allocation::<T>(len);
         let imp = match &self.imp {
             Imp::Cpu(_) => BufferImp::Cpu(cpu::HostBuffer::zeroed(len)),
             Imp::Cuda(gpu) => BufferImp::Cuda(gpu.alloc_zeroed(len * size_of::<T>())?, PhantomData),
@@ -251,6 +257,7 @@ impl Device {
     /// A buffer holding a copy of `data`.
     pub fn upload<T: Element>(&self, data: &[T]) -> Result<Buffer<T>, Error> {
         check_len::<T>(data.len())?;
+        self.note_allocation::<T>(data.len());
         let imp = match &self.imp {
             Imp::Cpu(_) => BufferImp::Cpu(cpu::HostBuffer::from_slice(data)),
             Imp::Cuda(gpu) => BufferImp::Cuda(gpu.upload(data)?, PhantomData),
@@ -389,6 +396,17 @@ impl Device {
             .map_or_else(BTreeMap::new, |launches| {
                 launches.lock().unwrap_or_else(|e| e.into_inner()).clone()
             })
+    }
+
+    /// Bytes of buffers allocated on this device since it was opened, freed ones included:
+    /// what a world's set-up took, measured.
+    pub fn allocated_bytes(&self) -> u64 {
+        self.allocated.load(Ordering::Relaxed)
+    }
+
+    fn note_allocation<T>(&self, len: usize) {
+        self.allocated
+            .fetch_add((len * size_of::<T>()) as u64, Ordering::Relaxed);
     }
 
     /// Free and total memory, in bytes, where this device keeps its buffers: the GPU's

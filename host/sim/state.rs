@@ -103,15 +103,18 @@ fn buckets(space: &Space, kinds: usize) -> usize {
     space.cells() as usize * kinds + 1
 }
 
-/// Bytes of device memory the buffers of a world of this layout and grid take.
+/// Bytes of device memory the buffers of a world of this layout and grid take, the
+/// generators' set-up (seeds and parameter table) included.
 pub fn bytes_needed(layout: &Layout, space: &Space, kinds: usize) -> u64 {
     let slots = u64::from(layout.slots);
     let buckets = buckets(space, kinds) as u64;
     let kind_tables = kinds as u64 * (size_of::<KindInfo>() + size_of::<SlotRange>() + 4) as u64;
+    let seeding = 4 * slots + (rng::TABLE.len() * size_of::<Mt607Params>()) as u64;
     slots * SLOT_BYTES
         + 4 * (buckets + PrefixSum::scratch_len(buckets as usize) as u64)
         + 4 * PrefixSum::scratch_len(slots as usize) as u64
         + kind_tables
+        + seeding
         + 4
 }
 
