@@ -81,8 +81,8 @@ fn a_scene_launches_only_the_stages_it_uses() {
     assert_eq!(count(&p, think), 2);
     // A world without machines has no think stage at all.
     let mut calm = scene("kamikaze");
-    for kind in &mut calm.world.kinds {
-        kind.behaviour = None;
+    for (kind, behaviour) in calm.world.kinds.iter_mut().zip(&mut calm.game.behaviours) {
+        (kind.controlled, *behaviour) = (false, None);
     }
     let c = launches(&calm, 3, true);
     assert_eq!(count(&c, think), 0, "{c:?}");

@@ -83,10 +83,14 @@ fn paper_reads_as_written() {
         (ship.max_speed, ship.lifetime),
         (f32::INFINITY, f32::INFINITY)
     );
-    let polygon = scene.world.kinds[2].behaviour.unwrap();
-    let texel = scene.world.kinds[4].behaviour.unwrap();
+    let polygon = scene.game.behaviours[2].unwrap();
+    let texel = scene.game.behaviours[4].unwrap();
     assert!(!polygon.avoid_bullets && texel.avoid_bullets);
-    assert_eq!(scene.world.kinds[7].behaviour.unwrap().low_energy, 1);
+    assert_eq!(scene.game.behaviours[7].unwrap().low_energy, 1);
+    // The world knows only which kinds the enemies' machines drive.
+    let controlled: Vec<bool> = scene.world.kinds.iter().map(|k| k.controlled).collect();
+    let behaving: Vec<bool> = scene.game.behaviours.iter().map(Option::is_some).collect();
+    assert_eq!(controlled, behaving);
 }
 
 #[test]
@@ -401,7 +405,7 @@ fn behaviours() {
         &["allowed 0 for a group"],
     );
 
-    // WorldSpec's rule, named in the file's terms: `behaviour.speed` above `max_speed`.
+    // A rule across the world and the game: `behaviour.speed` above the kind's `max_speed`.
     let text = mutate("speed = 70.0\n\n", "speed = 75.0\n\n");
     let line = line_of(&text, "speed = 75.0");
     assert_error(

@@ -5,11 +5,10 @@ use std::collections::VecDeque;
 
 use bytemuck::Zeroable;
 use gpuwars_kernels::game::control::{Command, Input, Status};
-use gpuwars_kernels::game::fsm::Machine;
 use gpuwars_kernels::game::rules::{Brain, Rules, Wave};
 use xxhash_rust::xxh3::Xxh3;
 
-use super::spec::Scene;
+use super::spec::{Machine, Scene};
 use crate::backend::Ring;
 use crate::pipeline::{GameConfig, Pipeline, Profile};
 use crate::sim::Snapshot;
@@ -99,11 +98,11 @@ fn waves(scene: &Scene) -> Vec<Wave> {
 fn brains(scene: &Scene) -> Vec<Brain> {
     let dt = scene.world.dt;
     scene
-        .world
-        .kinds
+        .game
+        .behaviours
         .iter()
         .enumerate()
-        .map(|(k, kind)| match kind.behaviour {
+        .map(|(k, behaviour)| match *behaviour {
             Some(b) if b.machine != Machine::None => Brain {
                 machine: b.machine as u32,
                 kind: k as u32,
@@ -137,8 +136,10 @@ impl<'d> Game<'d> {
         options: Options,
     ) -> Result<Self, Error> {
         let mut world = scene.world.clone();
-        // The autopilot looks through the grid too.
-        world.vision = world.vision.max(scene.game.ship.autopilot_sight);
+        // The enemies and the autopilot look through the grid: its cells must be as large as
+        // the farthest sight.
+        let enemies = scene.game.behaviours.iter().flatten().map(|b| b.vision);
+        world.vision = enemies.fold(world.vision.max(scene.game.ship.autopilot_sight), f32::max);
         let layout = Layout::new(&world);
         let game = GameConfig {
             rules: rules(scene, &layout),

@@ -19,11 +19,11 @@ use toml::de::{DeTable, DeValue};
 
 use crate::files::line_of;
 
-use super::spec::{FpsSpec, GameSpec, Scene, ShipSpec, SpawnSpec, WaveSpec};
+use super::spec::{Behaviour, FpsSpec, GameSpec, Machine, Scene, ShipSpec, SpawnSpec, WaveSpec};
 // Errors of the file's own rules read like the world's: a field and what is allowed.
 use crate::sim::spec::{
-    Behaviour, Boundary, KindSpec, MAX_SIDE, MAX_SLOTS, Machine, Shape, SpecError, WorldSpec,
-    check_range as check, error as invalid,
+    Boundary, KindSpec, MAX_SIDE, MAX_SLOTS, Shape, SpecError, WorldSpec, check_range as check,
+    error as invalid,
 };
 
 /// Largest speed, distance or time (seconds) in a scene: as far as f32 world coordinates go.
@@ -241,12 +241,13 @@ impl RawScene {
         if self.name.trim().is_empty() {
             return Err(invalid("name", "must not be empty"));
         }
-        let world = self.world.into_spec(self.kinds)?;
+        let (world, behaviours) = self.world.into_spec(self.kinds)?;
         world.validate().map_err(|e| toml_field(&world, e))?;
         let game = GameSpec {
             ship: self.ship,
             fps: self.fps,
             spawn: self.spawn.into_spec()?,
+            behaviours,
         };
         check_game(&world, &game)?;
         Ok(Scene {
@@ -260,7 +261,11 @@ impl RawScene {
 }
 
 impl RawWorld {
-    fn into_spec(self, kinds: Vec<RawKind>) -> Result<WorldSpec, SpecError> {
+    /// The world, and each kind's behaviour (which belongs to the game).
+    fn into_spec(
+        self,
+        kinds: Vec<RawKind>,
+    ) -> Result<(WorldSpec, Vec<Option<Behaviour>>), SpecError> {
         let boundary = match self.boundary.as_str() {
             "clamp" => Boundary::Clamp,
             "wrap" => Boundary::Wrap,
@@ -271,23 +276,25 @@ impl RawWorld {
                 ));
             }
         };
-        Ok(WorldSpec {
+        let (kinds, behaviours) = kinds
+            .into_iter()
+            .enumerate()
+            .map(|(k, kind)| kind.into_spec(k))
+            .collect::<Result<_, _>>()?;
+        let world = WorldSpec {
             size: Vec2::from(self.size),
             dt: self.dt,
             boundary,
             vision: self.cell,
-            kinds: kinds
-                .into_iter()
-                .enumerate()
-                .map(|(k, kind)| kind.into_spec(k))
-                .collect::<Result<_, _>>()?,
-        })
+            kinds,
+        };
+        Ok((world, behaviours))
     }
 }
 
 impl RawKind {
-    /// Kind number `k`.
-    fn into_spec(self, k: usize) -> Result<KindSpec, SpecError> {
+    /// Kind number `k`, and its behaviour.
+    fn into_spec(self, k: usize) -> Result<(KindSpec, Option<Behaviour>), SpecError> {
         let at = |field: &str| format!("kinds[{k}].{field}");
         let shape = match (self.circle, self.rect) {
             (Some(radius), None) => Shape::Circle { radius },
@@ -313,7 +320,7 @@ impl RawKind {
             Some(b) => Some(b.into_spec(|field| at(&format!("behaviour.{field}")))?),
             None => None,
         };
-        Ok(KindSpec {
+        let kind = KindSpec {
             name: self.name,
             shape,
             mass: self.mass,
@@ -324,8 +331,9 @@ impl RawKind {
             max_speed: self.max_speed,
             collides_with: self.collides_with,
             lifetime: self.lifetime,
-            behaviour,
-        })
+            controlled: behaviour.is_some(),
+        };
+        Ok((kind, behaviour))
     }
 }
 
@@ -433,6 +441,11 @@ fn toml_field(world: &WorldSpec, e: SpecError) -> SpecError {
 
 /// The rules of [`GameSpec`]'s docs, given a valid `world`.
 fn check_game(world: &WorldSpec, game: &GameSpec) -> Result<(), SpecError> {
+    for (k, (kind, behaviour)) in world.kinds.iter().zip(&game.behaviours).enumerate() {
+        if let Some(b) = behaviour {
+            b.validate(kind, |field| format!("kinds[{k}].behaviour.{field}"))?;
+        }
+    }
     let ShipSpec {
         kind,
         speed,
@@ -454,7 +467,7 @@ fn check_game(world: &WorldSpec, game: &GameSpec) -> Result<(), SpecError> {
             ),
         ));
     }
-    if ship.behaviour.is_some() {
+    if game.behaviours[ship_kind].is_some() {
         return Err(invalid(
             "ship.kind",
             format!("kind `{kind}` has a behaviour (the ship's kind must have none)"),
@@ -469,7 +482,7 @@ fn check_game(world: &WorldSpec, game: &GameSpec) -> Result<(), SpecError> {
             format!("`{shot}` is the ship's kind (shots need a kind of their own)"),
         ));
     }
-    if world.kinds[shot_kind].behaviour.is_some() {
+    if game.behaviours[shot_kind].is_some() {
         return Err(invalid(
             "ship.shot",
             format!("kind `{shot}` has a behaviour (the shots' kind must have none)"),

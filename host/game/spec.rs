@@ -1,9 +1,11 @@
-//! A scene's game rules, as the host describes them: the ship and its gun, the FPS meter and
-//! the spawn schedule. With a [`WorldSpec`] they make a [`Scene`].
+//! A scene's game rules, as the host describes them: the ship and its gun, the FPS meter, the
+//! spawn schedule and the enemies' behaviours. With a [`WorldSpec`] they make a [`Scene`].
 
+pub use gpuwars_kernels::game::fsm::Machine;
 use serde::Deserialize;
 
 use crate::sim::WorldSpec;
+use crate::sim::spec::{KindSpec, MAX_SIDE, SpecError, check_range, error};
 
 /// The ship and its gun (read from a scene's `[ship]` table as it is).
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -62,6 +64,61 @@ pub struct SpawnSpec {
     pub waves: Vec<WaveSpec>,
 }
 
+/// How an enemy kind behaves (paper section 7): its machine and the numbers that set it
+/// apart from the other kinds of the same machine.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Behaviour {
+    /// Kamikaze, group or tricky.
+    pub machine: Machine,
+    /// Vision radius (> 0); the grid cells are made at least this large.
+    pub vision: f32,
+    /// Speed when attacking, escaping or dodging (> 0, at most the kind's `max_speed`).
+    pub speed: f32,
+    /// Whether it perceives and avoids shots (group and tricky only).
+    pub avoid_bullets: bool,
+    /// Energy at or below which a tricky enemy escapes (0 to below its birth energy).
+    pub low_energy: i32,
+    /// Energy a tricky enemy recovers per second while escaping (≥ 0).
+    pub recovery: f32,
+}
+
+impl Behaviour {
+    /// Checks the behaviour of `kind` (valid in its world); `at` names a field.
+    pub(crate) fn validate(
+        &self,
+        kind: &KindSpec,
+        at: impl Fn(&str) -> String,
+    ) -> Result<(), SpecError> {
+        if self.machine == Machine::None {
+            return Err(error(at("machine"), "must be kamikaze, group or tricky"));
+        }
+        check_range(at("vision"), self.vision, (0.0, false), MAX_SIDE)?;
+        check_range(
+            at("speed"),
+            self.speed,
+            (0.0, false),
+            kind.max_speed.min(MAX_SIDE),
+        )?;
+        if !kind.mass.is_finite() {
+            return Err(error(
+                at("machine"),
+                "an enemy with a machine must have a finite mass (it steers by force)",
+            ));
+        }
+        if self.low_energy < 0 || self.low_energy >= kind.energy {
+            return Err(error(
+                at("low_energy"),
+                format!(
+                    "{} is out of range (allowed 0 to {}, below the birth energy)",
+                    self.low_energy,
+                    kind.energy - 1
+                ),
+            ));
+        }
+        check_range(at("recovery"), self.recovery, (0.0, true), MAX_SIDE)
+    }
+}
+
 /// The rules on top of the world.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GameSpec {
@@ -71,6 +128,9 @@ pub struct GameSpec {
     pub fps: FpsSpec,
     /// The spawn schedule.
     pub spawn: SpawnSpec,
+    /// Each kind's behaviour, indexed like the world's kinds: exactly the kinds the world
+    /// marks `controlled` have one.
+    pub behaviours: Vec<Option<Behaviour>>,
 }
 
 /// A playable scene: the world, its rules, and where it came from.

@@ -74,7 +74,9 @@ pub fn kind_table(spec: &WorldSpec) -> Vec<KindInfo> {
                 max_speed: kind.max_speed,
                 energy: kind.energy,
                 lifetime: steps(kind.lifetime, spec.dt),
-                machine: kind.behaviour.map_or(0, |b| b.machine as u32),
+                // The kernels only ask whether a controller decides deaths: the game hands
+                // its machines to its own kernels.
+                machine: u32::from(kind.controlled),
                 reserved: 0,
             }
         })
@@ -93,7 +95,7 @@ pub fn space(spec: &WorldSpec) -> Space {
         .filter(|(_, mask)| **mask != 0)
         .map(|(kind, _)| 2.0 * kind.shape.reach())
         .fold(0.0f32, f32::max);
-    let cell = touch.max(spec.max_vision()) * CELL_MARGIN;
+    let cell = touch.max(spec.vision) * CELL_MARGIN;
     let fit = |side: f32| {
         if cell > 0.0 {
             ((side / cell) as u32).clamp(1, MAX_CELLS)

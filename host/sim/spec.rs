@@ -5,7 +5,6 @@
 use std::fmt;
 
 use glam::Vec2;
-pub use gpuwars_kernels::game::fsm::Machine;
 
 /// Most kinds a world may have: collision masks are 32-bit.
 pub const MAX_KINDS: usize = 32;
@@ -71,26 +70,9 @@ pub struct KindSpec {
     pub collides_with: Vec<String>,
     /// Seconds a body lives (> 0; `f32::INFINITY` for ever).
     pub lifetime: f32,
-    /// The finite-state machine that drives the kind, if any (enemies).
-    pub behaviour: Option<Behaviour>,
-}
-
-/// How an enemy kind behaves (paper section 7): its machine and the numbers that set it
-/// apart from the other kinds of the same machine.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Behaviour {
-    /// Kamikaze, group or tricky.
-    pub machine: Machine,
-    /// Vision radius (> 0); the grid cells are made at least this large.
-    pub vision: f32,
-    /// Speed when attacking, escaping or dodging (> 0, at most the kind's `max_speed`).
-    pub speed: f32,
-    /// Whether it perceives and avoids shots (group and tricky only).
-    pub avoid_bullets: bool,
-    /// Energy at or below which a tricky enemy escapes (0 to below its birth energy).
-    pub low_energy: i32,
-    /// Energy a tricky enemy recovers per second while escaping (≥ 0).
-    pub recovery: f32,
+    /// Whether a controller (the game's machines) drives bodies of this kind: they die when
+    /// it says so, not when their energy runs out.
+    pub controlled: bool,
 }
 
 /// A whole world, before validation.
@@ -102,8 +84,8 @@ pub struct WorldSpec {
     pub dt: f32,
     /// What happens at the edges.
     pub boundary: Boundary,
-    /// A radius the grid must serve besides the kinds' vision (0 if none): the grid cells are
-    /// made at least this large.
+    /// The largest radius at which anything looks around (0 if none): the grid cells are made
+    /// at least this large.
     pub vision: f32,
     /// The kinds of body, in slot order.
     pub kinds: Vec<KindSpec>,
@@ -150,49 +132,7 @@ pub(crate) fn check_range(
     }
 }
 
-impl Behaviour {
-    /// Checks the behaviour of `kind`; `at` names a field.
-    fn validate(&self, kind: &KindSpec, at: impl Fn(&str) -> String) -> Result<(), SpecError> {
-        if self.machine == Machine::None {
-            return Err(error(at("machine"), "must be kamikaze, group or tricky"));
-        }
-        check_range(at("vision"), self.vision, (0.0, false), MAX_SIDE)?;
-        check_range(
-            at("speed"),
-            self.speed,
-            (0.0, false),
-            kind.max_speed.min(MAX_SIDE),
-        )?;
-        if !kind.mass.is_finite() {
-            return Err(error(
-                at("machine"),
-                "an enemy with a machine must have a finite mass (it steers by force)",
-            ));
-        }
-        if self.low_energy < 0 || self.low_energy >= kind.energy {
-            return Err(error(
-                at("low_energy"),
-                format!(
-                    "{} is out of range (allowed 0 to {}, below the birth energy)",
-                    self.low_energy,
-                    kind.energy - 1
-                ),
-            ));
-        }
-        check_range(at("recovery"), self.recovery, (0.0, true), MAX_SIDE)
-    }
-}
-
 impl WorldSpec {
-    /// The largest radius the grid must serve for vision: [`WorldSpec::vision`] or any
-    /// kind's behaviour's.
-    pub fn max_vision(&self) -> f32 {
-        self.kinds
-            .iter()
-            .filter_map(|k| k.behaviour.map(|b| b.vision))
-            .fold(self.vision, f32::max)
-    }
-
     /// Whether any kind is bounded by a rectangle (else the narrow phase tests circles only).
     pub fn has_rects(&self) -> bool {
         self.kinds
@@ -263,9 +203,6 @@ impl WorldSpec {
             }
             // inf: lives for ever.
             check_range(at("lifetime"), kind.lifetime, (0.0, false), f32::INFINITY)?;
-            if let Some(b) = &kind.behaviour {
-                b.validate(kind, |field| at(&format!("behaviour.{field}")))?;
-            }
             slots += u64::from(kind.capacity).next_multiple_of(32);
         }
         if slots > u64::from(MAX_SLOTS) {

@@ -8,7 +8,7 @@ use gpuwars::sim::layout::kind_table;
 use gpuwars::sim::{Boundary, KindSpec, Shape, Snapshot, WorldSpec};
 
 /// A kind with everything but the name, shape and capacity set to plain defaults: mass 1,
-/// energy 100, no damage, restitution 0.5, no speed limit, no lifetime, no behaviour,
+/// energy 100, no damage, restitution 0.5, no speed limit, no lifetime, no controller,
 /// colliding with the listed kinds.
 pub fn kind(name: &str, shape: Shape, capacity: u32, collides_with: &[&str]) -> KindSpec {
     KindSpec {
@@ -22,7 +22,7 @@ pub fn kind(name: &str, shape: Shape, capacity: u32, collides_with: &[&str]) -> 
         max_speed: f32::INFINITY,
         collides_with: collides_with.iter().map(|s| s.to_string()).collect(),
         lifetime: f32::INFINITY,
-        behaviour: None,
+        controlled: false,
     }
 }
 

@@ -41,9 +41,9 @@ pub struct KindInfo {
     pub energy: i32,
     /// Steps a body lives (0: no limit).
     pub lifetime: u32,
-    /// The finite-state machine that drives this kind (`crate::game::fsm::Machine` as u32;
-    /// 0: none). A body with a machine dies when its machine says so, not when its energy
-    /// runs out, so that the machine's "checking energy" and "dead" states see it happen.
+    /// Nonzero if a controller (the game's finite-state machines) drives this kind; 0: none.
+    /// A body with a controller dies when it says so, not when its energy runs out, so that
+    /// the machine's "checking energy" and "dead" states see it happen.
     pub machine: u32,
     /// Keeps the struct free of implicit padding.
     pub reserved: u32,
