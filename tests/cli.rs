@@ -207,6 +207,51 @@ fn demo_prints_every_figure_and_is_repeatable() {
 }
 
 #[test]
+fn demo_profiles_every_stage_and_runs_the_same_game() {
+    let args = ["--scene", "paper", "--steps", "30", "--seed", "2"];
+    let plain = demo_json(&args);
+    let mut with = args.to_vec();
+    with.push("--profile");
+    let profiled = demo_json(&with);
+    // Stage by stage, the same kernels in the same order: the same game.
+    assert_eq!(profiled["state_hash"], plain["state_hash"]);
+    let profile = &profiled["profile"];
+    assert_eq!(profile["steps"], 30);
+    assert!(profile["copy_bandwidth"].as_f64().unwrap() > 0.0);
+    let stages: Vec<&str> = profile["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["stage"].as_str().unwrap())
+        .collect();
+    let expected = [
+        "pilot",
+        "master",
+        "births",
+        "broad",
+        "narrow",
+        "think",
+        "integrate",
+        "free",
+        "tally",
+    ];
+    assert_eq!(stages, expected);
+    let launches: u64 = profile["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["launches"].as_u64().unwrap())
+        .sum();
+    assert_eq!(launches, plain["launches_per_step"].as_u64().unwrap());
+    // Every status read back at once, or four steps late: the same game.
+    let lagged = demo_json(&[
+        "--scene", "paper", "--steps", "30", "--seed", "2", "--lag", "1",
+    ]);
+    assert_eq!(lagged["state_hash"], plain["state_hash"]);
+    assert!(plain.get("profile").is_none());
+}
+
+#[test]
 fn demo_takes_a_scene_file_and_names_the_line_of_a_bad_one() {
     let dir = tempfile::tempdir().unwrap();
     let good = dir.path().join("mine.toml");
