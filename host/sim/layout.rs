@@ -76,7 +76,7 @@ pub fn kind_table(spec: &WorldSpec) -> Vec<KindInfo> {
                 lifetime: steps(kind.lifetime, spec.dt),
                 // The kernels only ask whether a controller decides deaths: the game hands
                 // its machines to its own kernels.
-                machine: u32::from(kind.controlled),
+                controlled: u32::from(kind.controlled),
                 reserved: 0,
             }
         })

@@ -41,10 +41,10 @@ pub struct KindInfo {
     pub energy: i32,
     /// Steps a body lives (0: no limit).
     pub lifetime: u32,
-    /// Nonzero if a controller (the game's finite-state machines) drives this kind; 0: none.
-    /// A body with a controller dies when it says so, not when its energy runs out, so that
-    /// the machine's "checking energy" and "dead" states see it happen.
-    pub machine: u32,
+    /// Nonzero if a controller (the game's finite-state machines) drives this kind: its
+    /// bodies die when the controller says so, not when their energy runs out, so that the
+    /// machine's "checking energy" and "dead" states see it happen.
+    pub controlled: u32,
     /// Keeps the struct free of implicit padding.
     pub reserved: u32,
 }
@@ -60,10 +60,10 @@ impl KindInfo {
         }
     }
 
-    /// Whether this kind's bodies die as soon as their energy runs out (no machine decides).
+    /// Whether this kind's bodies die as soon as their energy runs out (no controller decides).
     #[inline(always)]
     pub fn dies_at_zero_energy(&self) -> bool {
-        self.machine == 0
+        self.controlled == 0
     }
 
     /// Whether a body of this kind that has lived `age` steps has reached its lifetime.
