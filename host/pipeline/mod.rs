@@ -531,11 +531,18 @@ impl<'d> Pipeline<'d> {
             .snapshot(self.device, steps, &self.scratch.contacts.count)
     }
 
-    /// The game's status buffer and command buffer (games only).
+    /// The game's buffers, or an error for a world without a game.
     fn game(&self) -> Result<&GameState, Error> {
         self.game
             .as_ref()
             .ok_or_else(|| Error::Invalid("this world plays no game".into()))
+    }
+}
+
+impl Drop for Pipeline<'_> {
+    fn drop(&mut self) {
+        // Steps may still be queued: let them finish before their graphs and buffers go.
+        let _ = self.device.synchronize();
     }
 }
 
