@@ -90,8 +90,8 @@ impl Op {
 /// Ops issued in order; on the GPU, optionally captured once as a CUDA graph and replayed.
 pub struct Plan {
     ops: Vec<Op>,
-    /// Declared after `ops` is irrelevant here: the graph holds device addresses only, and
-    /// the buffers behind them belong to the plan's owner, which drops the plan first.
+    /// The ops recorded as a CUDA graph (GPU only). It holds the same device addresses as
+    /// the ops, so the plan's owner must drop it before the buffers they view.
     graph: Option<CudaGraph>,
 }
 
