@@ -8,7 +8,7 @@
 //! | `pilot` | the autopilot, or the player's input passed through (one thread) | games |
 //! | `master` | the master thread before the physics (one thread) | games |
 //! | `births` | the enemies the master thread ordered come alive | games |
-//! | `broad` | the grid: bucket counts, their prefix sum, placement, canonical order | worlds where something collides or looks around |
+//! | `broad` | the grid: bucket counts, their prefix sum, placement, canonical order | games, and worlds where something collides |
 //! | `narrow` | contacts and their response (`collide_circles` without rectangles) | worlds where something collides |
 //! | `think` | every enemy's machine, in one launch over the enemy kinds' slots | games with enemies |
 //! | `integrate` | Euler, the boundary rule, deaths | always |
