@@ -4,13 +4,14 @@ use std::process::ExitCode;
 
 use std::path::PathBuf;
 
-use anyhow::bail;
+use anyhow::{Context, bail};
 use clap::{Args, Parser, Subcommand};
 use gpuwars::game::demo::{self, Report, RunOptions};
 use gpuwars::game::replay::Replay;
 use gpuwars::game::scene;
 use gpuwars::game::{Options, Scene};
 use gpuwars::info::Info;
+use gpuwars::pipeline::draw::MAX_SIDE;
 use gpuwars::{BackendRequest, Device};
 
 /// GpuWars: a top-down shooter whose whole game loop runs as GPU kernels.
@@ -80,6 +81,7 @@ impl RunArgs {
                 graphs: !self.no_graphs,
             },
             profile: self.profile,
+            frame: None,
         }
     }
 }
@@ -101,8 +103,27 @@ struct DemoArgs {
     /// Write the game's inputs to this replay file.
     #[arg(long)]
     record: Option<PathBuf>,
+    /// Draw the final state with the kernel renderer and write it to this PNG file.
+    #[arg(long)]
+    screenshot: Option<PathBuf>,
+    /// Size of the screenshot, WIDTHxHEIGHT in pixels.
+    #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
+    size: (u32, u32),
     #[command(flatten)]
     run: RunArgs,
+}
+
+/// `WIDTHxHEIGHT`, each side 1 to 16384 pixels.
+fn parse_size(text: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("`{text}` is not WIDTHxHEIGHT with each side 1 to {MAX_SIDE} pixels");
+    let (w, h) = text.split_once(['x', 'X']).ok_or_else(bad)?;
+    let side = |s: &str| {
+        s.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|v| (1..=MAX_SIDE).contains(v))
+    };
+    Ok((side(w).ok_or_else(bad)?, side(h).ok_or_else(bad)?))
 }
 
 /// The default command: the demo with its defaults (and the environment's settings).
@@ -148,10 +169,18 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Command::Demo(args) => {
             let scene = Scene::load(&args.scene)?;
-            let (report, replay) =
-                demo::demo(&device, &scene, args.seed, args.steps, args.run.options())?;
+            let options = RunOptions {
+                frame: args.screenshot.as_ref().map(|_| args.size),
+                ..args.run.options()
+            };
+            let (report, replay) = demo::demo(&device, &scene, args.seed, args.steps, options)?;
             if let Some(path) = &args.record {
                 replay.save(path)?;
+            }
+            if let (Some(path), Some(frame)) = (&args.screenshot, &report.frame) {
+                frame
+                    .save_png(path)
+                    .with_context(|| format!("writing the screenshot {}", path.display()))?;
             }
             print_report(&report, args.json)?;
         }

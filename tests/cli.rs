@@ -296,3 +296,38 @@ fn a_recorded_demo_replays_to_the_same_hash_and_a_tampered_one_fails() {
     assert!(stderr.contains("game.replay.json:"), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+#[test]
+fn demo_writes_a_screenshot_of_the_final_state() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("shot.png");
+    let shot = path.to_str().unwrap();
+    let args = ["--scene", "kamikaze", "--steps", "40", "--screenshot", shot];
+    let report = demo_json(&[&args[..], &["--size", "64x48"]].concat());
+    let image = image::open(&path).unwrap().to_rgba8();
+    assert_eq!(image.dimensions(), (64, 48));
+    let hash = report["frame_hash"].as_str().unwrap();
+    assert!(hash.starts_with("0x") && hash.len() == 18, "{hash}");
+    // The same game draws the same frame.
+    let again = demo_json(&[&args[..], &["--size", "64x48"]].concat());
+    assert_eq!(again["frame_hash"], report["frame_hash"]);
+    // Only the temporary file's rename leaves a file: nothing else in the folder.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    for bad in ["0x48", "64", "64x99999", "ax3"] {
+        let out = gpuwars(&[
+            "demo",
+            "--backend",
+            "cpu",
+            "--screenshot",
+            shot,
+            "--size",
+            bad,
+        ]);
+        assert!(!out.status.success());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            stderr.contains("WIDTHxHEIGHT") && stderr.contains("16384"),
+            "{stderr}"
+        );
+    }
+}

@@ -10,7 +10,7 @@ use super::Game;
 use super::engine::Options;
 use super::replay::Replay;
 use super::spec::Scene;
-use crate::pipeline::Profile;
+use crate::pipeline::{Frame, Profile};
 use crate::{BackendKind, Device, Error};
 
 /// What `gpuwars demo` and `gpuwars replay` print.
@@ -57,6 +57,12 @@ pub struct Report {
     /// Per-stage times, with `--profile`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub profile: Option<ProfileReport>,
+    /// The hash of the final frame, when one was drawn (`0x` and 16 hex digits).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frame_hash: Option<String>,
+    /// The final frame, when one was drawn.
+    #[serde(skip)]
+    pub frame: Option<Frame>,
 }
 
 /// The stage times of a profiled run, and the device's copy bandwidth measured in it.
@@ -109,6 +115,12 @@ impl Report {
             "no".to_string()
         };
         line("game_over:", over);
+        if let (Some(frame), Some(hash)) = (&self.frame, &self.frame_hash) {
+            line(
+                "frame:",
+                format!("{}x{} pixels, hash {hash}", frame.width, frame.height),
+            );
+        }
         if let Some(p) = &self.profile {
             out += &format!(
                 "\nstage times over {} steps (copy bandwidth {:.1} GB/s):\n{}",
@@ -137,6 +149,8 @@ pub struct RunOptions {
     pub game: Options,
     /// Time every stage of every step (steps then run stage by stage and wait).
     pub profile: bool,
+    /// Draw the final state in a frame of this width and height (the kernel renderer).
+    pub frame: Option<(u32, u32)>,
 }
 
 /// The statuses of a game as they come back, up to the first that ends it.
@@ -193,6 +207,10 @@ fn play(
     }
     let seconds = start.elapsed().as_secs_f64();
     let hash = game.state_hash()?;
+    let frame = match options.frame {
+        Some((width, height)) => Some(game.draw(width, height)?),
+        None => None,
+    };
     let pipeline = game.pipeline();
     let device = pipeline.device();
     let profile = match profile {
@@ -229,6 +247,8 @@ fn play(
             _ => "",
         },
         profile,
+        frame_hash: frame.as_ref().map(|f| format!("{:#018x}", f.hash())),
+        frame,
     };
     Ok((report, record.inputs, hash))
 }

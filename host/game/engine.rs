@@ -8,9 +8,10 @@ use gpuwars_kernels::game::control::{Command, Input, Status};
 use gpuwars_kernels::game::rules::{Brain, Rules, Wave};
 use xxhash_rust::xxh3::Xxh3;
 
+use super::looks;
 use super::spec::{Machine, Scene};
 use crate::backend::Ring;
-use crate::pipeline::{GameConfig, Pipeline, Profile};
+use crate::pipeline::{Frame, GameConfig, Pipeline, Profile};
 use crate::sim::Snapshot;
 use crate::sim::layout::{Layout, steps};
 use crate::{Device, Error};
@@ -253,6 +254,14 @@ impl<'d> Game<'d> {
     pub fn snapshot(&mut self) -> Result<Snapshot, Error> {
         self.settle()?;
         self.pipeline.snapshot_at(u64::from(self.last.step))
+    }
+
+    /// The whole field after every queued step, drawn by the kernel renderer in a
+    /// `width × height` frame.
+    pub fn draw(&mut self, width: u32, height: u32) -> Result<Frame, Error> {
+        self.settle()?;
+        let view = looks::whole_field(&self.scene, width, height);
+        self.pipeline.draw(&view, &looks::looks(&self.scene))
     }
 
     /// XXH3-64 over the world's state hash, the status and the spawn counts: equal only if

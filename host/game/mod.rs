@@ -3,6 +3,7 @@
 
 pub mod demo;
 pub mod engine;
+pub mod looks;
 pub mod replay;
 pub mod scene;
 pub mod spec;

@@ -26,8 +26,10 @@
 //! ([`Config`]) are separate things. The pipeline owns all three, and the plans that view
 //! their buffers: that ownership is what makes replaying a plan sound.
 
+pub mod draw;
 mod profile;
 
+pub use draw::Frame;
 pub use profile::{Profile, StageTimes};
 
 use gpuwars_kernels::game::ai::ThinkArgs;
@@ -144,6 +146,8 @@ pub struct Pipeline<'d> {
     state: WorldState,
     scratch: Scratch,
     game: Option<GameState>,
+    /// The kernel renderer's buffers, made by the first frame drawn.
+    canvas: Option<draw::Canvas>,
     /// Steps queued since creation.
     steps: u64,
 }
@@ -231,6 +235,7 @@ impl<'d> Pipeline<'d> {
             state,
             scratch,
             game,
+            canvas: None,
             steps: 0,
         };
         let mut all = Vec::new();

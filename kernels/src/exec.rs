@@ -266,6 +266,16 @@ impl DevSlice<u32> {
         // launch reads the counter.
         atomic.fetch_add(value, Ordering::Relaxed)
     }
+
+    /// Atomically sets element `index` to the larger of it and `value`; returns the previous
+    /// value. The final value does not depend on the order in which threads arrive.
+    #[inline(always)]
+    pub fn atomic_max(&self, index: u32, value: u32) -> u32 {
+        let ptr = self.ptr(index);
+        // SAFETY: as in `atomic_add`.
+        let atomic = unsafe { AtomicU32::from_ptr(ptr) };
+        atomic.fetch_max(value, Ordering::Relaxed)
+    }
 }
 
 #[cold]

@@ -16,6 +16,7 @@ pub mod exec;
 pub mod game;
 pub mod primitives;
 pub mod registry;
+pub mod render;
 pub mod rng;
 pub mod sim;
 

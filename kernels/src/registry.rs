@@ -6,6 +6,7 @@
 
 use crate::game::{ai, autopilot, master};
 use crate::primitives::{histogram, scan, sort};
+use crate::render;
 use crate::rng::streams;
 use crate::sim::{broad, free_list, integrate, narrow, scatter};
 use crate::{Kernel, KernelInfo};
@@ -81,6 +82,10 @@ kernels! {
     THINK = think(ai::ThinkArgs) => ai::think;
     /// Sets up every slot's generator from its seed and the parameter table.
     SEED_STREAMS = seed_streams(streams::SeedArgs) => streams::seed_streams;
+    /// Draws every live body's shape into the pixel keys (atomic maximum: order-free).
+    SPLAT_BODIES = splat_bodies(render::SplatArgs) => render::splat_bodies;
+    /// Turns each pixel's key into its colour and clears the key.
+    RESOLVE_PIXELS = resolve_pixels(render::ResolveArgs) => render::resolve_pixels;
     /// The autopilot: the ship's input from what lies around it (one thread).
     AUTOPILOT = autopilot(autopilot::AutopilotArgs) => autopilot::autopilot;
 }

@@ -1,0 +1,71 @@
+//! How a scene's kinds look in a frame: the ship and its shots on top, each enemy type in a
+//! colour of its machine's family (kamikazes red, groups green, tricky ones violet), other
+//! bodies (obstacles) grey underneath.
+
+use gpuwars_kernels::render::{Look, View};
+
+use super::spec::{Machine, Scene};
+
+/// An RGBA8 colour packed little-endian (red in the low byte), opaque.
+pub const fn rgb(r: u8, g: u8, b: u8) -> u32 {
+    u32::from_le_bytes([r, g, b, 255])
+}
+
+/// The colour behind everything.
+pub const BACKGROUND: u32 = rgb(10, 12, 26);
+
+/// Colours of each machine's enemy types, taken in order of the scene's kinds.
+const KAMIKAZE: [u32; 3] = [rgb(235, 70, 60), rgb(255, 150, 50), rgb(200, 40, 110)];
+const GROUP: [u32; 3] = [rgb(80, 220, 110), rgb(40, 180, 170), rgb(175, 230, 60)];
+const TRICKY: [u32; 3] = [rgb(150, 110, 255), rgb(230, 90, 230), rgb(90, 140, 255)];
+const SHIP: u32 = rgb(235, 245, 255);
+const SHOT: u32 = rgb(255, 235, 90);
+const OTHER: u32 = rgb(140, 145, 160);
+
+/// `colour` halfway to white: the side a body faces.
+fn lighter(colour: u32) -> u32 {
+    let [r, g, b, a] = colour.to_le_bytes();
+    let up = |c: u8| c + (255 - c) / 2;
+    u32::from_le_bytes([up(r), up(g), up(b), a])
+}
+
+/// One look per kind of `scene`.
+pub fn looks(scene: &Scene) -> Vec<Look> {
+    let world = &scene.world;
+    let ship = world.kind_index(&scene.game.ship.kind);
+    let shot = world.kind_index(&scene.game.ship.shot);
+    let mut taken = [0usize; 3];
+    (0..world.kinds.len())
+        .map(|k| {
+            let machine = scene.game.behaviours[k].map(|b| b.machine);
+            let (colour, layer) = if Some(k) == ship {
+                (SHIP, 250)
+            } else if Some(k) == shot {
+                (SHOT, 240)
+            } else if let Some(family) = match machine {
+                Some(Machine::Kamikaze) => Some((0, &KAMIKAZE)),
+                Some(Machine::Group) => Some((1, &GROUP)),
+                Some(Machine::Tricky) => Some((2, &TRICKY)),
+                _ => None,
+            } {
+                let (i, colours) = family;
+                let colour = colours[taken[i] % colours.len()];
+                taken[i] += 1;
+                (colour, 100 + k as u32)
+            } else {
+                (OTHER, 10)
+            };
+            Look {
+                colour,
+                nose: lighter(colour),
+                layer,
+                reserved: 0,
+            }
+        })
+        .collect()
+}
+
+/// The whole field of `scene` in a `width × height` frame.
+pub fn whole_field(scene: &Scene, width: u32, height: u32) -> View {
+    View::whole(scene.world.size, width, height, BACKGROUND)
+}

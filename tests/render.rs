@@ -1,0 +1,183 @@
+//! The kernel renderer: each body in its kind's colour at its place, the background
+//! elsewhere, the top layer where bodies overlap, and the same pixels whatever the schedule
+//! and on either backend.
+
+mod common;
+
+use common::sim::{circle, kind, rect, world};
+use glam::Vec2;
+use gpuwars::Device;
+use gpuwars::backend::Schedule;
+use gpuwars::game::looks::{BACKGROUND, rgb};
+use gpuwars::game::scene::built_in;
+use gpuwars::game::{Game, Scene};
+use gpuwars::kernels::render::{Look, View};
+use gpuwars::pipeline::Simulation;
+use gpuwars::pipeline::draw::Frame;
+use gpuwars::sim::{Boundary, WorldSpec};
+
+/// A look with a nose of its own colour, so a kind is one colour.
+fn look(colour: u32, layer: u32) -> Look {
+    Look {
+        colour,
+        nose: colour,
+        layer,
+        reserved: 0,
+    }
+}
+
+/// Three kinds: a big circle, a rectangle, and a circle smaller than a pixel, in a 400 × 300
+/// world shown one unit per pixel.
+fn three_kinds() -> (WorldSpec, Vec<Look>) {
+    let spec = world(
+        Vec2::new(400.0, 300.0),
+        Boundary::Clamp,
+        vec![
+            kind("big", circle(20.0), 2, &[]),
+            kind("box", rect(12.0, 6.0), 1, &[]),
+            kind("dot", circle(0.3), 1, &[]),
+        ],
+    );
+    let looks = vec![
+        look(rgb(200, 30, 30), 1),
+        look(rgb(30, 200, 30), 5),
+        look(rgb(30, 30, 200), 3),
+    ];
+    (spec, looks)
+}
+
+/// The pixel under world position `pos` in `view`.
+fn pixel_at(frame: &Frame, view: &View, pos: Vec2) -> u32 {
+    let p = view.to_image(pos);
+    frame.pixel(p.x as u32, p.y as u32)
+}
+
+fn a_frame_shows_each_body_in_its_kinds_colour(device: &Device) {
+    let (spec, looks) = three_kinds();
+    let mut sim = Simulation::new(device, &spec, 1).unwrap();
+    let ranges = sim.layout().ranges.clone();
+    let big = (ranges[0].start, Vec2::new(80.0, 200.0));
+    // The box overlaps the second big circle: the box's layer is higher.
+    let big_under = (ranges[0].start + 1, Vec2::new(300.0, 100.0));
+    let boxed = (ranges[1].start, Vec2::new(310.0, 100.0));
+    let dot = (ranges[2].start, Vec2::new(150.5, 50.5));
+    let bodies = [big, big_under, boxed, dot];
+    let placed: Vec<_> = bodies.iter().map(|&(s, p)| (s, p, Vec2::X)).collect();
+    sim.place(&placed).unwrap();
+    let view = View::whole(spec.size, 400, 300, BACKGROUND);
+    let frame = sim.draw(&view, &looks).unwrap();
+    let colour = |k: usize| looks[k].colour;
+    // Each body's centre is its colour; the overlap is the box's.
+    assert_eq!(pixel_at(&frame, &view, big.1), colour(0));
+    assert_eq!(pixel_at(&frame, &view, boxed.1), colour(1));
+    assert_eq!(pixel_at(&frame, &view, Vec2::new(304.0, 100.0)), colour(1));
+    assert_eq!(pixel_at(&frame, &view, Vec2::new(285.0, 100.0)), colour(0));
+    assert_eq!(
+        pixel_at(&frame, &view, dot.1),
+        colour(2),
+        "a sub-pixel body still shows"
+    );
+    // Every pixel: well inside a body's shape, that body's kind (or one on top of it); well
+    // outside every shape, the background. (A pixel's centre decides; the margin keeps the
+    // check away from the rounding at the edge.)
+    let shapes = [
+        (big.1, 0, Vec2::splat(20.0)),
+        (big_under.1, 0, Vec2::splat(20.0)),
+        (boxed.1, 1, Vec2::new(12.0, 6.0)),
+        (dot.1, 2, Vec2::splat(0.3)),
+    ];
+    let mut seen = [false; 3];
+    for y in 0..frame.height {
+        for x in 0..frame.width {
+            let world_pos = view.origin
+                + Vec2::new(x as f32 + 0.5, frame.height as f32 - y as f32 - 0.5) / view.scale;
+            let got = frame.pixel(x, y);
+            if let Some(k) = (0..3).find(|&k| got == colour(k)) {
+                seen[k] = true;
+            }
+            let near = shapes.iter().any(|&(c, k, half)| {
+                let d = world_pos - c;
+                if k == 1 {
+                    d.x.abs() <= half.x + 1.5 && d.y.abs() <= half.y + 1.5
+                } else {
+                    d.length() <= half.x + 1.5
+                }
+            });
+            if !near {
+                assert_eq!(got, BACKGROUND, "pixel ({x}, {y}) is far from every body");
+            }
+            let deep = shapes.iter().find(|&&(c, k, half)| {
+                let d = world_pos - c;
+                if k == 1 {
+                    d.x.abs() <= half.x - 1.5 && d.y.abs() <= half.y - 1.5
+                } else {
+                    d.length() <= half.x - 1.5
+                }
+            });
+            if let Some(&(_, k, _)) = deep {
+                assert!(
+                    got == colour(k) || looks[k].layer < looks[1].layer && got == colour(1),
+                    "pixel ({x}, {y}) inside a body of kind {k} is {got:#010x}"
+                );
+            }
+        }
+    }
+    assert_eq!(seen, [true; 3], "every kind's colour is in the frame");
+    // Nothing alive, nothing drawn.
+    let empty = Simulation::new(device, &spec, 1)
+        .unwrap()
+        .draw(&view, &looks)
+        .unwrap();
+    assert!(empty.pixels.iter().all(|&p| p == BACKGROUND));
+}
+
+fn bad_frames_are_refused(device: &Device) {
+    let (spec, looks) = three_kinds();
+    let mut sim = Simulation::new(device, &spec, 1).unwrap();
+    let view = View::whole(spec.size, 400, 300, BACKGROUND);
+    let err = sim.draw(&view, &looks[..2]).unwrap_err().to_string();
+    assert!(err.contains("2 looks for a world of 3 kinds"), "{err}");
+    let wide = View { width: 0, ..view };
+    let err = sim.draw(&wide, &looks).unwrap_err().to_string();
+    assert!(err.contains("0x300") && err.contains("1 to 16384"), "{err}");
+    let flat = View { scale: 0.0, ..view };
+    assert!(sim.draw(&flat, &looks).is_err());
+}
+
+fn paper() -> Scene {
+    built_in("paper").unwrap().unwrap()
+}
+
+/// The frame of `paper` after `steps` autopilot steps.
+fn paper_frame(device: &Device, steps: u32) -> Frame {
+    let mut game = Game::new(device, &paper(), 1).unwrap();
+    for _ in 0..steps {
+        game.submit(None).unwrap();
+    }
+    game.draw(640, 360).unwrap()
+}
+
+#[test]
+fn frames_do_not_depend_on_the_schedule() {
+    let in_order = paper_frame(common::cpu(), 120);
+    let shuffled = Device::cpu_scheduled(Some(2), Schedule::Shuffled { seed: 9 }, "tests").unwrap();
+    assert_eq!(paper_frame(&shuffled, 120).hash(), in_order.hash());
+}
+
+#[test]
+fn the_gpu_draws_the_same_frame_as_the_cpu() {
+    let Some(gpu) = common::gpu() else { return };
+    let cpu = paper_frame(common::cpu(), 300);
+    let on_gpu = paper_frame(gpu, 300);
+    println!(
+        "paper frame after 300 steps: cpu {:#018x}, gpu {:#018x}",
+        cpu.hash(),
+        on_gpu.hash()
+    );
+    assert_eq!(on_gpu, cpu);
+}
+
+on_both_backends!(
+    a_frame_shows_each_body_in_its_kinds_colour,
+    bad_frames_are_refused,
+);
