@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, bail};
 use clap::{Args, Parser, Subcommand};
-use gpuwars::game::demo::{self, Report, RunOptions};
+use gpuwars::game::demo::{self, Pilot, Report, RunOptions};
 use gpuwars::game::replay::Replay;
 use gpuwars::game::scene;
 use gpuwars::game::{Options, Scene};
@@ -81,7 +81,7 @@ impl RunArgs {
                 graphs: !self.no_graphs,
             },
             profile: self.profile,
-            frame: None,
+            ..RunOptions::default()
         }
     }
 }
@@ -103,6 +103,9 @@ struct DemoArgs {
     /// Write the game's inputs to this replay file.
     #[arg(long)]
     record: Option<PathBuf>,
+    /// Who flies the ship: the autopilot, or nobody (it never moves and never fires).
+    #[arg(long, value_enum, default_value_t)]
+    pilot: Pilot,
     /// Draw the final state with the kernel renderer and write it to this PNG file.
     #[arg(long)]
     screenshot: Option<PathBuf>,
@@ -170,6 +173,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Demo(args) => {
             let scene = Scene::load(&args.scene)?;
             let options = RunOptions {
+                pilot: args.pilot,
                 frame: args.screenshot.as_ref().map(|_| args.size),
                 ..args.run.options()
             };

@@ -6,7 +6,7 @@ mod common;
 use gpuwars::Device;
 use gpuwars::backend::Schedule;
 use gpuwars::game::Options;
-use gpuwars::game::demo::RunOptions;
+use gpuwars::game::demo::{Pilot, RunOptions};
 use gpuwars::game::scene::built_in;
 use gpuwars::game::{Game, Scene, demo};
 use gpuwars::kernels::game::control::{Input, Status};
@@ -240,3 +240,37 @@ on_both_backends!(
     the_game_ends_at_the_same_step_whatever_the_lag,
     the_autopilot_survives_a_minute_of_the_paper_scene,
 );
+
+/// The paper's rule, kept: a ship that never moves nor fires is worn down by the enemies that
+/// reach it and loses `paper` well inside five minutes; the autopilot, in the same game time,
+/// is still playing and has processed more enemies.
+#[test]
+fn a_ship_with_no_pilot_loses_the_paper_scene_and_the_autopilot_does_better() {
+    let five_minutes = 5 * 60 * 60;
+    for seed in [1, 2] {
+        let idle = RunOptions {
+            pilot: Pilot::None,
+            ..RunOptions::default()
+        };
+        let (lost, _) =
+            demo::demo(common::cpu(), &scene("paper"), seed, five_minutes, idle).unwrap();
+        assert!(lost.game_over, "seed {seed}: {lost:?}");
+        assert_eq!(lost.game_over_reason, "too slow");
+        assert!(lost.game_seconds < 200.0, "seed {seed}: {lost:?}");
+        let (flown, _) = demo::demo(
+            common::cpu(),
+            &scene("paper"),
+            seed,
+            lost.steps,
+            RunOptions::default(),
+        )
+        .unwrap();
+        assert!(!flown.game_over, "seed {seed}: {flown:?}");
+        assert!(
+            flown.enemies_killed > 2 * lost.enemies_killed,
+            "seed {seed}: the autopilot processed {} enemies, the idle ship {}",
+            flown.enemies_killed,
+            lost.enemies_killed
+        );
+    }
+}

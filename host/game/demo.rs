@@ -142,9 +142,22 @@ pub fn device_name(device: &Device) -> String {
     }
 }
 
+/// Who flies the ship in a demo.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Pilot {
+    /// The autopilot.
+    #[default]
+    Auto,
+    /// Nobody: the ship never moves and never fires.
+    None,
+}
+
 /// How `demo` and `replay` run a game.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RunOptions {
+    /// Who flies the ship (`demo` only; a replay flies its recorded inputs).
+    pub pilot: Pilot,
     /// Lag and graphs.
     pub game: Options,
     /// Time every stage of every step (steps then run stage by stage and wait).
@@ -253,8 +266,8 @@ fn play(
     Ok((report, record.inputs, hash))
 }
 
-/// The autopilot plays `scene` for up to `steps` steps; returns the report and the replay
-/// of the game.
+/// The pilot `options` names (the autopilot by default) plays `scene` for up to `steps`
+/// steps; returns the report and the replay of the game.
 pub fn demo(
     device: &Device,
     scene: &Scene,
@@ -265,7 +278,11 @@ pub fn demo(
     let start = Instant::now();
     let mut game = Game::with_options(device, scene, seed, options.game)?;
     let setup_s = start.elapsed().as_secs_f64();
-    let (report, inputs, state_hash) = play(&mut game, setup_s, seed, steps, options, |_| None)?;
+    let pilot = match options.pilot {
+        Pilot::Auto => None,
+        Pilot::None => Some(Input::default()),
+    };
+    let (report, inputs, state_hash) = play(&mut game, setup_s, seed, steps, options, |_| pilot)?;
     let replay = Replay {
         scene: scene.name.clone(),
         scene_toml: scene.source.clone(),
