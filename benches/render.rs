@@ -1,6 +1,7 @@
 //! Time per frame of the kernel renderer at 1920 × 1080: `paper` full (8,190 enemies) and
-//! `scale-1m` (1,048,576), on the backend `GPUWARS_BACKEND` names (default: auto). A frame
-//! is the two drawing launches and the read-back of its pixels.
+//! `scale-1m` (1,048,576), on the backend `GPUWARS_BACKEND` names (default: auto): the frame
+//! left on the device (`render`: two launches, then a synchronise), and read back to the
+//! host (`draw`: 8 MB of pixels more).
 //!
 //! ```text
 //! cargo bench --bench render
@@ -25,7 +26,13 @@ fn frame(c: &mut Criterion) {
         }
         let alive = game.draw(16, 16).map(|_| game.status().enemies_alive);
         group.throughput(Throughput::Elements(u64::from(alive.unwrap())));
-        group.bench_function(format!("{}/{}", device.kind(), scene.name), |b| {
+        group.bench_function(format!("{}/{}/render", device.kind(), scene.name), |b| {
+            b.iter(|| {
+                game.render(1920, 1080).unwrap();
+                device.synchronize().unwrap();
+            })
+        });
+        group.bench_function(format!("{}/{}/draw", device.kind(), scene.name), |b| {
             b.iter(|| game.draw(1920, 1080).unwrap())
         });
     }

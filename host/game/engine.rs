@@ -264,6 +264,13 @@ impl<'d> Game<'d> {
         self.pipeline.draw(&view, &looks::looks(&self.scene))
     }
 
+    /// Queues the drawing of the whole field after the queued steps, left in device memory
+    /// (see [`Pipeline::render`]).
+    pub fn render(&mut self, width: u32, height: u32) -> Result<(), Error> {
+        let view = looks::whole_field(&self.scene, width, height);
+        self.pipeline.render(&view, &looks::looks(&self.scene))
+    }
+
     /// XXH3-64 over the world's state hash, the status and the spawn counts: equal only if
     /// two games agree bit for bit.
     pub fn state_hash(&mut self) -> Result<u64, Error> {

@@ -74,6 +74,18 @@ impl Pipeline<'_> {
     /// per kind), with the kernel renderer, and reads the frame back. Waits for the steps
     /// queued before.
     pub fn draw(&mut self, view: &View, looks: &[Look]) -> Result<Frame, Error> {
+        self.render(view, looks)?;
+        let canvas = self.canvas.as_ref().expect("made by render");
+        Ok(Frame {
+            width: canvas.width,
+            height: canvas.height,
+            pixels: self.device.download(&canvas.image)?,
+        })
+    }
+
+    /// Queues the drawing of a frame as [`Pipeline::draw`] does, and leaves it in device
+    /// memory (for a display that takes it from there) without waiting.
+    pub fn render(&mut self, view: &View, looks: &[Look]) -> Result<(), Error> {
         let (width, height) = (view.width, view.height);
         if !(1..=MAX_SIDE).contains(&width) || !(1..=MAX_SIDE).contains(&height) {
             return Err(Error::Invalid(format!(
@@ -132,11 +144,6 @@ impl Pipeline<'_> {
                 op(registry::RESOLVE_PIXELS, width * height, resolve, 12),
             ]
         };
-        device.run(&device.plan(ops, false)?)?;
-        Ok(Frame {
-            width,
-            height,
-            pixels: device.download(&canvas.image)?,
-        })
+        device.run(&device.plan(ops, false)?)
     }
 }
