@@ -17,7 +17,7 @@ use glam::Vec2;
 use super::control::{DESTROYED, Events, Input, PLAYING, Status, TOO_SLOW};
 use super::rules::{Rules, Wave};
 use crate::sim::free_list::FreeSlots;
-use crate::sim::scatter::{birth, random_place};
+use crate::sim::scatter::{Place, birth, random_place};
 use crate::sim::{Bodies, Contacts, KindInfo, SlotRange, Space};
 use crate::{DevSlice, KernelArgs, Thread};
 
@@ -85,7 +85,11 @@ pub fn master(t: Thread, args: &MasterArgs) {
     let step = st.step;
     let ship = rules.ship.start;
     if step == 0 {
-        let place = (args.space.size * 0.5, Vec2::ZERO);
+        let place = Place {
+            pos: args.space.size * 0.5,
+            vel: Vec2::ZERO,
+            facing: Vec2::X,
+        };
         birth(b, &args.space, ship, place, rules.ship_energy);
     }
     if b.is_alive(ship) {
@@ -196,13 +200,12 @@ fn fire(args: &MasterArgs, input: &Input) {
     let aim = input.aim_dir();
     let gap = args.kinds.get(rules.ship_kind).radius + shot.radius;
     let pos = b.pos.get(ship) + aim * (gap * 1.01);
-    birth(
-        b,
-        &args.space,
-        slot,
-        (pos, aim * rules.shot_speed),
-        shot.energy,
-    );
+    let place = Place {
+        pos,
+        vel: aim * rules.shot_speed,
+        facing: aim,
+    };
+    birth(b, &args.space, slot, place, shot.energy);
 }
 
 /// Arguments of [`births`].
@@ -258,7 +261,7 @@ pub fn births(t: Thread, args: &BirthArgs) {
     let mut tries = 1;
     while tries < PLACE_TRIES
         && b.is_alive(ship)
-        && args.space.offset(ship_pos, place.0).length_squared() < far
+        && args.space.offset(ship_pos, place.pos).length_squared() < far
     {
         place = random_place(b, slot, &args.space, speed);
         tries += 1;

@@ -34,29 +34,47 @@ pub fn scatter(t: Thread, args: &ScatterArgs) {
     }
     let b = &args.bodies;
     let slot = args.slots.get(i);
-    let (pos, vel) = random_place(b, slot, &args.space, args.speed);
-    birth(b, &args.space, slot, (pos, vel), args.energy);
+    let place = random_place(b, slot, &args.space, args.speed);
+    birth(b, &args.space, slot, place, args.energy);
+}
+
+/// Where and how a body comes to life.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Place {
+    /// Position.
+    pub pos: Vec2,
+    /// Velocity.
+    pub vel: Vec2,
+    /// The way it faces if it is born at rest (a unit vector).
+    pub facing: Vec2,
 }
 
 /// A uniformly random position in the world (two draws) and a normal velocity of deviation
-/// `speed` per axis (two more, Box–Muller), from `slot`'s own generator.
+/// `speed` per axis (two more, Box–Muller), from `slot`'s own generator. The same normal
+/// pair gives a uniformly random facing for a body born at rest: bodies that all faced `+x`
+/// would all wander that way, since wandering turns only a little from the way a body faces.
 #[inline(always)]
-pub fn random_place(b: &Bodies, slot: u32, space: &Space, speed: f32) -> (Vec2, Vec2) {
+pub fn random_place(b: &Bodies, slot: u32, space: &Space, speed: f32) -> Place {
     let mut rng = b.rng.open(slot);
     let u = Vec2::new(rng.next_f32(), rng.next_f32());
     let (nx, ny) = rng.next_normal_pair();
-    (u * space.size, Vec2::new(nx, ny) * speed)
+    let normal = Vec2::new(nx, ny);
+    Place {
+        pos: u * space.size,
+        vel: normal * speed,
+        facing: normal.try_normalize().unwrap_or(Vec2::X),
+    }
 }
 
-/// Brings `slot` to life at `place` = (position, velocity), kept inside the world: no force,
-/// `energy`, age 0, its machine's initial state, facing its velocity (or `+x` at rest).
+/// Brings `slot` to life at `place`, kept inside the world: no force, `energy`, age 0, its
+/// machine's initial state, facing its velocity (or the place's facing at rest).
 #[inline(always)]
-pub fn birth(b: &Bodies, space: &Space, slot: u32, place: (Vec2, Vec2), energy: i32) {
-    let (pos, vel) = space.confine(place.0, place.1);
+pub fn birth(b: &Bodies, space: &Space, slot: u32, place: Place, energy: i32) {
+    let (pos, vel) = space.confine(place.pos, place.vel);
     b.pos.set(slot, pos);
     b.vel.set(slot, vel);
     b.force.set(slot, Vec2::ZERO);
-    b.dir.set(slot, vel.try_normalize().unwrap_or(Vec2::X));
+    b.dir.set(slot, vel.try_normalize().unwrap_or(place.facing));
     b.energy.set(slot, energy);
     b.state.set(slot, 0);
     b.age.set(slot, 0);
