@@ -2,7 +2,7 @@
 
 use std::process::ExitCode;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use clap::{Args, Parser, Subcommand};
@@ -106,8 +106,9 @@ struct DemoArgs {
     /// Who flies the ship: the autopilot, or nobody (it never moves and never fires).
     #[arg(long, value_enum, default_value_t)]
     pilot: Pilot,
-    /// Draw the final state with the kernel renderer and write it to this PNG file.
-    #[arg(long)]
+    /// Draw the final state with the kernel renderer and write it to this PNG file (a bare
+    /// `gpuwars` writes gpuwars-demo.png in the system's temporary folder).
+    #[arg(long, env = "GPUWARS_SCREENSHOT")]
     screenshot: Option<PathBuf>,
     /// Size of the screenshot, WIDTHxHEIGHT in pixels.
     #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
@@ -136,7 +137,11 @@ fn default_demo() -> DemoArgs {
         #[command(flatten)]
         demo: DemoArgs,
     }
-    Defaults::parse_from(["gpuwars"]).demo
+    let mut demo = Defaults::parse_from(["gpuwars"]).demo;
+    // No window yet: the last frame goes to a PNG, and the report says where.
+    demo.screenshot
+        .get_or_insert_with(|| std::env::temp_dir().join("gpuwars-demo.png"));
+    demo
 }
 
 fn main() -> ExitCode {
@@ -186,14 +191,14 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     .save_png(path)
                     .with_context(|| format!("writing the screenshot {}", path.display()))?;
             }
-            print_report(&report, args.json)?;
+            print_report(&report, args.json, args.screenshot.as_deref())?;
         }
         Command::Replay { file, json, run } => {
             let replay = Replay::load(&file)?;
             let origin = format!("{} (scene `{}`)", file.display(), replay.scene);
             let scene = Scene::from_toml(&replay.scene_toml, &origin)?;
             let report = demo::replay(&device, &scene, &replay, run.options())?;
-            print_report(&report, json)?;
+            print_report(&report, json, None)?;
             let recorded = format!("{:#018x}", replay.state_hash);
             if report.state_hash != recorded {
                 bail!(
@@ -207,11 +212,19 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn print_report(report: &Report, json: bool) -> anyhow::Result<()> {
+/// The report, and where the screenshot went if one was written.
+fn print_report(report: &Report, json: bool, screenshot: Option<&Path>) -> anyhow::Result<()> {
     if json {
-        println!("{}", serde_json::to_string_pretty(report)?);
+        let mut value = serde_json::to_value(report)?;
+        if let Some(path) = screenshot {
+            value["screenshot"] = path.display().to_string().into();
+        }
+        println!("{}", serde_json::to_string_pretty(&value)?);
     } else {
         print!("{}", report.to_text());
+        if let Some(path) = screenshot {
+            println!("{:<18}{}", "screenshot:", path.display());
+        }
     }
     Ok(())
 }

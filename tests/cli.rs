@@ -134,10 +134,13 @@ fn text_info_names_the_backend() {
 
 #[test]
 fn the_default_command_is_the_headless_demo() {
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("last.png");
     let out = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
         .args(["--backend", "cpu"])
         .env("GPUWARS_SCENE", "kamikaze")
         .env("GPUWARS_STEPS", "30")
+        .env("GPUWARS_SCREENSHOT", &shot)
         .output()
         .unwrap();
     assert!(
@@ -148,6 +151,12 @@ fn the_default_command_is_the_headless_demo() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("scene:            kamikaze"), "{stdout}");
     assert!(stdout.contains("steps:            30 "), "{stdout}");
+    // Its last frame, and where it went.
+    assert!(
+        stdout.contains(&format!("screenshot:       {}", shot.display())),
+        "{stdout}"
+    );
+    assert_eq!(image::open(&shot).unwrap().width(), 1920);
 }
 
 #[test]
