@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use clap::{Args, Parser, Subcommand};
-use gpuwars::game::demo::{self, Pilot, Report, RunOptions};
+use gpuwars::game::demo::{self, Frames, Pilot, Report, RunOptions};
 use gpuwars::game::replay::Replay;
 use gpuwars::game::scene;
 use gpuwars::game::{Options, Scene};
@@ -110,11 +110,35 @@ struct DemoArgs {
     /// `gpuwars` writes gpuwars-demo.png in the system's temporary folder).
     #[arg(long, env = "GPUWARS_SCREENSHOT")]
     screenshot: Option<PathBuf>,
-    /// Size of the screenshot, WIDTHxHEIGHT in pixels.
+    /// Write a frame every N steps into DIR, as frame-STEP.png (with --size), for a video.
+    #[arg(long, num_args = 2, value_names = ["N", "DIR"])]
+    frames_every: Option<Vec<String>>,
+    /// Size of the screenshot and the frames, WIDTHxHEIGHT in pixels.
     #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
     size: (u32, u32),
     #[command(flatten)]
     run: RunArgs,
+}
+
+impl DemoArgs {
+    /// `--frames-every N DIR`, checked: N from 1, DIR an existing folder.
+    fn frames(&self, size: (u32, u32)) -> anyhow::Result<Option<Frames>> {
+        let Some([every, dir]) = self.frames_every.as_deref() else {
+            return Ok(None);
+        };
+        let every = every
+            .parse::<u64>()
+            .ok()
+            .filter(|&n| n >= 1)
+            .with_context(|| {
+                format!("--frames-every: `{every}` is not a step count (1 or more)")
+            })?;
+        let dir = PathBuf::from(dir);
+        if !dir.is_dir() {
+            bail!("--frames-every: {} is not a folder", dir.display());
+        }
+        Ok(Some(Frames { every, dir, size }))
+    }
 }
 
 /// `WIDTHxHEIGHT`, each side 1 to 16384 pixels.
@@ -180,6 +204,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let options = RunOptions {
                 pilot: args.pilot,
                 frame: args.screenshot.as_ref().map(|_| args.size),
+                frames: args.frames(args.size)?,
                 ..args.run.options()
             };
             let (report, replay) = demo::demo(&device, &scene, args.seed, args.steps, options)?;

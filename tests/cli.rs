@@ -340,3 +340,39 @@ fn demo_writes_a_screenshot_of_the_final_state() {
         );
     }
 }
+
+#[test]
+fn demo_writes_numbered_frames_and_plays_the_same_game() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().to_str().unwrap();
+    let args = ["--scene", "kamikaze", "--steps", "30", "--seed", "3"];
+    let plain = demo_json(&args);
+    let framed = demo_json(
+        &[
+            &args[..],
+            &["--frames-every", "10", folder, "--size", "32x24"],
+        ]
+        .concat(),
+    );
+    assert_eq!(framed["state_hash"], plain["state_hash"]);
+    let mut names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        ["frame-000010.png", "frame-000020.png", "frame-000030.png"]
+    );
+    let frame = image::open(dir.path().join("frame-000020.png")).unwrap();
+    assert_eq!((frame.width(), frame.height()), (32, 24));
+    for (every, folder, says) in [
+        ("0", folder, "not a step count"),
+        ("5", "/no/such/folder", "is not a folder"),
+    ] {
+        let out = gpuwars(&["demo", "--backend", "cpu", "--frames-every", every, folder]);
+        assert!(!out.status.success());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains(says), "{stderr}");
+    }
+}

@@ -1,6 +1,7 @@
 //! Playing a scene without a window: the autopilot demo and replays, and the figures they
 //! print.
 
+use std::path::PathBuf;
 use std::time::Instant;
 
 use gpuwars_kernels::game::control::{DESTROYED, Input, Status, TOO_SLOW};
@@ -153,8 +154,19 @@ pub enum Pilot {
     None,
 }
 
+/// Frames written while a game plays, so that a run can be turned into a video.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Frames {
+    /// A frame every this many steps (at least 1).
+    pub every: u64,
+    /// The folder they go to, as `frame-STEP.png` (STEP with six digits or more).
+    pub dir: PathBuf,
+    /// Their width and height in pixels.
+    pub size: (u32, u32),
+}
+
 /// How `demo` and `replay` run a game.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct RunOptions {
     /// Who flies the ship (`demo` only; a replay flies its recorded inputs).
     pub pilot: Pilot,
@@ -164,6 +176,8 @@ pub struct RunOptions {
     pub profile: bool,
     /// Draw the final state in a frame of this width and height (the kernel renderer).
     pub frame: Option<(u32, u32)>,
+    /// Write frames while playing.
+    pub frames: Option<Frames>,
 }
 
 /// The statuses of a game as they come back, up to the first that ends it.
@@ -210,6 +224,19 @@ fn play(
         }
         while let Some(status) = game.ready_status() {
             record.take(status);
+        }
+        if let Some(frames) = &options.frames
+            && (i + 1) % frames.every.max(1) == 0
+        {
+            // Every status first, so that the replay has every input; then the frame.
+            while let Some(status) = game.next_status()? {
+                record.take(status);
+            }
+            let (width, height) = frames.size;
+            let path = frames.dir.join(format!("frame-{:06}.png", i + 1));
+            game.draw(width, height)?
+                .save_png(&path)
+                .map_err(|e| Error::Invalid(format!("writing {}: {e}", path.display())))?;
         }
         if record.over {
             break;
