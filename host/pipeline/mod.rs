@@ -22,9 +22,9 @@
 //! step without the host waiting; on the CPU emulation the same ops in order, issued from
 //! inside the emulator's pool.
 //!
-//! State ([`WorldState`], the game's buffers), scratch ([`Scratch`]) and configuration
-//! ([`Config`]) are separate things. The pipeline owns all three, and the plans that view
-//! their buffers: that ownership is what makes replaying a plan sound.
+//! State (`sim::state::WorldState`, the game's buffers), scratch (`sim::state::Scratch`)
+//! and configuration ([`Config`]) are separate things. The pipeline owns all three, and the
+//! plans that view their buffers: that ownership is what makes replaying a plan sound.
 
 pub mod draw;
 mod profile;

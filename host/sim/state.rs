@@ -1,5 +1,5 @@
-//! A world's device buffers, in two parts: the [`WorldState`] that a step advances and a
-//! snapshot reads, and the [`Scratch`] that a step rebuilds from it. Both are sized once from
+//! A world's device buffers, in two parts: the `WorldState` that a step advances and a
+//! snapshot reads, and the `Scratch` that a step rebuilds from it. Both are sized once from
 //! the world's layout and grid; a step allocates nothing.
 
 use glam::Vec2;
