@@ -16,18 +16,8 @@ impl<'d> Simulation<'d> {
     /// An empty world (every slot free) for `spec`, its generators seeded from `seed`; the
     /// step replays as a CUDA graph on the GPU.
     pub fn new(device: &'d Device, spec: &WorldSpec, seed: u32) -> Result<Self, Error> {
-        Self::with_graphs(device, spec, seed, true)
-    }
-
-    /// As [`Simulation::new`], with the step recorded as a CUDA graph only if `graphs`.
-    pub fn with_graphs(
-        device: &'d Device,
-        spec: &WorldSpec,
-        seed: u32,
-        graphs: bool,
-    ) -> Result<Self, Error> {
         Ok(Simulation {
-            pipeline: Pipeline::new(device, spec, seed, None, graphs)?,
+            pipeline: Pipeline::new(device, spec, seed, None, true)?,
         })
     }
 
