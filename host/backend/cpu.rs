@@ -58,10 +58,6 @@ impl Emulator {
         self.pool.current_num_threads()
     }
 
-    pub(super) fn schedule(&self) -> Schedule {
-        self.schedule
-    }
-
     /// Runs `work` on a worker of the pool: the launches it issues then start their blocks
     /// without waking another thread first (a launch from outside the pool costs two
     /// cross-thread wake-ups).

@@ -475,14 +475,6 @@ impl Device {
         Ok((2 * len * size_of::<u32>() * reps) as f64 / seconds.max(f64::MIN_POSITIVE))
     }
 
-    /// The emulator's schedule; `None` on the GPU.
-    pub fn schedule(&self) -> Option<Schedule> {
-        match &self.imp {
-            Imp::Cpu(emu) => Some(emu.schedule()),
-            Imp::Cuda(_) => None,
-        }
-    }
-
     /// Waits until every queued launch and copy has finished, and reports a kernel fault.
     pub fn synchronize(&self) -> Result<(), Error> {
         match &self.imp {

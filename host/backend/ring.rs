@@ -65,16 +65,6 @@ impl Device {
 }
 
 impl<I: Element, O: Element> Ring<I, O> {
-    /// Steps that may be in flight at once.
-    pub fn depth(&self) -> usize {
-        self.depth
-    }
-
-    /// Steps queued and not yet read back.
-    pub fn in_flight(&self) -> usize {
-        self.in_flight.len()
-    }
-
     /// The slot of the next step.
     fn slot(&self) -> usize {
         (self.queued % self.depth as u64) as usize

@@ -490,11 +490,6 @@ impl<'d> Pipeline<'d> {
         Ok(())
     }
 
-    /// The stages this world has, in order.
-    pub fn stages(&self) -> &[Stage] {
-        &self.stages
-    }
-
     /// Kernel launches per step.
     pub fn launches_per_step(&self) -> usize {
         self.step.launches()
@@ -503,11 +498,6 @@ impl<'d> Pipeline<'d> {
     /// Whether the step replays as a CUDA graph.
     pub fn uses_graphs(&self) -> bool {
         self.step.is_graph()
-    }
-
-    /// The world's description.
-    pub fn spec(&self) -> &WorldSpec {
-        &self.spec
     }
 
     /// The slot ranges.
