@@ -2,6 +2,7 @@
 //! issued again every step: in order on the CPU emulation, from inside its pool, and on the
 //! GPU either one by one on the stream or replayed as a CUDA graph.
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use cudarc::driver::{CudaEvent, CudaGraph};
@@ -17,10 +18,11 @@ enum OpKind {
 }
 
 /// How an op is issued: on the device it runs on.
-type Issue = Box<dyn Fn(&Device) -> Result<(), Error> + Send + Sync>;
+type Issue = Arc<dyn Fn(&Device) -> Result<(), Error> + Send + Sync>;
 
 /// One operation of a plan: a kernel launch or a clear of a buffer, its arguments fixed
 /// when it was made.
+#[derive(Clone)]
 pub struct Op {
     name: &'static str,
     kind: OpKind,
@@ -52,7 +54,7 @@ impl Op {
             grid,
             bytes,
             // SAFETY: the caller's promise covers every run of the op.
-            issue: Box::new(move |device| unsafe { device.issue(kernel, grid, block, &args) }),
+            issue: Arc::new(move |device| unsafe { device.issue(kernel, grid, block, &args) }),
         }
     }
 
@@ -67,7 +69,7 @@ impl Op {
             grid: 0,
             bytes: u64::from(view.len()) * size_of::<T>() as u64,
             // SAFETY: the caller's promise covers every run of the op.
-            issue: Box::new(move |device| unsafe { device.clear(view) }),
+            issue: Arc::new(move |device| unsafe { device.clear(view) }),
         }
     }
 

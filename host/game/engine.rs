@@ -239,7 +239,7 @@ impl<'d> Game<'d> {
     /// status (waits for it, and hands out every earlier status first).
     pub fn step(&mut self, input: Option<Input>) -> Result<Status, Error> {
         self.submit(input)?;
-        while self.next_status()?.is_some() {}
+        self.settle()?;
         Ok(self.last)
     }
 
@@ -260,8 +260,8 @@ impl<'d> Game<'d> {
     /// `width × height` frame.
     pub fn draw(&mut self, width: u32, height: u32) -> Result<Frame, Error> {
         self.settle()?;
-        let view = looks::whole_field(&self.scene, width, height);
-        self.pipeline.draw(&view, &looks::looks(&self.scene))
+        self.render(width, height)?;
+        self.pipeline.frame()
     }
 
     /// Queues the drawing of the whole field after the queued steps, left in device memory

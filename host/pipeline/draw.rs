@@ -75,7 +75,15 @@ impl Pipeline<'_> {
     /// queued before.
     pub fn draw(&mut self, view: &View, looks: &[Look]) -> Result<Frame, Error> {
         self.render(view, looks)?;
-        let canvas = self.canvas.as_ref().expect("made by render");
+        self.frame()
+    }
+
+    /// The last frame rendered, read back (waits for it).
+    pub(crate) fn frame(&self) -> Result<Frame, Error> {
+        let canvas = self
+            .canvas
+            .as_ref()
+            .ok_or_else(|| Error::Invalid("no frame has been rendered".into()))?;
         Ok(Frame {
             width: canvas.width,
             height: canvas.height,

@@ -110,8 +110,6 @@ pub struct Config {
     collide: Option<Kernel<CollideArgs>>,
     /// Whether the grid is built (something collides, looks around, or the autopilot may fly).
     grid: bool,
-    /// Record each plan as a CUDA graph (on the GPU).
-    pub graphs: bool,
 }
 
 /// A stage of the step and its plan.
@@ -206,7 +204,6 @@ impl<'d> Pipeline<'d> {
             }),
             // A game's autopilot looks through the grid whenever it flies.
             grid: collides || game.is_some(),
-            graphs,
         };
         let state = WorldState::new(device, spec, &layout, seed)?;
         let scratch = Scratch::new(device, &layout, &space, kinds)?;
@@ -244,7 +241,8 @@ impl<'d> Pipeline<'d> {
             if ops.is_empty() {
                 continue;
             }
-            all.extend(pipeline.ops(name));
+            // The same ops serve the stage's own plan (for the profile) and the whole step.
+            all.extend(ops.iter().cloned());
             let plan = device.plan(ops, graphs)?;
             pipeline.stages.push(Stage { name, plan });
         }

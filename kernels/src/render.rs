@@ -80,11 +80,22 @@ pub struct Look {
 /// The key of an undrawn pixel.
 pub const EMPTY: u32 = 0;
 
+/// Bit 7 of every drawn key, so that none is [`EMPTY`].
+const DRAWN: u32 = 0x80;
+/// The shade's bits of a key.
+const SHADE: u32 = DRAWN - 1;
+
 /// A pixel's key: layer, then kind, then shade, so that the maximum is the body on top.
-/// Never [`EMPTY`]: the low bit pattern always carries a 1 above the shade.
+/// Never [`EMPTY`].
 #[inline(always)]
 pub fn key(layer: u32, kind: u32, shade: u32) -> u32 {
-    ((layer & 0xff) << 24) | ((kind & 0xffff) << 8) | 0x80 | (shade & 0x7f)
+    ((layer & 0xff) << 24) | ((kind & 0xffff) << 8) | DRAWN | (shade & SHADE)
+}
+
+/// The kind and the shade a key was drawn with.
+#[inline(always)]
+pub fn unkey(key: u32) -> (u32, u32) {
+    ((key >> 8) & 0xffff, key & SHADE)
 }
 
 /// Arguments of [`splat_bodies`].
@@ -196,8 +207,9 @@ pub fn resolve_pixels(t: Thread, args: &ResolveArgs) {
     let colour = if key == EMPTY {
         args.background
     } else {
-        let look = args.looks.get((key >> 8) & 0xffff);
-        if key & 0x7f == NOSE {
+        let (kind, shade) = unkey(key);
+        let look = args.looks.get(kind);
+        if shade == NOSE {
             look.nose
         } else {
             look.colour
