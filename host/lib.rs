@@ -8,6 +8,7 @@
 pub mod backend;
 pub mod files;
 pub mod game;
+pub mod graphics;
 pub mod info;
 pub mod pipeline;
 pub mod primitives;

@@ -11,18 +11,23 @@ use gpuwars::backend::Schedule;
 use gpuwars::game::looks::{BACKGROUND, rgb};
 use gpuwars::game::scene::built_in;
 use gpuwars::game::{Game, Scene};
+use gpuwars::graphics::bodies::BodyRenderer;
+use gpuwars::graphics::headless::Headless;
 use gpuwars::kernels::render::{Look, View};
+use gpuwars::pipeline::Pipeline;
 use gpuwars::pipeline::Simulation;
 use gpuwars::pipeline::draw::Frame;
+use gpuwars::sim::layout::kind_table;
 use gpuwars::sim::{Boundary, WorldSpec};
+use gpuwars::{BackendKind, game::looks};
 
-/// A look with a nose of its own colour, so a kind is one colour.
+/// A look with a nose and a hurt shade of its own colour, so a kind is one colour.
 fn look(colour: u32, layer: u32) -> Look {
     Look {
         colour,
         nose: colour,
         layer,
-        reserved: 0,
+        hurt: colour,
     }
 }
 
@@ -52,9 +57,9 @@ fn pixel_at(frame: &Frame, view: &View, pos: Vec2) -> u32 {
     frame.pixel(p.x as u32, p.y as u32)
 }
 
-fn a_frame_shows_each_body_in_its_kinds_colour(device: &Device) {
-    let (spec, looks) = three_kinds();
-    let mut sim = Simulation::new(device, &spec, 1).unwrap();
+/// The three kinds' bodies placed in `sim`: (slot, position) of a big circle, a second big
+/// circle under a box, the box, and a sub-pixel dot.
+fn place_three(sim: &mut Simulation) -> [(u32, Vec2); 4] {
     let ranges = sim.layout().ranges.clone();
     let big = (ranges[0].start, Vec2::new(80.0, 200.0));
     // The box overlaps the second big circle: the box's layer is higher.
@@ -64,16 +69,22 @@ fn a_frame_shows_each_body_in_its_kinds_colour(device: &Device) {
     let bodies = [big, big_under, boxed, dot];
     let placed: Vec<_> = bodies.iter().map(|&(s, p)| (s, p, Vec2::X)).collect();
     sim.place(&placed).unwrap();
-    let view = View::whole(spec.size, 400, 300, BACKGROUND);
-    let frame = sim.draw(&view, &looks).unwrap();
+    bodies
+}
+
+/// Checks a frame of the bodies of [`place_three`] against their shapes: each body's
+/// colour at its place, the top layer where they overlap, every kind's colour present, and
+/// the background far from every body.
+fn check_three(frame: &Frame, view: &View, looks: &[Look], bodies: [(u32, Vec2); 4]) {
+    let [big, big_under, boxed, dot] = bodies;
     let colour = |k: usize| looks[k].colour;
     // Each body's centre is its colour; the overlap is the box's.
-    assert_eq!(pixel_at(&frame, &view, big.1), colour(0));
-    assert_eq!(pixel_at(&frame, &view, boxed.1), colour(1));
-    assert_eq!(pixel_at(&frame, &view, Vec2::new(304.0, 100.0)), colour(1));
-    assert_eq!(pixel_at(&frame, &view, Vec2::new(285.0, 100.0)), colour(0));
+    assert_eq!(pixel_at(frame, view, big.1), colour(0));
+    assert_eq!(pixel_at(frame, view, boxed.1), colour(1));
+    assert_eq!(pixel_at(frame, view, Vec2::new(304.0, 100.0)), colour(1));
+    assert_eq!(pixel_at(frame, view, Vec2::new(285.0, 100.0)), colour(0));
     assert_eq!(
-        pixel_at(&frame, &view, dot.1),
+        pixel_at(frame, view, dot.1),
         colour(2),
         "a sub-pixel body still shows"
     );
@@ -123,6 +134,15 @@ fn a_frame_shows_each_body_in_its_kinds_colour(device: &Device) {
         }
     }
     assert_eq!(seen, [true; 3], "every kind's colour is in the frame");
+}
+
+fn a_frame_shows_each_body_in_its_kinds_colour(device: &Device) {
+    let (spec, looks) = three_kinds();
+    let mut sim = Simulation::new(device, &spec, 1).unwrap();
+    let bodies = place_three(&mut sim);
+    let view = View::whole(spec.size, 400, 300, BACKGROUND);
+    let frame = sim.draw(&view, &looks).unwrap();
+    check_three(&frame, &view, &looks, bodies);
     // Nothing alive, nothing drawn.
     let empty = Simulation::new(device, &spec, 1)
         .unwrap()
@@ -177,7 +197,97 @@ fn the_gpu_draws_the_same_frame_as_the_cpu() {
     assert_eq!(on_gpu, cpu);
 }
 
+/// A GL context without a window: NVIDIA's EGL device with the GPU (so that interop works),
+/// Mesa's software device without.
+fn headless(device: &Device) -> Headless {
+    Headless::new(device.kind() == BackendKind::Cuda).expect("an EGL device (see scripts/setup)")
+}
+
+/// How many pixels of two frames of one size differ.
+fn differing(a: &Frame, b: &Frame) -> usize {
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    a.pixels
+        .iter()
+        .zip(&b.pixels)
+        .filter(|(p, q)| p != q)
+        .count()
+}
+
+/// The GL renderer's frame of `pipeline`, whose kinds are `spec`'s.
+fn gl_frame(
+    gl: &Headless,
+    pipeline: &Pipeline,
+    spec: &WorldSpec,
+    looks: &[Look],
+    view: &View,
+) -> (Frame, bool) {
+    let mut renderer = BodyRenderer::new(gl.facade(), pipeline, &kind_table(spec), looks).unwrap();
+    if let Some(why) = renderer.fallback() {
+        panic!("the GPU's vertices are uploaded: {why}");
+    }
+    let frame = gl.draw(&mut renderer, pipeline, view).unwrap();
+    (frame, renderer.is_interop())
+}
+
+fn gl_draws_each_body_in_its_kinds_colour(device: &Device) {
+    let gl = headless(device);
+    let (spec, looks) = three_kinds();
+    let mut sim = Simulation::new(device, &spec, 1).unwrap();
+    let bodies = place_three(&mut sim);
+    let view = View::whole(spec.size, 400, 300, BACKGROUND);
+    let (frame, interop) = gl_frame(&gl, &sim, &spec, &looks, &view);
+    assert_eq!(interop, device.kind() == BackendKind::Cuda);
+    check_three(&frame, &view, &looks, bodies);
+    let kernel = sim.draw(&view, &looks).unwrap();
+    let differ = differing(&frame, &kernel);
+    println!(
+        "three bodies, GL on {}: {differ} of {} pixels differ from the kernel renderer's",
+        gl.device(),
+        frame.pixels.len()
+    );
+    assert!(
+        differ <= 8,
+        "only rounding at an edge may differ: {differ} pixels"
+    );
+}
+
+fn gl_draws_a_game_as_the_kernel_does(device: &Device) {
+    let gl = headless(device);
+    let scene = paper();
+    let mut game = Game::new(device, &scene, 1).unwrap();
+    for _ in 0..300 {
+        game.submit(None).unwrap();
+    }
+    let kernel = game.draw(640, 360).unwrap();
+    let view = looks::whole_field(&scene, 640, 360);
+    let looks = looks::looks(&scene);
+    let (frame, _) = gl_frame(&gl, game.pipeline(), &scene.world, &looks, &view);
+    let differ = differing(&frame, &kernel);
+    println!(
+        "paper after 300 steps, GL on {}: {differ} of {} pixels differ from the kernel \
+         renderer's (frame hash {:#018x})",
+        gl.device(),
+        frame.pixels.len(),
+        frame.hash()
+    );
+    let state = game.snapshot().unwrap();
+    for kind in state.live().map(|slot| state.kind[slot] as usize) {
+        let look = &looks[kind];
+        let drawn = [look.colour, look.nose, look.hurt];
+        assert!(
+            frame.pixels.iter().any(|p| drawn.contains(p)),
+            "kind {kind} lives but is not drawn"
+        );
+    }
+    assert!(
+        differ * 1000 <= frame.pixels.len(),
+        "{differ} pixels differ"
+    );
+}
+
 on_both_backends!(
     a_frame_shows_each_body_in_its_kinds_colour,
     bad_frames_are_refused,
+    gl_draws_each_body_in_its_kinds_colour,
+    gl_draws_a_game_as_the_kernel_does,
 );

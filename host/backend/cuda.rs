@@ -107,6 +107,12 @@ impl Gpu {
         &self.properties
     }
 
+    /// The context and the stream every launch and copy goes to, for raw driver calls that
+    /// must be ordered with them.
+    pub(super) fn context_and_stream(&self) -> (Arc<CudaContext>, Arc<CudaStream>) {
+        (self.ctx.clone(), self.stream.clone())
+    }
+
     // Buffers are untyped bytes here, so that any plain-data element type (including the
     // kernels' own structs) can live in device memory without cudarc's marker traits.
 

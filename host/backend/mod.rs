@@ -7,6 +7,7 @@
 
 mod cpu;
 mod cuda;
+mod interop;
 mod plan;
 mod ring;
 
@@ -21,6 +22,7 @@ use serde::Serialize;
 
 pub use cpu::Schedule;
 pub use cuda::GpuProperties;
+pub use interop::GlBuffer;
 pub use plan::{Op, Plan};
 pub use ring::Ring;
 

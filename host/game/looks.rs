@@ -22,11 +22,20 @@ const SHIP: u32 = rgb(235, 245, 255);
 const SHOT: u32 = rgb(255, 235, 90);
 const OTHER: u32 = rgb(140, 145, 160);
 
+/// The ship while it has lost energy (its FPS meter is down).
+const SHIP_HURT: u32 = rgb(255, 110, 100);
+
 /// `colour` halfway to white: the side a body faces.
 fn lighter(colour: u32) -> u32 {
     let [r, g, b, a] = colour.to_le_bytes();
     let up = |c: u8| c + (255 - c) / 2;
     u32::from_le_bytes([up(r), up(g), up(b), a])
+}
+
+/// `colour` darkened by half: a body that has lost energy.
+fn darker(colour: u32) -> u32 {
+    let [r, g, b, a] = colour.to_le_bytes();
+    u32::from_le_bytes([r / 2, g / 2, b / 2, a])
 }
 
 /// One look per kind of `scene`.
@@ -59,7 +68,11 @@ pub fn looks(scene: &Scene) -> Vec<Look> {
                 colour,
                 nose: lighter(colour),
                 layer,
-                reserved: 0,
+                hurt: if Some(k) == ship {
+                    SHIP_HURT
+                } else {
+                    darker(colour)
+                },
             }
         })
         .collect()

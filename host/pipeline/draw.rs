@@ -1,10 +1,11 @@
-//! The kernel renderer's host half: a frame of the world drawn on the device by
-//! `gpuwars_kernels::render`, read back, hashed and written as a PNG.
+//! The renderers' device work: the kernel renderer's frame of the world drawn on the device
+//! by `gpuwars_kernels::render`, read back, hashed and written as a PNG; and the vertices
+//! the GL renderer draws.
 
 use std::path::Path;
 
-use gpuwars_kernels::registry;
-use gpuwars_kernels::render::{Look, ResolveArgs, SplatArgs, View};
+use gpuwars_kernels::render::{BodyVertex, Look, ResolveArgs, SplatArgs, VertexArgs, View};
+use gpuwars_kernels::{DevSlice, registry};
 use xxhash_rust::xxh3::xxh3_64;
 
 use super::{Pipeline, op};
@@ -153,5 +154,45 @@ impl Pipeline<'_> {
             ]
         };
         device.run(&device.plan(ops, false)?)
+    }
+}
+
+impl Pipeline<'_> {
+    /// The number of vertices [`Pipeline::write_vertices`] writes: one per slot.
+    pub fn vertex_count(&self) -> u32 {
+        self.layout.slots
+    }
+
+    /// Queues the writing of every slot's vertex after the steps queued before, without
+    /// waiting.
+    ///
+    /// # Safety
+    /// `vertices` views memory of this pipeline's device (a mapped GL buffer, a buffer)
+    /// that holds at least [`Pipeline::vertex_count`] vertices and that nothing else
+    /// touches until the launch completes.
+    pub unsafe fn write_vertices(&self, vertices: DevSlice<BodyVertex>) -> Result<(), Error> {
+        if vertices.len() < self.layout.slots {
+            return Err(Error::Invalid(format!(
+                "a vertex buffer of {} vertices for {} slots",
+                vertices.len(),
+                self.layout.slots
+            )));
+        }
+        let args = VertexArgs {
+            bodies: self.state.bodies(),
+            kinds: self.state.kinds.view(),
+            vertices,
+        };
+        let device = self.device;
+        // SAFETY: the body views are this pipeline's; the caller vouches for `vertices`.
+        let ops = unsafe { vec![op(registry::WRITE_VERTICES, self.layout.slots, args, 24)] };
+        device.run(&device.plan(ops, false)?)
+    }
+
+    /// Every slot's vertex, written into `vertices` (a buffer of this pipeline's device).
+    pub fn vertices_into(&self, vertices: &mut Buffer<BodyVertex>) -> Result<(), Error> {
+        // SAFETY: the buffer is borrowed mutably for the launch, which `run` completes on
+        // the CPU and orders before any later use of the buffer on the GPU's one stream.
+        unsafe { self.write_vertices(vertices.view()) }
     }
 }

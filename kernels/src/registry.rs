@@ -86,6 +86,8 @@ kernels! {
     SPLAT_BODIES = splat_bodies(render::SplatArgs) => render::splat_bodies;
     /// Turns each pixel's key into its colour and clears the key.
     RESOLVE_PIXELS = resolve_pixels(render::ResolveArgs) => render::resolve_pixels;
+    /// Writes every slot's vertex for the GL renderer (into its mapped vertex buffer).
+    WRITE_VERTICES = write_vertices(render::VertexArgs) => render::write_vertices;
     /// The autopilot: the ship's input from what lies around it (one thread).
     AUTOPILOT = autopilot(autopilot::AutopilotArgs) => autopilot::autopilot;
 }

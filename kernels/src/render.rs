@@ -9,6 +9,10 @@
 //!    highest kind, then the brighter shade.
 //! 2. [`resolve_pixels`]: each pixel turns its key into a colour from the kinds' looks (the
 //!    background where nothing was drawn) and clears the key for the next frame.
+//!
+//! The GL renderer (the paper's way) draws from [`BodyVertex`]es instead, which
+//! [`write_vertices`] writes straight into the vertex buffer GL draws from; its shaders
+//! follow the same rules (shapes, shades, layers), so both renderers draw the same picture.
 
 use glam::Vec2;
 
@@ -18,8 +22,12 @@ use crate::{DevSlice, KernelArgs, Thread};
 
 /// Largest radius, in pixels, a body is drawn with: bounds the work of one thread.
 pub const MAX_RADIUS_PX: f32 = 48.0;
-/// Shade of a body's pixels towards where it faces (its nose); the rest are shade 0.
+/// Shade of a body's pixels: its colour.
+pub const BODY: u32 = 0;
+/// Shade of a body's pixels towards where it faces (its nose).
 pub const NOSE: u32 = 1;
+/// Shade of the body's pixels (its nose excepted) while it has lost energy: the hit effect.
+pub const HURT: u32 = 2;
 /// Fraction of the radius beyond which a pixel on the facing side is the nose.
 pub const NOSE_FROM: f32 = 0.35;
 
@@ -73,8 +81,26 @@ pub struct Look {
     pub nose: u32,
     /// Drawing order: a higher layer covers a lower one (0 to 255).
     pub layer: u32,
-    /// Keeps the struct free of implicit padding (checked by its `Pod` derive).
-    pub reserved: u32,
+    /// Body colour while it has less energy than it was born with.
+    pub hurt: u32,
+}
+
+impl Look {
+    /// The colour of `shade` ([`BODY`], [`NOSE`] or [`HURT`]).
+    #[inline(always)]
+    pub fn colour_of(&self, shade: u32) -> u32 {
+        match shade {
+            NOSE => self.nose,
+            HURT => self.hurt,
+            _ => self.colour,
+        }
+    }
+}
+
+/// Whether the body in `slot` is drawn hurt: it has lost energy, and its kind has any.
+#[inline(always)]
+pub fn is_hurt(b: &Bodies, info: &KindInfo, slot: u32) -> bool {
+    b.energy.get(slot) < info.energy
 }
 
 /// The key of an undrawn pixel.
@@ -145,6 +171,7 @@ pub fn splat_bodies(t: Thread, args: &SplatArgs) {
     } else {
         Vec2::splat(reach)
     };
+    let body_shade = if is_hurt(b, &info, slot) { HURT } else { BODY };
     let facing = b.dir.get(slot);
     // Image y runs down: the facing direction flips its y.
     let facing = Vec2::new(facing.x, -facing.y);
@@ -170,7 +197,7 @@ pub fn splat_bodies(t: Thread, args: &SplatArgs) {
             let shade = if d.dot(facing) > NOSE_FROM * reach {
                 NOSE
             } else {
-                0
+                body_shade
             };
             let pixel = y * view.width + x;
             args.keys.atomic_max(pixel, key(layer, kind, shade));
@@ -208,13 +235,66 @@ pub fn resolve_pixels(t: Thread, args: &ResolveArgs) {
         args.background
     } else {
         let (kind, shade) = unkey(key);
-        let look = args.looks.get(kind);
-        if shade == NOSE {
-            look.nose
-        } else {
-            look.colour
-        }
+        args.looks.get(kind).colour_of(shade)
     };
     args.image.set(pixel, colour);
     args.keys.set(pixel, EMPTY);
+}
+
+/// [`BodyVertex::flags`]: a body lives in this slot (the others are not drawn).
+pub const VERTEX_ALIVE: u32 = 1;
+/// [`BodyVertex::flags`]: the body is hurt (see [`is_hurt`]).
+pub const VERTEX_HURT: u32 = 2;
+
+/// One slot as the GL renderer draws it: "the positions and type are put in a VBO" (paper,
+/// section 5). The layout of the vertex buffer, for the kernel that writes it and the
+/// shaders that read it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct BodyVertex {
+    /// World position.
+    pub pos: Vec2,
+    /// Unit direction the body faces.
+    pub dir: Vec2,
+    /// Kind index.
+    pub kind: u32,
+    /// [`VERTEX_ALIVE`] and [`VERTEX_HURT`] bits.
+    pub flags: u32,
+}
+
+/// Arguments of [`write_vertices`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
+pub struct VertexArgs {
+    /// The bodies (read only).
+    pub bodies: Bodies,
+    /// Kind table (energies at birth).
+    pub kinds: DevSlice<KindInfo>,
+    /// Output: one vertex per slot (the GL vertex buffer, mapped, on the GPU).
+    pub vertices: DevSlice<BodyVertex>,
+}
+// SAFETY: repr(C) plain data.
+unsafe impl KernelArgs for VertexArgs {}
+
+/// Thread `i` writes slot `i`'s vertex (flags 0 for a free slot).
+#[inline(always)]
+pub fn write_vertices(t: Thread, args: &VertexArgs) {
+    let b = &args.bodies;
+    let slot = t.global();
+    if slot >= b.slots() || slot >= args.vertices.len() {
+        return;
+    }
+    let vertex = if b.is_alive(slot) {
+        let kind = b.kind.get(slot);
+        let hurt = is_hurt(b, &args.kinds.get(kind), slot);
+        BodyVertex {
+            pos: b.pos.get(slot),
+            dir: b.dir.get(slot),
+            kind,
+            flags: VERTEX_ALIVE | if hurt { VERTEX_HURT } else { 0 },
+        }
+    } else {
+        BodyVertex::default()
+    };
+    args.vertices.set(slot, vertex);
 }
