@@ -14,6 +14,7 @@ pub mod pipeline;
 pub mod primitives;
 pub mod ptx;
 pub mod sim;
+pub mod sound;
 
 pub use backend::{BackendKind, BackendRequest, Buffer, Device, Element, Error, Op, Plan};
 pub use gpuwars_kernels as kernels;

@@ -1,8 +1,9 @@
 //! The game on the host side: scenes (TOML), the per-step driver that launches the game's
-//! kernels in order, and replays.
+//! kernels in order, replays, and high scores.
 
 pub mod demo;
 pub mod engine;
+pub mod highscore;
 pub mod looks;
 pub mod replay;
 pub mod scene;
