@@ -11,6 +11,7 @@ pub mod game;
 pub mod graphics;
 pub mod info;
 pub mod pipeline;
+pub mod play;
 pub mod primitives;
 pub mod ptx;
 pub mod sim;

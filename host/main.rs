@@ -12,6 +12,7 @@ use gpuwars::game::scene;
 use gpuwars::game::{Options, Scene};
 use gpuwars::info::Info;
 use gpuwars::pipeline::draw::MAX_SIDE;
+use gpuwars::play::{self, Pilot as PlayPilot, PlayOptions, Renderer};
 use gpuwars::{BackendRequest, Device};
 
 /// GpuWars: a top-down shooter whose whole game loop runs as GPU kernels.
@@ -47,6 +48,8 @@ enum Command {
     Scenes,
     /// The autopilot plays a scene without a window and prints its figures (the default).
     Demo(DemoArgs),
+    /// Plays a scene in a window, at the keyboard (the default when a display is present).
+    Play(PlayArgs),
     /// Plays a recorded game again and checks that it ends in the recorded state.
     Replay {
         /// The replay file (written by `demo --record`).
@@ -141,6 +144,41 @@ impl DemoArgs {
     }
 }
 
+#[derive(Args)]
+struct PlayArgs {
+    /// A built-in scene's name (see `gpuwars scenes`) or a path to a scene TOML file.
+    #[arg(long, env = "GPUWARS_SCENE", default_value = "paper")]
+    scene: String,
+    /// Seed of the random number generators.
+    #[arg(long, default_value_t = 1)]
+    seed: u32,
+    /// Who flies the ship: you (WASD moves, the arrow keys fire), the autopilot, or nobody.
+    #[arg(long, value_enum, default_value_t)]
+    pilot: PlayPilot,
+    /// Start with the sound off (M toggles it).
+    #[arg(long)]
+    mute: bool,
+    /// Draw frames as fast as possible instead of with the display's refresh.
+    #[arg(long)]
+    no_vsync: bool,
+    /// Write the last game's inputs to this replay file when the window closes.
+    #[arg(long)]
+    record: Option<PathBuf>,
+    /// Which renderer draws the world: a kernel's image, or GL from a CUDA–GL interop
+    /// vertex buffer.
+    #[arg(long, value_enum, default_value_t)]
+    render: Renderer,
+    /// The window's size, WIDTHxHEIGHT in pixels.
+    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Steps in flight before the host reads a status back.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u16).range(1..=1024))]
+    lag: u16,
+    /// Print JSON instead of text when the window closes.
+    #[arg(long)]
+    json: bool,
+}
+
 /// `WIDTHxHEIGHT`, each side 1 to 16384 pixels.
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
     let bad = || format!("`{text}` is not WIDTHxHEIGHT with each side 1 to {MAX_SIDE} pixels");
@@ -154,15 +192,20 @@ fn parse_size(text: &str) -> Result<(u32, u32), String> {
     Ok((side(w).ok_or_else(bad)?, side(h).ok_or_else(bad)?))
 }
 
-/// The default command: the demo with its defaults (and the environment's settings).
-fn default_demo() -> DemoArgs {
+/// Arguments `T` at their defaults (and the environment's settings).
+fn defaults<T: Args + clap::FromArgMatches>() -> T {
     #[derive(Parser)]
-    struct Defaults {
+    struct Defaults<T: Args + clap::FromArgMatches> {
         #[command(flatten)]
-        demo: DemoArgs,
+        args: T,
     }
-    let mut demo = Defaults::parse_from(["gpuwars"]).demo;
-    // No window yet: the last frame goes to a PNG, and the report says where.
+    Defaults::<T>::parse_from(["gpuwars"]).args
+}
+
+/// The default demo: with no window, the last frame goes to a PNG, and the report says
+/// where.
+fn default_demo() -> DemoArgs {
+    let mut demo: DemoArgs = defaults();
     demo.screenshot
         .get_or_insert_with(|| std::env::temp_dir().join("gpuwars-demo.png"));
     demo
@@ -179,8 +222,17 @@ fn main() -> ExitCode {
     }
 }
 
+/// The default command: the game in a window when a display is there, else the demo.
+fn default_command() -> Command {
+    if play::display_present() {
+        Command::Play(defaults())
+    } else {
+        Command::Demo(default_demo())
+    }
+}
+
 fn run(cli: Cli) -> anyhow::Result<()> {
-    let command = cli.command.unwrap_or_else(|| Command::Demo(default_demo()));
+    let command = cli.command.unwrap_or_else(default_command);
     if let Command::Scenes = command {
         for built_in in scene::BUILT_IN {
             let scene = Scene::from_toml(built_in.source, built_in.name)?;
@@ -217,6 +269,25 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     .with_context(|| format!("writing the screenshot {}", path.display()))?;
             }
             print_report(&report, args.json, args.screenshot.as_deref())?;
+        }
+        Command::Play(args) => {
+            let scene = Scene::load(&args.scene)?;
+            let options = PlayOptions {
+                seed: args.seed,
+                pilot: args.pilot,
+                muted: args.mute,
+                vsync: !args.no_vsync,
+                renderer: args.render,
+                record: args.record,
+                size: args.size,
+                lag: usize::from(args.lag),
+            };
+            let report = play::play(&device, &scene, options)?;
+            if args.json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                print!("{}", report.to_text());
+            }
         }
         Command::Replay { file, json, run } => {
             let replay = Replay::load(&file)?;

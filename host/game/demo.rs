@@ -182,15 +182,20 @@ pub struct RunOptions {
 
 /// The statuses of a game as they come back, up to the first that ends it.
 #[derive(Default)]
-struct Record {
-    inputs: Vec<Input>,
-    shots: u64,
-    last: Status,
-    over: bool,
+pub(crate) struct Record {
+    /// The input each step applied: the replay.
+    pub(crate) inputs: Vec<Input>,
+    /// Shots fired.
+    pub(crate) shots: u64,
+    /// The latest status.
+    pub(crate) last: Status,
+    /// Whether the game has ended.
+    pub(crate) over: bool,
 }
 
 impl Record {
-    fn take(&mut self, status: Status) {
+    /// Takes the next step's status (those after the end repeat it and are ignored).
+    pub(crate) fn take(&mut self, status: Status) {
         if self.over {
             // Steps queued after the end change nothing: their statuses repeat the last.
             return;

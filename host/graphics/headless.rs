@@ -183,6 +183,16 @@ impl Target {
         Ok(Target { colour, depth })
     }
 
+    /// The colour image (row 0 at the bottom, as GL has it).
+    pub fn colour(&self) -> &Texture2d {
+        &self.colour
+    }
+
+    /// The target's width and height in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.colour.width(), self.colour.height())
+    }
+
     /// A surface that draws into the target.
     pub fn surface<'a>(&'a self, facade: &impl Facade) -> Result<SimpleFrameBuffer<'a>, GlError> {
         SimpleFrameBuffer::with_depth_buffer(facade, &self.colour, &self.depth)

@@ -26,31 +26,34 @@ const FRAGMENT_SHADER: &str = r#"
 #version 330 core
 uniform sampler2D image;
 uniform ivec2 origin;
+uniform bool top_down;
 out vec4 colour;
 void main() {
-    // The image's row 0 is its top; GL counts rows from the bottom.
     ivec2 size = textureSize(image, 0);
     ivec2 p = ivec2(gl_FragCoord.xy) - origin;
-    colour = texelFetch(image, ivec2(p.x, size.y - 1 - p.y), 0);
+    // GL counts rows from the bottom; an uploaded image's row 0 is its top.
+    colour = texelFetch(image, ivec2(p.x, top_down ? size.y - 1 - p.y : p.y), 0);
 }
 "#;
 
-/// An RGBA8 image in a texture, shown pixel for pixel.
-pub struct Picture {
+/// Draws textures pixel for pixel.
+pub struct Blit {
     program: Program,
+}
+
+/// An RGBA8 image uploaded into a texture, which is kept for the next image of its size.
+#[derive(Default)]
+pub struct Upload {
     texture: Option<Texture2d>,
 }
 
-impl Picture {
-    /// A picture with no image yet.
-    pub fn new(facade: &impl Facade) -> Result<Self, GlError> {
-        Ok(Picture {
-            program: program(facade, VERTEX_SHADER, FRAGMENT_SHADER)?,
-            texture: None,
-        })
+impl Upload {
+    /// The texture of the last image set, if any.
+    pub fn texture(&self) -> Option<&Texture2d> {
+        self.texture.as_ref()
     }
 
-    /// Uploads `frame` as the image (reusing the texture when the size is the same).
+    /// Uploads `frame` as the image.
     pub fn set(&mut self, facade: &impl Facade, frame: &Frame) -> Result<(), GlError> {
         let image = RawImage2d {
             data: Cow::Borrowed(bytemuck::cast_slice::<u32, u8>(&frame.pixels)),
@@ -81,20 +84,29 @@ impl Picture {
         }
         Ok(())
     }
+}
 
-    /// Draws the image with its top-left corner at `(left, top)` pixels from the target's
-    /// top-left corner (the target is `target_height` pixels high), over what is there when
-    /// `blend` (by the image's alpha) or replacing it.
+impl Blit {
+    /// The program that draws them.
+    pub fn new(facade: &impl Facade) -> Result<Self, GlError> {
+        Ok(Blit {
+            program: program(facade, VERTEX_SHADER, FRAGMENT_SHADER)?,
+        })
+    }
+
+    /// Draws `texture` (row 0 its top if `top_down`, as uploaded frames have it; its bottom
+    /// otherwise, as GL draws) with its top-left corner at `(left, top)` pixels from
+    /// the target's top-left corner (the target is `target_height` pixels high), over what
+    /// is there when `blend` (by the image's alpha) or replacing it.
     pub fn draw(
         &self,
         target: &mut impl Surface,
+        texture: &Texture2d,
+        top_down: bool,
         (left, top): (u32, u32),
         target_height: u32,
         blend: bool,
     ) -> Result<(), GlError> {
-        let Some(texture) = &self.texture else {
-            return Ok(());
-        };
         let (width, height) = (texture.width(), texture.height());
         let bottom = target_height.saturating_sub(top + height);
         let uniforms = uniform! {
@@ -102,6 +114,7 @@ impl Picture {
                 .magnify_filter(MagnifySamplerFilter::Nearest)
                 .minify_filter(MinifySamplerFilter::Nearest),
             origin: [left as i32, bottom as i32],
+            top_down: top_down,
         };
         let params = DrawParameters {
             blend: if blend {

@@ -1,0 +1,741 @@
+//! `gpuwars play`: the game in a window. A fixed-step loop submits the steps that real time
+//! has made due, each with the keyboard's input of the moment, draws the world with the
+//! renderer asked for, and puts the HUD, the help and the game-over banner over it; sound
+//! effects follow each step's events.
+//!
+//! A slow frame never changes the outcome: the simulation's dt is the scene's, and a frame
+//! that falls behind plays its due steps late (at most [`MAX_CATCH_UP`] per frame, after
+//! which the game slows down rather than skipping). The inputs of every step are recorded,
+//! so `--record` writes a replay that `gpuwars replay` plays headless to the same state.
+
+pub mod keys;
+mod window;
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use anyhow::Context as _;
+use glium::{Display, Rect, Surface};
+use glutin::surface::WindowSurface;
+use gpuwars_kernels::game::control::{DESTROYED, Input, Status};
+use serde::Serialize;
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::PhysicalKey;
+use winit::window::{Fullscreen, Window, WindowId};
+
+use crate::game::demo::{Record, device_name};
+use crate::game::highscore::{self, HighScores};
+use crate::game::replay::Replay;
+use crate::game::{Game, Options, Scene, looks};
+use crate::graphics::bodies::BodyRenderer;
+use crate::graphics::headless::Target;
+use crate::graphics::hud::text_image;
+use crate::graphics::picture::{Blit, Upload};
+use crate::graphics::unpack;
+use crate::sim::layout::kind_table;
+use crate::sound::Sound;
+use crate::{BackendKind, Device};
+use keys::{Action, HELP, Held};
+
+/// The most steps one frame plays; beyond it the game slows down instead.
+pub const MAX_CATCH_UP: u64 = 8;
+/// How often the HUD's figures are redrawn.
+const HUD_EVERY: Duration = Duration::from_millis(250);
+/// Frames the red border shows after the ship was hit.
+const FLASH_FRAMES: u32 = 8;
+/// The hit flash's colour and border width in pixels.
+const FLASH: (f32, f32, f32, f32) = (0.9, 0.1, 0.1, 1.0);
+const FLASH_WIDTH: u32 = 6;
+/// The HUD's text colour.
+const TEXT: u32 = crate::game::looks::rgb(230, 235, 245);
+
+/// Who flies the ship in the window.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Pilot {
+    /// The player, at the keyboard.
+    #[default]
+    Human,
+    /// The autopilot.
+    Auto,
+    /// Nobody: the ship never moves and never fires.
+    None,
+}
+
+/// Which renderer draws the world.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Renderer {
+    /// A kernel draws an image that GL shows (one upload per frame): identical pixels on
+    /// every backend.
+    #[default]
+    Kernel,
+    /// GL draws the bodies from a vertex buffer that kernels write in place (CUDA–GL
+    /// interop; uploaded from the CPU emulation).
+    Interop,
+}
+
+/// How `play` runs.
+#[derive(Clone, Debug)]
+pub struct PlayOptions {
+    /// Seed of the generators.
+    pub seed: u32,
+    /// Who flies the ship.
+    pub pilot: Pilot,
+    /// Start with the sound off.
+    pub muted: bool,
+    /// Swap frames with the display's refresh.
+    pub vsync: bool,
+    /// The renderer.
+    pub renderer: Renderer,
+    /// Write the last game's replay here on exit.
+    pub record: Option<PathBuf>,
+    /// The window's size in pixels.
+    pub size: (u32, u32),
+    /// Steps in flight before a status is read back.
+    pub lag: usize,
+}
+
+/// What `play` prints when the window closes: the last game's figures.
+#[derive(Clone, Debug, Serialize)]
+pub struct PlayReport {
+    /// The backend that ran the kernels.
+    pub backend: BackendKind,
+    /// The GPU's name, or the CPU emulation.
+    pub device: String,
+    /// The renderer and how its data reached GL.
+    pub renderer: String,
+    /// The scene.
+    pub scene: String,
+    /// The seed.
+    pub seed: u32,
+    /// Steps the last game played.
+    pub steps: u64,
+    /// Its game seconds.
+    pub game_seconds: f64,
+    /// The final state hash (`0x` and 16 hex digits), as `demo` and `replay` print it.
+    pub state_hash: String,
+    /// Points scored.
+    pub score: u32,
+    /// Enemies that died.
+    pub enemies_killed: u32,
+    /// The FPS meter at the end.
+    pub fps_meter: f32,
+    /// Whether the game ended.
+    pub game_over: bool,
+    /// Frames drawn in the whole session.
+    pub frames: u64,
+    /// Frames per second over the session.
+    pub frame_rate: f64,
+}
+
+impl PlayReport {
+    /// The report as aligned lines of text.
+    pub fn to_text(&self) -> String {
+        let rows = [
+            ("backend:", self.backend.to_string()),
+            ("device:", self.device.clone()),
+            ("renderer:", self.renderer.clone()),
+            ("scene:", self.scene.clone()),
+            ("seed:", self.seed.to_string()),
+            (
+                "steps:",
+                format!("{} ({:.1} s of game time)", self.steps, self.game_seconds),
+            ),
+            ("state_hash:", self.state_hash.clone()),
+            ("score:", self.score.to_string()),
+            ("enemies_killed:", self.enemies_killed.to_string()),
+            ("fps_meter:", format!("{:.2}", self.fps_meter)),
+            (
+                "game_over:",
+                if self.game_over { "yes" } else { "no" }.into(),
+            ),
+            (
+                "frames:",
+                format!("{} ({:.1} per second)", self.frames, self.frame_rate),
+            ),
+        ];
+        rows.iter().map(|(k, v)| format!("{k:<18}{v}\n")).collect()
+    }
+}
+
+/// Whether a display to open a window on is there (X11 or Wayland).
+pub fn display_present() -> bool {
+    ["DISPLAY", "WAYLAND_DISPLAY"]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some_and(|d| !d.is_empty()))
+}
+
+/// Plays `scene` in a window until Esc or the window is closed; returns the last game's
+/// report (and writes its replay if asked).
+pub fn play(device: &Device, scene: &Scene, options: PlayOptions) -> anyhow::Result<PlayReport> {
+    let event_loop = EventLoop::new()
+        .context("no display to open a window on (`gpuwars demo` plays without one)")?;
+    event_loop.set_control_flow(ControlFlow::Poll);
+    let mut app = App::new(device, scene, options)?;
+    event_loop.run_app(&mut app).context("running the window")?;
+    app.finish()
+}
+
+/// Game time: runs while the game is neither paused nor over, and tells how many steps are
+/// due.
+struct Clock {
+    dt: f64,
+    /// Game time banked before `since`.
+    banked: f64,
+    /// When it last started running, if it runs.
+    since: Option<Instant>,
+}
+
+impl Clock {
+    fn new(dt: f32) -> Self {
+        Clock {
+            dt: f64::from(dt),
+            banked: 0.0,
+            since: None,
+        }
+    }
+
+    fn run(&mut self, running: bool, now: Instant) {
+        match (running, self.since) {
+            (true, None) => self.since = Some(now),
+            (false, Some(since)) => {
+                self.banked += (now - since).as_secs_f64();
+                self.since = None;
+            }
+            _ => {}
+        }
+    }
+
+    /// Steps due at `now` when `played` have been played; the time of the steps beyond
+    /// [`MAX_CATCH_UP`] is given up (the game slows down, it does not skip).
+    fn due(&mut self, played: u64, now: Instant) -> u64 {
+        let elapsed = self.banked + self.since.map_or(0.0, |s| (now - s).as_secs_f64());
+        let due = ((elapsed / self.dt) as u64).saturating_sub(played);
+        if due > MAX_CATCH_UP {
+            self.banked -= (due - MAX_CATCH_UP) as f64 * self.dt;
+        }
+        due.min(MAX_CATCH_UP)
+    }
+}
+
+/// The window and what draws into it.
+struct Screen {
+    // Dropped in this order: GL objects before the display, the display before the window.
+    bodies: Option<BodyRenderer>,
+    target: Option<Target>,
+    picture: Upload,
+    hud: Upload,
+    overlay: Upload,
+    blit: Blit,
+    display: Display<WindowSurface>,
+    window: Window,
+}
+
+/// One game in progress and what the loop knows of it.
+struct Round<'d> {
+    game: Game<'d>,
+    record: Record,
+    submitted: u64,
+    clock: Clock,
+    scored: bool,
+}
+
+struct App<'d> {
+    device: &'d Device,
+    scene: Scene,
+    options: PlayOptions,
+    screen: Option<Screen>,
+    round: Round<'d>,
+    held: Held,
+    last_aim: u32,
+    paused: bool,
+    help: bool,
+    sound: Sound,
+    /// The high scores, where the user has a data folder.
+    scores: Option<HighScores>,
+    flash: u32,
+    frames: u64,
+    started: Instant,
+    /// Frames and steps over the last HUD period, for its rates.
+    rates: (u64, u64, Instant),
+    shown: (f64, f64),
+    hud_at: Option<Instant>,
+    renderer: String,
+    failure: Option<anyhow::Error>,
+}
+
+impl<'d> App<'d> {
+    fn new(device: &'d Device, scene: &Scene, options: PlayOptions) -> anyhow::Result<Self> {
+        let round = Round::new(device, scene, &options)?;
+        let scores = match highscore::default_path() {
+            Some(path) => {
+                let (scores, problem) = HighScores::load(path);
+                if let Some(problem) = problem {
+                    eprintln!("gpuwars: {problem}: it will be replaced");
+                }
+                Some(scores)
+            }
+            None => None,
+        };
+        let now = Instant::now();
+        Ok(App {
+            device,
+            scene: scene.clone(),
+            sound: Sound::open(options.muted),
+            scores,
+            options,
+            screen: None,
+            round,
+            held: Held::default(),
+            last_aim: 0,
+            paused: false,
+            help: false,
+            flash: 0,
+            frames: 0,
+            started: now,
+            rates: (0, 0, now),
+            shown: (0.0, 0.0),
+            hud_at: None,
+            renderer: String::new(),
+            failure: None,
+        })
+    }
+
+    /// Opens the window and sets up the renderer.
+    fn open(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
+        let title = format!("GpuWars — {}", self.scene.name);
+        let (window, display) =
+            window::open(event_loop, &title, self.options.size, self.options.vsync)?;
+        let bodies = match self.options.renderer {
+            Renderer::Kernel => {
+                self.renderer = "kernel (image uploaded to GL each frame)".into();
+                None
+            }
+            Renderer::Interop => {
+                let pipeline = self.round.game.pipeline();
+                let kinds = kind_table(&self.scene.world);
+                let renderer =
+                    BodyRenderer::new(&display, pipeline, &kinds, &looks::looks(&self.scene))?;
+                self.renderer = match (renderer.is_interop(), renderer.fallback()) {
+                    (true, _) => "GL from a CUDA–GL interop vertex buffer".into(),
+                    (false, Some(why)) => {
+                        eprintln!("gpuwars: {why}: the vertices are uploaded");
+                        "GL from uploaded vertices (interop unavailable)".into()
+                    }
+                    (false, None) => "GL from vertices the emulator wrote".into(),
+                };
+                Some(renderer)
+            }
+        };
+        self.screen = Some(Screen {
+            bodies,
+            target: None,
+            picture: Upload::default(),
+            hud: Upload::default(),
+            overlay: Upload::default(),
+            blit: Blit::new(&display)?,
+            display,
+            window,
+        });
+        Ok(())
+    }
+
+    /// The input of the next step, by the pilot.
+    fn input(&mut self) -> Option<Input> {
+        match self.options.pilot {
+            Pilot::Human => {
+                let input = self.held.input(self.last_aim);
+                self.last_aim = input.aim;
+                Some(input)
+            }
+            Pilot::Auto => None,
+            Pilot::None => Some(Input::default()),
+        }
+    }
+
+    /// Plays the due steps and takes the statuses that came back.
+    fn advance(&mut self, now: Instant) -> anyhow::Result<()> {
+        let running = !self.paused && !self.round.record.over;
+        self.round.clock.run(running, now);
+        let due = if running {
+            self.round.clock.due(self.round.submitted, now)
+        } else {
+            0
+        };
+        for _ in 0..due {
+            let input = self.input();
+            self.round.game.submit(input)?;
+            self.round.submitted += 1;
+            self.rates.1 += 1;
+        }
+        while let Some(status) = self.round.game.ready_status() {
+            self.take(status);
+        }
+        Ok(())
+    }
+
+    /// One status back from the device: recorded, heard, and the end of the game noted.
+    fn take(&mut self, status: Status) {
+        if self.round.record.over {
+            return;
+        }
+        self.round.record.take(status);
+        self.sound.play(&status);
+        if status.events.ship_hits > 0 {
+            self.flash = FLASH_FRAMES;
+        }
+        if self.round.record.over && !self.round.scored {
+            self.round.scored = true;
+            let scene = &self.scene.name;
+            if let Some(scores) = &mut self.scores
+                && scores.record(scene, status.score, Some(self.options.seed))
+                && let Err(e) = scores.save()
+            {
+                eprintln!("gpuwars: the high score was not saved: {e}");
+            }
+        }
+    }
+
+    /// Draws one frame.
+    fn draw(&mut self) -> anyhow::Result<()> {
+        let Some(screen) = &mut self.screen else {
+            return Ok(());
+        };
+        let (width, height) = screen.window.inner_size().into();
+        if width == 0 || height == 0 {
+            return Ok(());
+        }
+        let view = looks::whole_field(&self.scene, width, height);
+        let mut frame = screen.display.draw();
+        match &mut screen.bodies {
+            None => {
+                self.round.game.render(width, height)?;
+                let image = self.round.game.pipeline().frame()?;
+                screen.picture.set(&screen.display, &image)?;
+                if let Some(texture) = screen.picture.texture() {
+                    screen
+                        .blit
+                        .draw(&mut frame, texture, true, (0, 0), height, false)?;
+                }
+            }
+            Some(bodies) => {
+                let fits = screen
+                    .target
+                    .as_ref()
+                    .is_some_and(|t| t.size() == (width, height));
+                if !fits {
+                    screen.target = Some(Target::new(&screen.display, width, height)?);
+                }
+                let target = screen.target.as_ref().expect("made above");
+                let mut surface = target.surface(&screen.display)?;
+                surface.clear_color_and_depth(unpack(view.background), 0.0);
+                bodies.update(self.round.game.pipeline())?;
+                bodies.draw(&mut surface, &view)?;
+                screen
+                    .blit
+                    .draw(&mut frame, target.colour(), false, (0, 0), height, false)?;
+            }
+        }
+        if self.flash > 0 {
+            self.flash -= 1;
+            let w = FLASH_WIDTH.min(width).min(height);
+            for rect in [
+                (0, 0, width, w),
+                (0, height - w, width, w),
+                (0, 0, w, height),
+                (width - w, 0, w, height),
+            ] {
+                let (left, bottom, width, height) = rect;
+                let rect = Rect {
+                    left,
+                    bottom,
+                    width,
+                    height,
+                };
+                frame.clear(Some(&rect), Some(FLASH), false, None, None);
+            }
+        }
+        self.draw_text(&mut frame, width, height)?;
+        frame.finish().context("showing the frame")?;
+        self.frames += 1;
+        self.rates.0 += 1;
+        Ok(())
+    }
+
+    /// The HUD, and the help or the game-over banner when they show.
+    fn draw_text(
+        &mut self,
+        frame: &mut glium::Frame,
+        width: u32,
+        height: u32,
+    ) -> anyhow::Result<()> {
+        let now = Instant::now();
+        let scale = if width >= 1600 { 2 } else { 1 };
+        if self.screen.is_none() {
+            return Ok(());
+        }
+        if self.hud_at.is_none_or(|at| now - at >= HUD_EVERY) {
+            let (frames, steps, since) = self.rates;
+            let seconds = (now - since).as_secs_f64().max(1e-9);
+            if self.hud_at.is_some() {
+                self.shown = (frames as f64 / seconds, steps as f64 / seconds);
+            }
+            self.rates = (0, 0, now);
+            self.hud_at = Some(now);
+            let lines = hud_lines(self, &self.round.record.last);
+            let image = text_image(&lines, TEXT, scale);
+            let screen = self.screen.as_mut().expect("checked above");
+            screen.hud.set(&screen.display, &image)?;
+        }
+        let screen = self.screen.as_mut().expect("checked above");
+        if let Some(texture) = screen.hud.texture() {
+            screen
+                .blit
+                .draw(frame, texture, true, (8, 8), height, true)?;
+        }
+        let overlay: Option<Vec<String>> = if self.help {
+            Some(HELP.iter().map(|l| l.to_string()).collect())
+        } else if self.round.record.over {
+            Some(game_over_lines(self))
+        } else if self.paused {
+            Some(vec!["paused: P to go on".into()])
+        } else {
+            None
+        };
+        let screen = self.screen.as_mut().expect("checked above");
+        if let Some(lines) = overlay {
+            let image = text_image(&lines, TEXT, scale);
+            screen.overlay.set(&screen.display, &image)?;
+            if let Some(texture) = screen.overlay.texture() {
+                let at = (
+                    width.saturating_sub(image.width) / 2,
+                    height.saturating_sub(image.height) / 2,
+                );
+                screen.blit.draw(frame, texture, true, at, height, true)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Does what a key asks.
+    fn act(&mut self, action: Action, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
+        match action {
+            Action::Pause => self.paused = !self.paused,
+            Action::Mute => {
+                self.sound.toggle_muted();
+            }
+            Action::Help => self.help = !self.help,
+            Action::Restart if self.round.record.over => {
+                self.round = Round::new(self.device, &self.scene, &self.options)?;
+                self.hud_at = None;
+            }
+            Action::Restart => {}
+            Action::Fullscreen => {
+                if let Some(screen) = &self.screen {
+                    let full = screen.window.fullscreen().is_some();
+                    let mode = (!full).then_some(Fullscreen::Borderless(None));
+                    screen.window.set_fullscreen(mode);
+                }
+            }
+            Action::Quit => event_loop.exit(),
+        }
+        self.hud_at = None;
+        Ok(())
+    }
+
+    /// Notes a failure and closes the window.
+    fn fail(&mut self, error: anyhow::Error, event_loop: &ActiveEventLoop) {
+        self.failure.get_or_insert(error);
+        event_loop.exit();
+    }
+
+    /// The last game's report, its replay written if asked; the window's failure if one
+    /// closed it.
+    fn finish(mut self) -> anyhow::Result<PlayReport> {
+        // GL goes before the game's device buffers that interop registered.
+        self.screen = None;
+        if let Some(error) = self.failure.take() {
+            return Err(error);
+        }
+        while let Some(status) = self.round.game.next_status()? {
+            self.take(status);
+        }
+        let hash = self.round.game.state_hash()?;
+        let record = &self.round.record;
+        let status = record.last;
+        let played = record.inputs.len() as u64;
+        if let Some(path) = &self.options.record {
+            let replay = Replay {
+                scene: self.scene.name.clone(),
+                scene_toml: self.scene.source.clone(),
+                seed: self.options.seed,
+                backend: self.device.kind().to_string(),
+                state_hash: hash,
+                inputs: record.inputs.clone(),
+            };
+            replay.save(path)?;
+        }
+        let seconds = self.started.elapsed().as_secs_f64().max(1e-9);
+        Ok(PlayReport {
+            backend: self.device.kind(),
+            device: device_name(self.device),
+            renderer: self.renderer,
+            scene: self.scene.name.clone(),
+            seed: self.options.seed,
+            steps: played,
+            game_seconds: played as f64 * f64::from(self.scene.world.dt),
+            state_hash: format!("{hash:#018x}"),
+            score: status.score,
+            enemies_killed: status.enemies_killed,
+            fps_meter: status.fps_meter,
+            game_over: status.is_over(),
+            frames: self.frames,
+            frame_rate: self.frames as f64 / seconds,
+        })
+    }
+}
+
+impl<'d> Round<'d> {
+    fn new(device: &'d Device, scene: &Scene, options: &PlayOptions) -> anyhow::Result<Self> {
+        let game = Game::with_options(
+            device,
+            scene,
+            options.seed,
+            Options {
+                lag: options.lag,
+                graphs: true,
+            },
+        )?;
+        Ok(Round {
+            game,
+            record: Record::default(),
+            submitted: 0,
+            clock: Clock::new(scene.world.dt),
+            scored: false,
+        })
+    }
+}
+
+/// The HUD's lines.
+fn hud_lines(app: &App, status: &Status) -> Vec<String> {
+    let best = best_score(app).max(status.score);
+    let (frame_rate, step_rate) = app.shown;
+    let mut flags = Vec::new();
+    if app.paused {
+        flags.push("paused");
+    }
+    if app.sound.is_silent() {
+        flags.push("no sound device");
+    } else if app.sound.is_muted() {
+        flags.push("muted");
+    }
+    flags.push("F1 help");
+    vec![
+        format!("score {}   best {best}", status.score),
+        format!(
+            "FPS meter {:.1} (over below {})",
+            status.fps_meter, app.scene.game.fps.min
+        ),
+        format!("frame rate {frame_rate:.0}/s   steps {step_rate:.0}/s"),
+        format!(
+            "enemies {} alive, {} processed",
+            status.enemies_alive, status.enemies_killed
+        ),
+        format!(
+            "game time {:.1} s",
+            f64::from(status.step) * f64::from(app.scene.world.dt)
+        ),
+        format!("{}: {}", app.device.kind(), device_name(app.device)),
+        format!(
+            "{} renderer   {}",
+            render_name(app.options.renderer),
+            flags.join("   ")
+        ),
+    ]
+}
+
+fn render_name(renderer: Renderer) -> &'static str {
+    match renderer {
+        Renderer::Kernel => "kernel",
+        Renderer::Interop => "interop",
+    }
+}
+
+/// The scene's high score (0 when none is kept).
+fn best_score(app: &App) -> u32 {
+    let best = app.scores.as_ref().and_then(|s| s.best(&app.scene.name));
+    best.map_or(0, |e| e.score)
+}
+
+/// The game-over banner's lines.
+fn game_over_lines(app: &App) -> Vec<String> {
+    let status = &app.round.record.last;
+    let why = if status.game_over == DESTROYED {
+        "the ship was destroyed"
+    } else {
+        "too slow: the FPS meter fell too low"
+    };
+    let best = best_score(app);
+    vec![
+        "GAME OVER".into(),
+        why.into(),
+        format!("score {}   best {best}", status.score),
+        "R new game   Esc quit".into(),
+    ]
+}
+
+impl ApplicationHandler for App<'_> {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.screen.is_none()
+            && let Err(e) = self.open(event_loop)
+        {
+            self.fail(e, event_loop);
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        let result = match event {
+            WindowEvent::CloseRequested => {
+                event_loop.exit();
+                Ok(())
+            }
+            WindowEvent::Resized(size) => {
+                if let Some(screen) = &self.screen {
+                    screen.display.resize(size.into());
+                }
+                Ok(())
+            }
+            WindowEvent::Focused(false) => {
+                self.held.release_all();
+                Ok(())
+            }
+            WindowEvent::KeyboardInput { event, .. } => {
+                let PhysicalKey::Code(key) = event.physical_key else {
+                    return;
+                };
+                let pressed = event.state == ElementState::Pressed;
+                if self.held.set(key, pressed) || !pressed || event.repeat {
+                    Ok(())
+                } else if let Some(action) = Action::of(key) {
+                    self.act(action, event_loop)
+                } else {
+                    Ok(())
+                }
+            }
+            WindowEvent::RedrawRequested => self.advance(Instant::now()).and_then(|()| self.draw()),
+            _ => Ok(()),
+        };
+        if let Err(e) = result {
+            self.fail(e, event_loop);
+        }
+    }
+
+    fn about_to_wait(&mut self, _: &ActiveEventLoop) {
+        if let Some(screen) = &self.screen {
+            screen.window.request_redraw();
+        }
+    }
+}
