@@ -10,9 +10,10 @@ use gpuwars::game::demo::{self, Frames, Pilot, Report, RunOptions};
 use gpuwars::game::replay::Replay;
 use gpuwars::game::scene;
 use gpuwars::game::{Options, Scene};
+use gpuwars::graphics::Renderer;
 use gpuwars::info::Info;
 use gpuwars::pipeline::draw::MAX_SIDE;
-use gpuwars::play::{self, Pilot as PlayPilot, PlayOptions, Renderer};
+use gpuwars::play::{self, Pilot as PlayPilot, PlayOptions};
 use gpuwars::{BackendRequest, Device};
 
 /// GpuWars: a top-down shooter whose whole game loop runs as GPU kernels.
@@ -119,6 +120,10 @@ struct DemoArgs {
     /// Size of the screenshot and the frames, WIDTHxHEIGHT in pixels.
     #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
     size: (u32, u32),
+    /// What draws the screenshot and the frames: the kernel renderer, or GL without a
+    /// window from a CUDA–GL interop vertex buffer (an EGL device).
+    #[arg(long, value_enum, default_value_t)]
+    render: Renderer,
     #[command(flatten)]
     run: RunArgs,
 }
@@ -257,6 +262,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 pilot: args.pilot,
                 frame: args.screenshot.as_ref().map(|_| args.size),
                 frames: args.frames(args.size)?,
+                renderer: args.render,
                 ..args.run.options()
             };
             let (report, replay) = demo::demo(&device, &scene, args.seed, args.steps, options)?;

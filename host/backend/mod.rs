@@ -55,6 +55,14 @@ pub enum Error {
     /// A launch, buffer or size outside what the backends accept.
     #[error("invalid request: {0}")]
     Invalid(String),
+    /// Drawing with OpenGL failed (or no GL context could be made).
+    #[error("OpenGL: {during}: {message}")]
+    Graphics {
+        /// What was being done.
+        during: String,
+        /// What glium or the driver said.
+        message: String,
+    },
     /// A world larger than the device's free memory.
     #[error("{what} needs {needed} bytes of {place} memory, but only {free} are free")]
     OutOfMemory {

@@ -7,11 +7,15 @@ use std::time::Instant;
 use gpuwars_kernels::game::control::{DESTROYED, Input, Status, TOO_SLOW};
 use serde::Serialize;
 
-use super::Game;
 use super::engine::Options;
 use super::replay::Replay;
 use super::spec::Scene;
+use super::{Game, looks};
+use crate::graphics::Renderer;
+use crate::graphics::bodies::BodyRenderer;
+use crate::graphics::headless::Headless;
 use crate::pipeline::{Frame, Profile};
+use crate::sim::layout::kind_table;
 use crate::{BackendKind, Device, Error};
 
 /// What `gpuwars demo` and `gpuwars replay` print.
@@ -61,6 +65,9 @@ pub struct Report {
     /// The hash of the final frame, when one was drawn (`0x` and 16 hex digits).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub frame_hash: Option<String>,
+    /// What drew the frames, when any was drawn.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub renderer: Option<String>,
     /// The final frame, when one was drawn.
     #[serde(skip)]
     pub frame: Option<Frame>,
@@ -122,6 +129,9 @@ impl Report {
                 format!("{}x{} pixels, hash {hash}", frame.width, frame.height),
             );
         }
+        if let Some(renderer) = &self.renderer {
+            line("renderer:", renderer.clone());
+        }
         if let Some(p) = &self.profile {
             out += &format!(
                 "\nstage times over {} steps (copy bandwidth {:.1} GB/s):\n{}",
@@ -178,6 +188,64 @@ pub struct RunOptions {
     pub frame: Option<(u32, u32)>,
     /// Write frames while playing.
     pub frames: Option<Frames>,
+    /// What draws the frames.
+    pub renderer: Renderer,
+}
+
+/// What draws a demo's frames: the kernel renderer, or GL with no window (the interop
+/// renderer, on an EGL device).
+enum Painter {
+    Kernel,
+    Gl(Box<(Headless, BodyRenderer)>),
+}
+
+impl Painter {
+    /// The painter `renderer` names, for `game`.
+    fn new(renderer: Renderer, game: &Game) -> Result<Self, Error> {
+        Ok(match renderer {
+            Renderer::Kernel => Painter::Kernel,
+            Renderer::Interop => {
+                let device = game.pipeline().device();
+                let gl = Headless::new(device.kind() == BackendKind::Cuda)?;
+                let scene = game.scene();
+                let kinds = kind_table(&scene.world);
+                let bodies =
+                    BodyRenderer::new(gl.facade(), game.pipeline(), &kinds, &looks::looks(scene))?;
+                if let Some(why) = bodies.fallback() {
+                    eprintln!("gpuwars: {why}: the vertices are uploaded");
+                }
+                Painter::Gl(Box::new((gl, bodies)))
+            }
+        })
+    }
+
+    /// What draws, in a few words.
+    fn describe(&self) -> String {
+        match self {
+            Painter::Kernel => "kernel".into(),
+            Painter::Gl(gl) => {
+                let (gl, bodies) = &**gl;
+                let feed = if bodies.is_interop() {
+                    "CUDA–GL interop"
+                } else {
+                    "uploaded vertices"
+                };
+                format!("GL ({feed}) on {}", gl.device())
+            }
+        }
+    }
+
+    /// The whole field after every queued step, in a `width × height` frame.
+    fn draw(&mut self, game: &mut Game, width: u32, height: u32) -> Result<Frame, Error> {
+        match self {
+            Painter::Kernel => game.draw(width, height),
+            Painter::Gl(gl) => {
+                let (gl, bodies) = &mut **gl;
+                let view = looks::whole_field(game.scene(), width, height);
+                gl.draw(bodies, game.pipeline(), &view)
+            }
+        }
+    }
 }
 
 /// The statuses of a game as they come back, up to the first that ends it.
@@ -221,6 +289,11 @@ fn play(
 ) -> Result<(Report, Vec<Input>, u64), Error> {
     let mut record = Record::default();
     let mut profile = options.profile.then(Profile::default);
+    let drawing = options.frame.is_some() || options.frames.is_some();
+    let mut painter = match drawing {
+        true => Some(Painter::new(options.renderer, game)?),
+        false => None,
+    };
     let start = Instant::now();
     for i in 0..steps {
         match &mut profile {
@@ -239,7 +312,9 @@ fn play(
             }
             let (width, height) = frames.size;
             let path = frames.dir.join(format!("frame-{:06}.png", i + 1));
-            game.draw(width, height)?
+            let painter = painter.as_mut().expect("made when frames are asked for");
+            painter
+                .draw(game, width, height)?
                 .save_png(&path)
                 .map_err(|e| Error::Invalid(format!("writing {}: {e}", path.display())))?;
         }
@@ -252,9 +327,9 @@ fn play(
     }
     let seconds = start.elapsed().as_secs_f64();
     let hash = game.state_hash()?;
-    let frame = match options.frame {
-        Some((width, height)) => Some(game.draw(width, height)?),
-        None => None,
+    let frame = match (options.frame, &mut painter) {
+        (Some((width, height)), Some(painter)) => Some(painter.draw(game, width, height)?),
+        _ => None,
     };
     let pipeline = game.pipeline();
     let device = pipeline.device();
@@ -293,6 +368,7 @@ fn play(
         },
         profile,
         frame_hash: frame.as_ref().map(|f| format!("{:#018x}", f.hash())),
+        renderer: painter.as_ref().map(Painter::describe),
         frame,
     };
     Ok((report, record.inputs, hash))

@@ -23,10 +23,10 @@ use gpuwars_kernels::render::{BodyVertex, Look, MAX_RADIUS_PX, NOSE_FROM, View};
 use gpuwars_kernels::sim::KindInfo;
 use gpuwars_kernels::sim::kinds::SHAPE_RECT;
 
-use super::{GlError, gl_error, program};
+use super::{gl_error, program};
 use crate::backend::GlBuffer;
 use crate::pipeline::Pipeline;
-use crate::{BackendKind, Buffer};
+use crate::{BackendKind, Buffer, Error};
 
 /// The attributes of [`BodyVertex`], as the vertex shader names them.
 const LAYOUT: glium::vertex::VertexFormat = &[
@@ -155,9 +155,9 @@ impl BodyRenderer {
         pipeline: &Pipeline,
         kinds: &[KindInfo],
         looks: &[Look],
-    ) -> Result<Self, GlError> {
+    ) -> Result<Self, Error> {
         if kinds.len() != looks.len() || kinds.len() > MAX_KINDS {
-            return Err(GlError::Gl {
+            return Err(Error::Graphics {
                 during: "setting up the body renderer".into(),
                 message: format!(
                     "{} kinds and {} looks (allowed: as many looks as kinds, at most {MAX_KINDS})",
@@ -212,7 +212,7 @@ impl BodyRenderer {
 
     /// Writes every body's vertex after the steps queued on `pipeline` (the pipeline this
     /// renderer was made for).
-    pub fn update(&mut self, pipeline: &Pipeline) -> Result<(), GlError> {
+    pub fn update(&mut self, pipeline: &Pipeline) -> Result<(), Error> {
         match &mut self.feed {
             Feed::Interop(buffer) => {
                 // SAFETY: the mapped buffer holds one vertex per slot (made so above) and
@@ -230,7 +230,7 @@ impl BodyRenderer {
 
     /// Draws the bodies as `view` shows the world onto `target`, whose size must be the
     /// view's. The caller clears colour to the background and depth to 0 first.
-    pub fn draw(&self, target: &mut impl Surface, view: &View) -> Result<(), GlError> {
+    pub fn draw(&self, target: &mut impl Surface, view: &View) -> Result<(), Error> {
         let uniforms = uniform! {
             kinds: self.kinds.sampled()
                 .magnify_filter(MagnifySamplerFilter::Nearest)
@@ -273,7 +273,7 @@ fn kind_table(
     facade: &impl Facade,
     kinds: &[KindInfo],
     looks: &[Look],
-) -> Result<UnsignedTexture2d, GlError> {
+) -> Result<UnsignedTexture2d, Error> {
     let mut texels: Vec<u32> = looks
         .iter()
         .flat_map(|l| [l.colour, l.nose, l.hurt, l.layer.min(255)])

@@ -18,7 +18,8 @@ use glium::Surface;
 use gpuwars_kernels::render::View;
 
 use super::bodies::BodyRenderer;
-use super::{GlError, gl_error, unpack};
+use super::{gl_error, unpack};
+use crate::Error;
 use crate::pipeline::{Frame, Pipeline};
 
 /// The EGL extension of NVIDIA's devices (those CUDA can share buffers with).
@@ -69,7 +70,7 @@ pub struct Headless {
 impl Headless {
     /// A context on the first EGL device that makes one; an NVIDIA device first when
     /// `nvidia_first` (so that CUDA can share buffers with it).
-    pub fn new(nvidia_first: bool) -> Result<Self, GlError> {
+    pub fn new(nvidia_first: bool) -> Result<Self, Error> {
         let mut devices: Vec<_> = egl::device::Device::query_devices()
             .map_err(gl_error("listing the EGL devices (is libEGL installed?)"))?
             .collect();
@@ -83,13 +84,13 @@ impl Headless {
                     let context =
                         unsafe { Context::new(backend, false, DebugCallbackBehavior::Ignore) }
                             .map_err(gl_error("starting glium on the EGL context"))?;
-                    let device = format!("{} ({name})", context.get_opengl_renderer_string());
+                    let device = format!("{}, {name}", context.get_opengl_renderer_string());
                     return Ok(Headless { context, device });
                 }
                 Err(e) => tried.push(format!("{name}: {e}")),
             }
         }
-        Err(GlError::Gl {
+        Err(Error::Graphics {
             during: "making a GL context without a window".into(),
             message: if tried.is_empty() {
                 "no EGL device (install Mesa's EGL: libegl1 libegl-mesa0 libgl1-mesa-dri)".into()
@@ -116,7 +117,7 @@ impl Headless {
         renderer: &mut BodyRenderer,
         pipeline: &Pipeline,
         view: &View,
-    ) -> Result<Frame, GlError> {
+    ) -> Result<Frame, Error> {
         let target = Target::new(&self.context, view.width, view.height)?;
         let mut surface = target.surface(&self.context)?;
         surface.clear_color_and_depth(unpack(view.background), 0.0);
@@ -169,7 +170,7 @@ pub struct Target {
 
 impl Target {
     /// A `width × height` target.
-    pub fn new(facade: &impl Facade, width: u32, height: u32) -> Result<Self, GlError> {
+    pub fn new(facade: &impl Facade, width: u32, height: u32) -> Result<Self, Error> {
         let colour = Texture2d::empty_with_format(
             facade,
             UncompressedFloatFormat::U8U8U8U8,
@@ -194,7 +195,7 @@ impl Target {
     }
 
     /// A surface that draws into the target.
-    pub fn surface<'a>(&'a self, facade: &impl Facade) -> Result<SimpleFrameBuffer<'a>, GlError> {
+    pub fn surface<'a>(&'a self, facade: &impl Facade) -> Result<SimpleFrameBuffer<'a>, Error> {
         SimpleFrameBuffer::with_depth_buffer(facade, &self.colour, &self.depth)
             .map_err(gl_error("binding the offscreen target"))
     }

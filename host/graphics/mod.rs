@@ -16,32 +16,41 @@ use glium::Program;
 use glium::backend::Facade;
 use glium::program::ProgramCreationInput;
 
-/// What went wrong while drawing with GL.
-#[derive(Debug, thiserror::Error)]
-pub enum GlError {
-    /// A GL call failed (or no GL context could be made).
-    #[error("OpenGL: {during}: {message}")]
-    Gl {
-        /// What was being done.
-        during: String,
-        /// What glium or the driver said.
-        message: String,
-    },
-    /// The device failed while writing what GL draws.
-    #[error(transparent)]
-    Device(#[from] crate::Error),
+use crate::Error;
+
+/// Which renderer draws the world.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Renderer {
+    /// A kernel draws an image that GL shows (one upload per frame): identical pixels on
+    /// every backend.
+    #[default]
+    Kernel,
+    /// GL draws the bodies from a vertex buffer that kernels write in place (CUDA–GL
+    /// interop; uploaded from the CPU emulation).
+    Interop,
 }
 
-/// Turns a glium error into a [`GlError`] saying what was being done.
-pub fn gl_error<E: Display>(during: &str) -> impl FnOnce(E) -> GlError + '_ {
-    move |e| GlError::Gl {
+impl Renderer {
+    /// The name `--render` takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Renderer::Kernel => "kernel",
+            Renderer::Interop => "interop",
+        }
+    }
+}
+
+/// Turns a glium error into an [`Error::Graphics`] saying what was being done.
+pub fn gl_error<E: Display>(during: &str) -> impl FnOnce(E) -> Error + '_ {
+    move |e| Error::Graphics {
         during: during.to_string(),
         message: e.to_string(),
     }
 }
 
 /// A program from GLSL sources whose outputs are written as they are (no sRGB encoding).
-fn program(facade: &impl Facade, vertex: &str, fragment: &str) -> Result<Program, GlError> {
+fn program(facade: &impl Facade, vertex: &str, fragment: &str) -> Result<Program, Error> {
     Program::new(
         facade,
         ProgramCreationInput::SourceCode {

@@ -10,7 +10,8 @@ use glium::uniforms::{MagnifySamplerFilter, MinifySamplerFilter};
 use glium::vertex::EmptyVertexAttributes;
 use glium::{Blend, DrawParameters, Program, Rect, Surface, uniform};
 
-use super::{GlError, gl_error, program};
+use super::{gl_error, program};
+use crate::Error;
 use crate::pipeline::Frame;
 
 const VERTEX_SHADER: &str = r#"
@@ -54,7 +55,7 @@ impl Upload {
     }
 
     /// Uploads `frame` as the image.
-    pub fn set(&mut self, facade: &impl Facade, frame: &Frame) -> Result<(), GlError> {
+    pub fn set(&mut self, facade: &impl Facade, frame: &Frame) -> Result<(), Error> {
         let image = RawImage2d {
             data: Cow::Borrowed(bytemuck::cast_slice::<u32, u8>(&frame.pixels)),
             width: frame.width,
@@ -88,7 +89,7 @@ impl Upload {
 
 impl Blit {
     /// The program that draws them.
-    pub fn new(facade: &impl Facade) -> Result<Self, GlError> {
+    pub fn new(facade: &impl Facade) -> Result<Self, Error> {
         Ok(Blit {
             program: program(facade, VERTEX_SHADER, FRAGMENT_SHADER)?,
         })
@@ -106,7 +107,7 @@ impl Blit {
         (left, top): (u32, u32),
         target_height: u32,
         blend: bool,
-    ) -> Result<(), GlError> {
+    ) -> Result<(), Error> {
         let (width, height) = (texture.width(), texture.height());
         let bottom = target_height.saturating_sub(top + height);
         let uniforms = uniform! {

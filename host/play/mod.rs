@@ -33,7 +33,7 @@ use crate::graphics::bodies::BodyRenderer;
 use crate::graphics::headless::Target;
 use crate::graphics::hud::text_image;
 use crate::graphics::picture::{Blit, Upload};
-use crate::graphics::unpack;
+use crate::graphics::{Renderer, unpack};
 use crate::sim::layout::kind_table;
 use crate::sound::Sound;
 use crate::{BackendKind, Device};
@@ -62,19 +62,6 @@ pub enum Pilot {
     Auto,
     /// Nobody: the ship never moves and never fires.
     None,
-}
-
-/// Which renderer draws the world.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Renderer {
-    /// A kernel draws an image that GL shows (one upload per frame): identical pixels on
-    /// every backend.
-    #[default]
-    Kernel,
-    /// GL draws the bodies from a vertex buffer that kernels write in place (CUDA–GL
-    /// interop; uploaded from the CPU emulation).
-    Interop,
 }
 
 /// How `play` runs.
@@ -651,17 +638,10 @@ fn hud_lines(app: &App, status: &Status) -> Vec<String> {
         format!("{}: {}", app.device.kind(), device_name(app.device)),
         format!(
             "{} renderer   {}",
-            render_name(app.options.renderer),
+            app.options.renderer.name(),
             flags.join("   ")
         ),
     ]
-}
-
-fn render_name(renderer: Renderer) -> &'static str {
-    match renderer {
-        Renderer::Kernel => "kernel",
-        Renderer::Interop => "interop",
-    }
 }
 
 /// The scene's high score (0 when none is kept).
