@@ -1,15 +1,28 @@
-//! Time per frame of the kernel renderer at 1920 × 1080: `paper` full (8,190 enemies) and
-//! `scale-1m` (1,048,576), on the backend `GPUWARS_BACKEND` names (default: auto): the frame
-//! left on the device (`render`: two launches, then a synchronise), and read back to the
-//! host (`draw`: 8 MB of pixels more).
+//! Time per frame at 1920 × 1080: `paper` full (8,190 enemies) and `scale-1m` (1,048,576),
+//! on the backend `GPUWARS_BACKEND` names (default: auto).
+//!
+//! - `kernel_frame_1080p`: the kernel renderer's frame left on the device (`render`: two
+//!   launches, then a synchronise), and read back to the host (`draw`: 8 MB of pixels more).
+//! - `displayed_frame_1080p`: a whole displayed frame with GL (no window: an EGL device),
+//!   `glFinish` included, for each renderer: `kernel` (render, read back, one texture
+//!   upload, one textured draw) and `interop` (the vertex kernel into GL's mapped vertex
+//!   buffer, or the emulator's vertices uploaded, then one point draw); alone, and after
+//!   one simulation step (`step+…`: the GPU then switches from CUDA to GL each frame).
 //!
 //! ```text
 //! cargo bench --bench render
 //! ```
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use gpuwars::game::Game;
+use glium::Surface;
+use gpuwars::BackendKind;
 use gpuwars::game::scene::built_in;
+use gpuwars::game::{Game, looks};
+use gpuwars::graphics::bodies::BodyRenderer;
+use gpuwars::graphics::headless::{Headless, Target};
+use gpuwars::graphics::picture::{Blit, Upload};
+use gpuwars::graphics::unpack;
+use gpuwars::sim::layout::kind_table;
 
 mod common;
 use common::device;
@@ -39,5 +52,67 @@ fn frame(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, frame);
+fn displayed(c: &mut Criterion) {
+    let device = device();
+    let gl = Headless::new(device.kind() == BackendKind::Cuda).expect("an EGL device");
+    let facade = gl.facade();
+    let (width, height) = (1920, 1080);
+    let target = Target::new(facade, width, height).unwrap();
+    let blit = Blit::new(facade).unwrap();
+    let mut group = c.benchmark_group("displayed_frame_1080p");
+    group.sample_size(10);
+    for (name, steps) in [("paper", 900), ("scale-1m", 2)] {
+        let scene = built_in(name).unwrap().unwrap();
+        let mut game = Game::new(&device, &scene, 1).unwrap();
+        for _ in 0..steps {
+            game.submit(None).unwrap();
+        }
+        let alive = game.draw(16, 16).map(|_| game.status().enemies_alive);
+        group.throughput(Throughput::Elements(u64::from(alive.unwrap())));
+        let view = looks::whole_field(&scene, width, height);
+        let kinds = kind_table(&scene.world);
+        let mut bodies =
+            BodyRenderer::new(facade, game.pipeline(), &kinds, &looks::looks(&scene)).unwrap();
+        let feed = if bodies.is_interop() {
+            "interop"
+        } else {
+            "upload"
+        };
+        let mut upload = Upload::default();
+        let mut kernel_frame = |game: &mut Game| {
+            let frame = game.draw(width, height).unwrap();
+            upload.set(facade, &frame).unwrap();
+            let mut surface = target.surface(facade).unwrap();
+            let texture = upload.texture().unwrap();
+            blit.draw(&mut surface, texture, true, (0, 0), height, false)
+                .unwrap();
+            facade.finish();
+        };
+        let label = |what: &str| format!("{}/{name}/{what}", device.kind());
+        group.bench_function(label("kernel"), |b| b.iter(|| kernel_frame(&mut game)));
+        group.bench_function(label("step+kernel"), |b| {
+            b.iter(|| {
+                game.submit(None).unwrap();
+                kernel_frame(&mut game)
+            })
+        });
+        let mut gl_frame = |game: &mut Game| {
+            let mut surface = target.surface(facade).unwrap();
+            surface.clear_color_and_depth(unpack(view.background), 0.0);
+            bodies.update(game.pipeline()).unwrap();
+            bodies.draw(&mut surface, &view).unwrap();
+            facade.finish();
+        };
+        group.bench_function(label(feed), |b| b.iter(|| gl_frame(&mut game)));
+        group.bench_function(label(&format!("step+{feed}")), |b| {
+            b.iter(|| {
+                game.submit(None).unwrap();
+                gl_frame(&mut game)
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, frame, displayed);
 criterion_main!(benches);
