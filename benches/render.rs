@@ -5,7 +5,8 @@
 //!   launches, then a synchronise), and read back to the host (`draw`: 8 MB of pixels more).
 //! - `displayed_frame_1080p`: a whole displayed frame with GL (no window: an EGL device),
 //!   `glFinish` included, for each renderer: `kernel` (render, read back, one texture
-//!   upload, one textured draw) and `interop` (the vertex kernel into GL's mapped vertex
+//!   upload, one textured draw; `kernel-pbo` on the GPU: drawn into a GL pixel buffer
+//!   registered with CUDA, copied into the texture by GL) and `interop` (the vertex kernel into GL's mapped vertex
 //!   buffer, or the emulator's vertices uploaded, then one point draw); alone, and after
 //!   one simulation step (`step+…`: the GPU then switches from CUDA to GL each frame).
 //!
@@ -20,7 +21,7 @@ use gpuwars::game::scene::built_in;
 use gpuwars::game::{Game, looks};
 use gpuwars::graphics::bodies::BodyRenderer;
 use gpuwars::graphics::headless::{Headless, Target};
-use gpuwars::graphics::picture::{Blit, Upload};
+use gpuwars::graphics::picture::{Blit, DeviceImage, Upload};
 use gpuwars::graphics::unpack;
 use gpuwars::sim::layout::kind_table;
 
@@ -90,6 +91,26 @@ fn displayed(c: &mut Criterion) {
         };
         let label = |what: &str| format!("{}/{name}/{what}", device.kind());
         group.bench_function(label("kernel"), |b| b.iter(|| kernel_frame(&mut game)));
+        if let Ok(mut image) = DeviceImage::new(facade, &device, width, height) {
+            // The frame never leaves the GPU: drawn into a GL pixel buffer mapped for CUDA.
+            let mut pbo_frame = |game: &mut Game| {
+                // SAFETY: the mapped buffer holds the frame; only these launches touch it.
+                let texture = image
+                    .set(|pixels| unsafe { game.render_into(width, height, pixels) })
+                    .unwrap();
+                let mut surface = target.surface(facade).unwrap();
+                blit.draw(&mut surface, texture, true, (0, 0), height, false)
+                    .unwrap();
+                facade.finish();
+            };
+            group.bench_function(label("kernel-pbo"), |b| b.iter(|| pbo_frame(&mut game)));
+            group.bench_function(label("step+kernel-pbo"), |b| {
+                b.iter(|| {
+                    game.submit(None).unwrap();
+                    pbo_frame(&mut game)
+                })
+            });
+        }
         group.bench_function(label("step+kernel"), |b| {
             b.iter(|| {
                 game.submit(None).unwrap();

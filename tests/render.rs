@@ -6,6 +6,7 @@ mod common;
 
 use common::sim::{circle, kind, rect, world};
 use glam::Vec2;
+use glium::texture::RawImage2d;
 use gpuwars::Device;
 use gpuwars::backend::Schedule;
 use gpuwars::game::looks::{BACKGROUND, rgb};
@@ -13,6 +14,7 @@ use gpuwars::game::scene::built_in;
 use gpuwars::game::{Game, Scene};
 use gpuwars::graphics::bodies::BodyRenderer;
 use gpuwars::graphics::headless::Headless;
+use gpuwars::graphics::picture::DeviceImage;
 use gpuwars::kernels::render::{Look, View};
 use gpuwars::pipeline::Pipeline;
 use gpuwars::pipeline::Simulation;
@@ -283,6 +285,63 @@ fn gl_draws_a_game_as_the_kernel_does(device: &Device) {
         differ * 1000 <= frame.pixels.len(),
         "{differ} pixels differ"
     );
+}
+
+#[test]
+fn the_gpus_interop_frame_matches_the_cpus() {
+    let Some(gpu) = common::gpu() else { return };
+    let gl = headless(gpu);
+    let scene = paper();
+    let mut game = Game::new(gpu, &scene, 1).unwrap();
+    for _ in 0..300 {
+        game.submit(None).unwrap();
+    }
+    let _ = game.snapshot().unwrap();
+    let view = looks::whole_field(&scene, 640, 360);
+    let looks = looks::looks(&scene);
+    let (on_gpu, interop) = gl_frame(&gl, game.pipeline(), &scene.world, &looks, &view);
+    assert!(interop);
+    let cpu = paper_frame(common::cpu(), 300);
+    println!(
+        "paper after 300 steps: the H200's interop frame ({}) and the CPU's kernel frame \
+         differ in {} of {} pixels (hashes {:#018x}, {:#018x})",
+        gl.device(),
+        differing(&on_gpu, &cpu),
+        cpu.pixels.len(),
+        on_gpu.hash(),
+        cpu.hash()
+    );
+    assert!(differing(&on_gpu, &cpu) * 1000 <= cpu.pixels.len());
+}
+
+#[test]
+fn kernel_frames_shown_from_a_gl_pixel_buffer_are_the_frames() {
+    let Some(gpu) = common::gpu() else { return };
+    let gl = headless(gpu);
+    let mut game = Game::new(gpu, &paper(), 1).unwrap();
+    for _ in 0..300 {
+        game.submit(None).unwrap();
+    }
+    let (width, height) = (640, 360);
+    let mut image = DeviceImage::new(gl.facade(), gpu, width, height).unwrap();
+    // SAFETY: the mapped buffer holds the frame's pixels; only these launches touch it.
+    let texture = image
+        .set(|pixels| unsafe { game.render_into(width, height, pixels) })
+        .unwrap();
+    let shown: RawImage2d<u8> = texture.read();
+    let shown = Frame {
+        width,
+        height,
+        pixels: bytemuck::cast_slice(&shown.data).to_vec(),
+    };
+    let drawn = game.draw(width, height).unwrap();
+    println!(
+        "kernel frame through a GL pixel buffer on {}: {} of {} pixels differ",
+        gl.device(),
+        differing(&shown, &drawn),
+        drawn.pixels.len()
+    );
+    assert_eq!(shown.hash(), drawn.hash());
 }
 
 on_both_backends!(

@@ -271,6 +271,24 @@ impl<'d> Game<'d> {
         self.pipeline.render(&view, &looks::looks(&self.scene))
     }
 
+    /// As [`Game::render`], the pixels written into `image` (see [`Pipeline::render_into`]).
+    ///
+    /// # Safety
+    /// As for [`Pipeline::render_into`].
+    pub unsafe fn render_into(
+        &mut self,
+        width: u32,
+        height: u32,
+        image: gpuwars_kernels::DevSlice<u32>,
+    ) -> Result<(), Error> {
+        let view = looks::whole_field(&self.scene, width, height);
+        // SAFETY: forwarded.
+        unsafe {
+            self.pipeline
+                .render_into(&view, &looks::looks(&self.scene), image)
+        }
+    }
+
     /// XXH3-64 over the world's state hash, the status and the spawn counts: equal only if
     /// two games agree bit for bit.
     pub fn state_hash(&mut self) -> Result<u64, Error> {

@@ -4,15 +4,18 @@
 use std::borrow::Cow;
 
 use glium::backend::Facade;
+use glium::buffer::{BufferMode, BufferType};
 use glium::index::{NoIndices, PrimitiveType};
 use glium::texture::{ClientFormat, MipmapsOption, RawImage2d, Texture2d, UncompressedFloatFormat};
 use glium::uniforms::{MagnifySamplerFilter, MinifySamplerFilter};
 use glium::vertex::EmptyVertexAttributes;
-use glium::{Blend, DrawParameters, Program, Rect, Surface, uniform};
+use glium::{Blend, DrawParameters, GlObject, Program, Rect, Surface, uniform};
+use gpuwars_kernels::DevSlice;
 
 use super::{gl_error, program};
-use crate::Error;
+use crate::backend::GlBuffer;
 use crate::pipeline::Frame;
+use crate::{Device, Error};
 
 const VERTEX_SHADER: &str = r#"
 #version 330 core
@@ -36,6 +39,71 @@ void main() {
     colour = texelFetch(image, ivec2(p.x, top_down ? size.y - 1 - p.y : p.y), 0);
 }
 "#;
+
+/// An image that kernels write into a GL pixel buffer registered with CUDA, then copied
+/// into a texture by GL: the kernel renderer's frames shown without leaving the GPU.
+pub struct DeviceImage {
+    /// Registered with CUDA: dropped before the GL buffer.
+    registered: GlBuffer,
+    pixels: glium::buffer::Buffer<[(u8, u8, u8, u8)]>,
+    texture: Texture2d,
+}
+
+impl DeviceImage {
+    /// A `width × height` image in `device`'s reach (the CUDA backend, with GL on the
+    /// NVIDIA driver).
+    pub fn new(
+        facade: &impl Facade,
+        device: &Device,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, Error> {
+        let count = width as usize * height as usize;
+        let pixels = glium::buffer::Buffer::empty_array(
+            facade,
+            BufferType::PixelUnpackBuffer,
+            count,
+            BufferMode::Dynamic,
+        )
+        .map_err(gl_error("making a pixel buffer"))?;
+        let registered = device.register_gl_buffer(pixels.get_id())?;
+        let texture = Texture2d::empty_with_format(
+            facade,
+            UncompressedFloatFormat::U8U8U8U8,
+            MipmapsOption::NoMipmap,
+            width,
+            height,
+        )
+        .map_err(gl_error("making a texture"))?;
+        Ok(DeviceImage {
+            registered,
+            pixels,
+            texture,
+        })
+    }
+
+    /// The image's width and height.
+    pub fn size(&self) -> (u32, u32) {
+        (self.texture.width(), self.texture.height())
+    }
+
+    /// Lets `write` fill the pixel buffer (row 0 the image's top) with launches on the
+    /// device, then copies it into the texture on the GPU.
+    pub fn set(
+        &mut self,
+        write: impl FnOnce(DevSlice<u32>) -> Result<(), Error>,
+    ) -> Result<&Texture2d, Error> {
+        self.registered.with_mapped(write)?;
+        let (width, height) = self.size();
+        self.texture.main_level().raw_upload_from_pixel_buffer(
+            self.pixels.as_slice(),
+            0..width,
+            0..height,
+            0..1,
+        );
+        Ok(&self.texture)
+    }
+}
 
 /// Draws textures pixel for pixel.
 pub struct Blit {

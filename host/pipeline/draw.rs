@@ -95,6 +95,44 @@ impl Pipeline<'_> {
     /// Queues the drawing of a frame as [`Pipeline::draw`] does, and leaves it in device
     /// memory (for a display that takes it from there) without waiting.
     pub fn render(&mut self, view: &View, looks: &[Look]) -> Result<(), Error> {
+        // SAFETY: no outside image.
+        unsafe { self.render_to(view, looks, None) }
+    }
+
+    /// As [`Pipeline::render`], the pixels written into `image` (row-major from the top-left
+    /// corner) instead of the pipeline's own frame: a GL pixel buffer mapped for CUDA, so
+    /// that the frame never leaves the device.
+    ///
+    /// # Safety
+    /// `image` views memory of this pipeline's device that holds at least `view.width ×
+    /// view.height` pixels and that nothing else touches until the launches complete.
+    pub unsafe fn render_into(
+        &mut self,
+        view: &View,
+        looks: &[Look],
+        image: DevSlice<u32>,
+    ) -> Result<(), Error> {
+        let pixels = u64::from(view.width) * u64::from(view.height);
+        if u64::from(image.len()) < pixels {
+            return Err(Error::Invalid(format!(
+                "an image of {} pixels for a {}x{} frame",
+                image.len(),
+                view.width,
+                view.height
+            )));
+        }
+        // SAFETY: forwarded; `resolve_pixels` writes one pixel per thread of the frame.
+        unsafe { self.render_to(view, looks, Some(image.range(0, pixels as u32))) }
+    }
+
+    /// # Safety
+    /// As for [`Pipeline::render_into`], for `image` when given.
+    unsafe fn render_to(
+        &mut self,
+        view: &View,
+        looks: &[Look],
+        image: Option<DevSlice<u32>>,
+    ) -> Result<(), Error> {
         let (width, height) = (view.width, view.height);
         if !(1..=MAX_SIDE).contains(&width) || !(1..=MAX_SIDE).contains(&height) {
             return Err(Error::Invalid(format!(
@@ -141,12 +179,13 @@ impl Pipeline<'_> {
         let resolve = ResolveArgs {
             looks: canvas.looks.view(),
             keys: canvas.keys.view(),
-            image: canvas.image.view(),
+            image: image.unwrap_or_else(|| canvas.image.view()),
             background: view.background,
             reserved: 0,
         };
-        // SAFETY: the views are of this pipeline's buffers, sized for the world's slots and
-        // the frame's pixels, and the ops run (and are dropped) before this borrow ends.
+        // SAFETY: the views are of this pipeline's buffers (or the caller's image), sized
+        // for the world's slots and the frame's pixels, and the ops run (and are dropped)
+        // before this borrow ends.
         let ops = unsafe {
             vec![
                 op(registry::SPLAT_BODIES, self.layout.slots, splat, 64),

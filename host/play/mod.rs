@@ -32,7 +32,7 @@ use crate::game::{Game, Options, Scene, looks};
 use crate::graphics::bodies::BodyRenderer;
 use crate::graphics::headless::Target;
 use crate::graphics::hud::text_image;
-use crate::graphics::picture::{Blit, Upload};
+use crate::graphics::picture::{Blit, DeviceImage, Upload};
 use crate::graphics::{Renderer, unpack};
 use crate::sim::layout::kind_table;
 use crate::sound::Sound;
@@ -212,6 +212,9 @@ impl Clock {
 struct Screen {
     // Dropped in this order: GL objects before the display, the display before the window.
     bodies: Option<BodyRenderer>,
+    /// The kernel renderer's frames on the GPU, in a GL pixel buffer registered with CUDA:
+    /// `Err` once that failed (GL not on the NVIDIA driver), and frames are uploaded.
+    device_image: Result<Option<DeviceImage>, ()>,
     target: Option<Target>,
     picture: Upload,
     hud: Upload,
@@ -219,6 +222,46 @@ struct Screen {
     blit: Blit,
     display: Display<WindowSurface>,
     window: Window,
+}
+
+/// Draws the kernel renderer's frame of `game` after the queued steps, `width × height`,
+/// onto `frame`: written on the GPU into a GL pixel buffer where CUDA–GL interop works, else
+/// read back and uploaded.
+fn show_kernel_frame(
+    screen: &mut Screen,
+    game: &mut Game,
+    frame: &mut glium::Frame,
+    (width, height): (u32, u32),
+) -> anyhow::Result<()> {
+    if let Ok(image) = &mut screen.device_image
+        && image.as_ref().is_none_or(|i| i.size() != (width, height))
+    {
+        let device = game.pipeline().device();
+        match DeviceImage::new(&screen.display, device, width, height) {
+            Ok(made) => *image = Some(made),
+            Err(e) => {
+                eprintln!("gpuwars: CUDA–GL interop is not available ({e}): frames are uploaded");
+                screen.device_image = Err(());
+            }
+        }
+    }
+    if let Ok(Some(image)) = &mut screen.device_image {
+        // SAFETY: the mapped pixel buffer holds `width × height` pixels and only these
+        // launches touch it until the unmap.
+        let texture = image.set(|pixels| unsafe { game.render_into(width, height, pixels) })?;
+        screen
+            .blit
+            .draw(frame, texture, true, (0, 0), height, false)?;
+        return Ok(());
+    }
+    game.render(width, height)?;
+    let image = game.pipeline().frame()?;
+    screen.picture.set(&screen.display, &image)?;
+    let texture = screen.picture.texture().expect("set above");
+    screen
+        .blit
+        .draw(frame, texture, true, (0, 0), height, false)?;
+    Ok(())
 }
 
 /// One game in progress and what the loop knows of it.
@@ -298,7 +341,11 @@ impl<'d> App<'d> {
             window::open(event_loop, &title, self.options.size, self.options.vsync)?;
         let bodies = match self.options.renderer {
             Renderer::Kernel => {
-                self.renderer = "kernel (image uploaded to GL each frame)".into();
+                self.renderer = match self.device.kind() {
+                    BackendKind::Cuda => "kernel, into a GL pixel buffer registered with CUDA",
+                    BackendKind::Cpu => "kernel, image uploaded to GL each frame",
+                }
+                .into();
                 None
             }
             Renderer::Interop => {
@@ -317,8 +364,13 @@ impl<'d> App<'d> {
                 Some(renderer)
             }
         };
+        let device_image = match self.device.kind() {
+            BackendKind::Cuda => Ok(None),
+            BackendKind::Cpu => Err(()),
+        };
         self.screen = Some(Screen {
             bodies,
+            device_image,
             target: None,
             picture: Upload::default(),
             hud: Upload::default(),
@@ -399,14 +451,7 @@ impl<'d> App<'d> {
         let mut frame = screen.display.draw();
         match &mut screen.bodies {
             None => {
-                self.round.game.render(width, height)?;
-                let image = self.round.game.pipeline().frame()?;
-                screen.picture.set(&screen.display, &image)?;
-                if let Some(texture) = screen.picture.texture() {
-                    screen
-                        .blit
-                        .draw(&mut frame, texture, true, (0, 0), height, false)?;
-                }
+                show_kernel_frame(screen, &mut self.round.game, &mut frame, (width, height))?;
             }
             Some(bodies) => {
                 let fits = screen
