@@ -133,11 +133,13 @@ fn text_info_names_the_backend() {
 }
 
 #[test]
-fn the_default_command_is_the_headless_demo() {
+fn with_no_display_the_default_command_is_the_headless_demo() {
     let dir = tempfile::tempdir().unwrap();
     let shot = dir.path().join("last.png");
     let out = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
         .args(["--backend", "cpu"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
         .env("GPUWARS_SCENE", "kamikaze")
         .env("GPUWARS_STEPS", "30")
         .env("GPUWARS_SCREENSHOT", &shot)

@@ -9,6 +9,7 @@ use std::process::Command;
 use std::sync::Mutex;
 
 use gpuwars::game::demo::{self, RunOptions};
+use gpuwars::game::highscore::{self, HighScores};
 use gpuwars::game::replay::Replay;
 use gpuwars::game::{Game, Scene};
 use gpuwars::kernels::game::control::{AIM_STEPS, Input, MOVE_SCALE};
@@ -97,6 +98,14 @@ fn keys_move_the_ship_and_the_game_replays(renderer: &str) {
     let report = demo::replay(cpu, &scene, &replay, RunOptions::default()).unwrap();
     assert_eq!(report.state_hash, format!("{:#018x}", replay.state_hash));
     assert!(stdout.contains(&report.state_hash), "{stdout}");
+    // The score was kept, in the data folder the environment named.
+    let (scores, problem) = HighScores::load(dir.path().join(highscore::FILE_NAME));
+    assert!(problem.is_none(), "{problem:?}");
+    assert_eq!(
+        scores.best("paper").map(|e| e.score),
+        Some(report.score),
+        "the game's score is the scene's best"
+    );
 
     // The ship went right, then up.
     let mut game = Game::new(cpu, &scene, replay.seed).unwrap();

@@ -426,15 +426,23 @@ impl<'d> App<'d> {
         if status.events.ship_hits > 0 {
             self.flash = FLASH_FRAMES;
         }
-        if self.round.record.over && !self.round.scored {
-            self.round.scored = true;
-            let scene = &self.scene.name;
-            if let Some(scores) = &mut self.scores
-                && scores.record(scene, status.score, Some(self.options.seed))
-                && let Err(e) = scores.save()
-            {
-                eprintln!("gpuwars: the high score was not saved: {e}");
-            }
+        if self.round.record.over {
+            self.keep_score();
+        }
+    }
+
+    /// Records the game's score as the scene's best if it is, once per game: at game over,
+    /// or when the window closes mid-game.
+    fn keep_score(&mut self) {
+        if std::mem::replace(&mut self.round.scored, true) {
+            return;
+        }
+        let score = self.round.record.last.score;
+        if let Some(scores) = &mut self.scores
+            && scores.record(&self.scene.name, score, Some(self.options.seed))
+            && let Err(e) = scores.save()
+        {
+            eprintln!("gpuwars: the high score was not saved: {e}");
         }
     }
 
@@ -595,6 +603,7 @@ impl<'d> App<'d> {
         while let Some(status) = self.round.game.next_status()? {
             self.take(status);
         }
+        self.keep_score();
         let hash = self.round.game.state_hash()?;
         let record = &self.round.record;
         let status = record.last;
