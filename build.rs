@@ -28,6 +28,7 @@ fn main() {
         kernels.join("Cargo.toml").display()
     );
     println!("cargo::rustc-env=GPUWARS_PTX_ARCH={ARCH}");
+    embed_commit(&root);
     embed_rng_table(&root.join("data").join("mt607_params.txt"), &out_dir);
 
     let rustc = env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
@@ -172,4 +173,33 @@ fn embed_rng_table(table: &Path, out_dir: &Path) {
     }
     rows += "]\n";
     fs::write(out_dir.join("mt607_params.rs"), rows).expect("OUT_DIR is writable");
+}
+
+/// The commit being built, for the benchmarks' reports (`GPUWARS_COMMIT`; "unknown" outside
+/// a git checkout).
+fn embed_commit(root: &Path) {
+    let git = |args: &[&str]| {
+        Command::new("git")
+            .args(args)
+            .current_dir(root)
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    };
+    let commit = git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into());
+    if let Some(dir) = git(&["rev-parse", "--absolute-git-dir"]) {
+        let dir = PathBuf::from(dir);
+        println!("cargo::rerun-if-changed={}", dir.join("HEAD").display());
+        // The branch's ref, or the packed refs it lives in (a missing file would rerun
+        // this script on every build).
+        let branch = git(&["symbolic-ref", "-q", "HEAD"]).map(|head| dir.join(head));
+        let packed = dir.join("packed-refs");
+        for file in branch.iter().chain([&packed]) {
+            if file.exists() {
+                println!("cargo::rerun-if-changed={}", file.display());
+            }
+        }
+    }
+    println!("cargo::rustc-env=GPUWARS_COMMIT={commit}");
 }

@@ -3,9 +3,13 @@
 use std::process::ExitCode;
 
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 use anyhow::{Context, bail};
 use clap::{Args, Parser, Subcommand};
+use gpuwars::benchmark::compare;
+use gpuwars::benchmark::paper::{self, PaperOptions, PaperSummary};
+use gpuwars::benchmark::scale::{self, ScaleOptions, ScaleSummary};
 use gpuwars::game::demo::{self, Frames, Pilot, Report, RunOptions};
 use gpuwars::game::replay::Replay;
 use gpuwars::game::scene;
@@ -51,6 +55,11 @@ enum Command {
     Demo(DemoArgs),
     /// Plays a scene in a window, at the keyboard (the default when a display is present).
     Play(PlayArgs),
+    /// Measures: the paper's experiment, how the game scales, and the change between runs.
+    Bench {
+        #[command(subcommand)]
+        which: BenchCommand,
+    },
     /// Plays a recorded game again and checks that it ends in the recorded state.
     Replay {
         /// The replay file (written by `demo --record`).
@@ -149,6 +158,91 @@ impl DemoArgs {
     }
 }
 
+#[derive(Subcommand)]
+enum BenchCommand {
+    /// The paper's experiment: `paper` played by the autopilot, one step and one frame per
+    /// loop, frames per second every second (CSV, PNG plot, JSON summary).
+    Paper {
+        /// Minutes of wall time to play.
+        #[arg(long, default_value_t = 5.0, value_parser = parse_minutes)]
+        minutes: f64,
+        /// Size of the frames, WIDTHxHEIGHT in pixels.
+        #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
+        size: (u32, u32),
+        /// What draws the frames: the kernel renderer or GL from the interop buffer.
+        #[arg(long, value_enum, default_value_t)]
+        render: Renderer,
+        /// Seed of the game.
+        #[arg(long, default_value_t = 1)]
+        seed: u32,
+        #[command(flatten)]
+        out: BenchOut,
+    },
+    /// The paper's mix and density from 1,024 enemies up, doubling, to --max or the largest
+    /// world that fits (CSV, log-log PNG plot, JSON summary).
+    Scale {
+        /// The most enemies (1,024 to 16,760,000; the last size if not a power of two).
+        #[arg(long, default_value_t = scale::MAX_ENEMIES, value_parser = clap::value_parser!(u64).range(scale::MIN_ENEMIES..=scale::MAX_ENEMIES))]
+        max: u64,
+        /// Seconds spent on each measurement of a size.
+        #[arg(long, default_value_t = 2.0, value_parser = parse_seconds)]
+        seconds: f64,
+        /// Size of the frames, WIDTHxHEIGHT in pixels.
+        #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
+        size: (u32, u32),
+        #[command(flatten)]
+        out: BenchOut,
+    },
+    /// The change from run A to run B, figure by figure (two summaries of one benchmark).
+    Compare {
+        /// The first summary (bench-*.json).
+        a: PathBuf,
+        /// The second summary.
+        b: PathBuf,
+    },
+}
+
+/// Where a benchmark's files go, and how it reports.
+#[derive(Args)]
+struct BenchOut {
+    /// The folder for bench-NAME.csv, .png and .json (made if missing).
+    #[arg(long, default_value = ".")]
+    out: PathBuf,
+    /// Print the JSON summary instead of text (and no progress bar).
+    #[arg(long)]
+    json: bool,
+}
+
+/// Minutes: a number above 0 and at most a day.
+fn parse_minutes(text: &str) -> Result<f64, String> {
+    text.parse::<f64>()
+        .ok()
+        .filter(|m| *m > 0.0 && *m <= 1440.0)
+        .ok_or_else(|| format!("`{text}` is not a number of minutes above 0 and at most 1440"))
+}
+
+/// Seconds: a number from 0.01 to 3600.
+fn parse_seconds(text: &str) -> Result<f64, String> {
+    text.parse::<f64>()
+        .ok()
+        .filter(|s| (0.01..=3600.0).contains(s))
+        .ok_or_else(|| format!("`{text}` is not a number of seconds from 0.01 to 3600"))
+}
+
+/// Prints a summary as JSON or as its text.
+fn print_summary<T: serde::Serialize>(
+    summary: &T,
+    json: bool,
+    text: impl FnOnce(&T) -> String,
+) -> anyhow::Result<()> {
+    if json {
+        println!("{}", serde_json::to_string_pretty(summary)?);
+    } else {
+        print!("{}", text(summary));
+    }
+    Ok(())
+}
+
 #[derive(Args)]
 struct PlayArgs {
     /// A built-in scene's name (see `gpuwars scenes`) or a path to a scene TOML file.
@@ -238,6 +332,14 @@ fn default_command() -> Command {
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     let command = cli.command.unwrap_or_else(default_command);
+    if let Command::Bench {
+        which: BenchCommand::Compare { a, b },
+    } = &command
+    {
+        let (a, b) = (compare::load(a)?, compare::load(b)?);
+        print!("{}", compare::to_text(&compare::compare(&a, &b)?, &a, &b));
+        return Ok(());
+    }
     if let Command::Scenes = command {
         for built_in in scene::BUILT_IN {
             let scene = Scene::from_toml(built_in.source, built_in.name)?;
@@ -247,7 +349,50 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     }
     let device = Device::select(cli.backend, cli.cpu_threads.map(usize::from))?;
     match command {
-        Command::Scenes => unreachable!("handled above"),
+        Command::Scenes
+        | Command::Bench {
+            which: BenchCommand::Compare { .. },
+        } => unreachable!("handled above"),
+        Command::Bench {
+            which:
+                BenchCommand::Paper {
+                    minutes,
+                    size,
+                    render,
+                    seed,
+                    out,
+                },
+        } => {
+            let options = PaperOptions {
+                duration: Duration::from_secs_f64(minutes * 60.0),
+                size,
+                renderer: render,
+                seed,
+                out: out.out,
+                progress: !out.json,
+            };
+            let summary = paper::run(&device, &options)?;
+            print_summary(&summary, out.json, PaperSummary::to_text)?;
+        }
+        Command::Bench {
+            which:
+                BenchCommand::Scale {
+                    max,
+                    seconds,
+                    size,
+                    out,
+                },
+        } => {
+            let options = ScaleOptions {
+                max,
+                time: Duration::from_secs_f64(seconds),
+                size,
+                out: out.out,
+                progress: !out.json,
+            };
+            let summary = scale::run(&device, &options)?;
+            print_summary(&summary, out.json, ScaleSummary::to_text)?;
+        }
         Command::Info { json } => {
             let info = Info::gather(&device);
             if json {

@@ -15,7 +15,6 @@ use crate::graphics::Renderer;
 use crate::graphics::bodies::BodyRenderer;
 use crate::graphics::headless::Headless;
 use crate::pipeline::{Frame, Profile};
-use crate::sim::layout::kind_table;
 use crate::{BackendKind, Device, Error};
 
 /// What `gpuwars demo` and `gpuwars replay` print.
@@ -207,10 +206,7 @@ impl Painter {
             Renderer::Interop => {
                 let device = game.pipeline().device();
                 let gl = Headless::new(device.kind() == BackendKind::Cuda)?;
-                let scene = game.scene();
-                let kinds = kind_table(&scene.world);
-                let bodies =
-                    BodyRenderer::new(gl.facade(), game.pipeline(), &kinds, &looks::looks(scene))?;
+                let bodies = BodyRenderer::for_game(gl.facade(), game)?;
                 if let Some(why) = bodies.fallback() {
                     eprintln!("gpuwars: {why}: the vertices are uploaded");
                 }

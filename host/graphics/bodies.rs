@@ -25,7 +25,9 @@ use gpuwars_kernels::sim::kinds::SHAPE_RECT;
 
 use super::{gl_error, program};
 use crate::backend::GlBuffer;
+use crate::game::{Game, looks};
 use crate::pipeline::Pipeline;
+use crate::sim::layout::kind_table;
 use crate::{BackendKind, Buffer, Error};
 
 /// The attributes of [`BodyVertex`], as the vertex shader names them.
@@ -194,10 +196,17 @@ impl BodyRenderer {
         Ok(BodyRenderer {
             program: program(facade, VERTEX_SHADER, FRAGMENT_SHADER)?,
             vertices,
-            kinds: kind_table(facade, kinds, looks)?,
+            kinds: kind_texture(facade, kinds, looks)?,
             feed,
             fallback,
         })
+    }
+
+    /// A renderer of `game`'s bodies, in its scene's looks (see [`BodyRenderer::new`]).
+    pub fn for_game(facade: &impl Facade, game: &Game) -> Result<Self, Error> {
+        let scene = game.scene();
+        let kinds = kind_table(&scene.world);
+        BodyRenderer::new(facade, game.pipeline(), &kinds, &looks::looks(scene))
     }
 
     /// Whether kernels write GL's vertex buffer in place (CUDA–GL interop).
@@ -269,7 +278,7 @@ impl BodyRenderer {
 }
 
 /// The per-kind table the shaders read: colours and layer, then shape and sizes.
-fn kind_table(
+fn kind_texture(
     facade: &impl Facade,
     kinds: &[KindInfo],
     looks: &[Look],

@@ -19,7 +19,17 @@ use glium::program::ProgramCreationInput;
 use crate::Error;
 
 /// Which renderer draws the world.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    clap::ValueEnum,
+    serde::Serialize,
+    serde::Deserialize,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Renderer {
     /// A kernel draws an image that GL shows (one upload per frame): identical pixels on

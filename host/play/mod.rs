@@ -34,7 +34,6 @@ use crate::graphics::headless::Target;
 use crate::graphics::hud::text_image;
 use crate::graphics::picture::{Blit, DeviceImage, Upload};
 use crate::graphics::{Renderer, unpack};
-use crate::sim::layout::kind_table;
 use crate::sound::Sound;
 use crate::{BackendKind, Device};
 use keys::{Action, HELP, Held};
@@ -349,10 +348,7 @@ impl<'d> App<'d> {
                 None
             }
             Renderer::Interop => {
-                let pipeline = self.round.game.pipeline();
-                let kinds = kind_table(&self.scene.world);
-                let renderer =
-                    BodyRenderer::new(&display, pipeline, &kinds, &looks::looks(&self.scene))?;
+                let renderer = BodyRenderer::for_game(&display, &self.round.game)?;
                 self.renderer = match (renderer.is_interop(), renderer.fallback()) {
                     (true, _) => "GL from a CUDA–GL interop vertex buffer".into(),
                     (false, Some(why)) => {

@@ -1,0 +1,144 @@
+//! `gpuwars bench`: the paper's experiment (section 8, Figure 8) and how the game scales,
+//! written as CSV, PNG plots and JSON summaries, and compared run against run.
+//!
+//! - [`paper`]: scene `paper`, the autopilot playing, one simulation step and one rendered
+//!   frame per loop as in the paper, second by second.
+//! - [`scale`]: the paper's mix and density from 1,024 enemies up to the largest world that
+//!   fits the device, doubling.
+//! - [`compare`]: the change between two summaries, figure by figure.
+
+pub mod compare;
+pub mod paper;
+mod plot;
+pub mod scale;
+
+use std::path::{Path, PathBuf};
+use std::time::SystemTime;
+
+use anyhow::Context as _;
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::{Deserialize, Serialize};
+
+use crate::Device;
+use crate::files::write_atomically;
+use crate::game::demo::device_name;
+
+/// Where and when a benchmark ran.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Machine {
+    /// `cuda` or `cpu`.
+    pub backend: String,
+    /// The GPU's name, or the CPU emulation and its threads.
+    pub device: String,
+    /// The commit the binary was built from.
+    pub commit: String,
+    /// When the run started (RFC 3339, UTC).
+    pub date: String,
+    /// The command line that ran it.
+    pub command: String,
+}
+
+impl Machine {
+    /// The machine `device` is on, now.
+    pub fn now(device: &Device) -> Self {
+        Machine {
+            backend: device.kind().to_string(),
+            device: device_name(device),
+            commit: env!("GPUWARS_COMMIT").to_string(),
+            date: humantime::format_rfc3339_seconds(SystemTime::now()).to_string(),
+            command: std::env::args().collect::<Vec<_>>().join(" "),
+        }
+    }
+}
+
+/// The least, the median, the mean and the largest of a series.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Spread {
+    /// Smallest value.
+    pub min: f64,
+    /// Median (the mean of the middle two for an even count).
+    pub median: f64,
+    /// Arithmetic mean.
+    pub mean: f64,
+    /// Largest value.
+    pub max: f64,
+}
+
+impl Spread {
+    /// The spread of `values` (all zero when there are none; NaNs are left out).
+    pub fn of(values: impl IntoIterator<Item = f64>) -> Self {
+        let mut v: Vec<f64> = values.into_iter().filter(|x| !x.is_nan()).collect();
+        if v.is_empty() {
+            return Spread::default();
+        }
+        v.sort_by(f64::total_cmp);
+        let n = v.len();
+        let median = if n % 2 == 1 {
+            v[n / 2]
+        } else {
+            (v[n / 2 - 1] + v[n / 2]) / 2.0
+        };
+        Spread {
+            min: v[0],
+            median,
+            mean: v.iter().sum::<f64>() / n as f64,
+            max: v[n - 1],
+        }
+    }
+}
+
+/// The files of one run: `DIR/bench-NAME.{csv,png,json}`.
+pub struct Outputs {
+    /// The CSV table.
+    pub csv: PathBuf,
+    /// The plot.
+    pub png: PathBuf,
+    /// The summary.
+    pub json: PathBuf,
+}
+
+impl Outputs {
+    /// The files of benchmark `name` in `dir` (made if missing).
+    pub fn in_dir(dir: &Path, name: &str) -> anyhow::Result<Self> {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("making the output folder {}", dir.display()))?;
+        let file = |ext: &str| dir.join(format!("bench-{name}.{ext}"));
+        Ok(Outputs {
+            csv: file("csv"),
+            png: file("png"),
+            json: file("json"),
+        })
+    }
+}
+
+/// Writes `rows` as CSV (a header from the field names), atomically.
+fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> anyhow::Result<()> {
+    let mut writer = csv::Writer::from_writer(Vec::new());
+    for row in rows {
+        writer.serialize(row)?;
+    }
+    let bytes = writer.into_inner().context("finishing the CSV")?;
+    write_atomically(path, &bytes).with_context(|| format!("writing {}", path.display()))
+}
+
+/// Writes `value` as pretty JSON, atomically.
+fn write_json<T: Serialize>(path: &Path, value: &T) -> anyhow::Result<()> {
+    let text = serde_json::to_string_pretty(value)? + "\n";
+    write_atomically(path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))
+}
+
+/// A progress bar over `len` units on stderr when `show` and stderr is a terminal; hidden
+/// otherwise.
+fn progress(len: u64, show: bool, what: &str) -> ProgressBar {
+    use std::io::IsTerminal;
+    if !show || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(len);
+    let style = ProgressStyle::with_template("{prefix} [{bar:40}] {pos}/{len} {msg}")
+        .expect("a valid template")
+        .progress_chars("=> ");
+    bar.set_style(style);
+    bar.set_prefix(what.to_string());
+    bar
+}

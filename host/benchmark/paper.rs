@@ -1,0 +1,314 @@
+//! The paper's experiment (section 8, Figure 8): `paper` (up to 8,192 enemies), the autopilot
+//! playing, each loop one simulation step and one frame rendered offscreen, for some minutes
+//! of wall time; frames per second, second by second, against the paper's two cards.
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use anyhow::Context as _;
+use glium::Surface;
+use serde::{Deserialize, Serialize};
+
+use super::{Machine, Outputs, Spread, plot, progress, write_csv, write_json};
+use crate::game::scene::built_in;
+use crate::game::{Game, Options, looks};
+use crate::graphics::Renderer;
+use crate::graphics::bodies::BodyRenderer;
+use crate::graphics::headless::{Headless, Target};
+use crate::graphics::unpack;
+use crate::pipeline::Profile;
+use crate::{BackendKind, Device};
+
+/// The paper's Figure 8: frames per second over five minutes, on its two cards.
+pub const PAPER_BANDS: [(&str, f64, f64); 2] = [
+    ("GeForce 8200M (paper)", 45.0, 58.0),
+    ("GeForce 8800GS (paper)", 130.0, 170.0),
+];
+
+/// How `bench paper` runs.
+#[derive(Clone, Debug)]
+pub struct PaperOptions {
+    /// Wall time to play.
+    pub duration: Duration,
+    /// The frames' size in pixels.
+    pub size: (u32, u32),
+    /// The renderer.
+    pub renderer: Renderer,
+    /// Seed of the game.
+    pub seed: u32,
+    /// Where the CSV, PNG and JSON go.
+    pub out: PathBuf,
+    /// Show a progress bar (on a terminal).
+    pub progress: bool,
+}
+
+/// One second of the run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Second {
+    /// Seconds since the start (the second this row ends).
+    pub second: u32,
+    /// Frames rendered in this second (one simulation step each).
+    pub frames_per_s: f64,
+    /// Simulation steps in this second.
+    pub steps_per_s: f64,
+    /// Enemies alive at its end.
+    pub enemies_alive: u32,
+    /// The step's time, stage by stage, of one profiled step of this second (µs).
+    pub step_us: f64,
+    /// The master thread's stages (pilot, master, tally) of that step (µs).
+    pub master_us: f64,
+    /// Its physics stages (births, broad, narrow, integrate, free) (µs).
+    pub physics_us: f64,
+    /// Its AI stage (think) (µs).
+    pub ai_us: f64,
+    /// The renderer's device work for that frame (kernels, or the vertex kernel with the
+    /// map and unmap of the interop buffer) (µs).
+    pub render_us: f64,
+    /// GL's part of that frame: clear, draw and `glFinish` (µs; 0 for the kernel renderer).
+    pub gl_us: f64,
+}
+
+/// The summary of a run, written as JSON.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PaperSummary {
+    /// Always "paper".
+    pub benchmark: String,
+    /// Where and when.
+    pub machine: Machine,
+    /// The renderer.
+    pub renderer: Renderer,
+    /// The frames' width and height.
+    pub size: (u32, u32),
+    /// Seconds measured (whole seconds).
+    pub seconds: u32,
+    /// Frames rendered in all.
+    pub frames: u64,
+    /// Frames per second over the seconds.
+    pub frames_per_s: Spread,
+    /// Enemies alive over the seconds.
+    pub enemies_alive: Spread,
+    /// The profiled steps' time (µs).
+    pub step_us: Spread,
+    /// The renderer's device work per frame (µs).
+    pub render_us: Spread,
+    /// GL's part of a frame (µs).
+    pub gl_us: Spread,
+    /// The simulation alone, no frames, measured after the run (steps/s).
+    pub sim_only_steps_per_s: f64,
+    /// Whether the autopilot lost before the end (the world then stands still).
+    pub game_over: bool,
+}
+
+/// What draws each frame offscreen.
+enum Drawer {
+    /// The kernel renderer; its image stays on the device.
+    Kernel,
+    /// GL without a window, from the interop vertex buffer.
+    Gl(Box<(Headless, BodyRenderer, Target)>),
+}
+
+impl Drawer {
+    fn new(renderer: Renderer, game: &Game, (width, height): (u32, u32)) -> anyhow::Result<Self> {
+        Ok(match renderer {
+            Renderer::Kernel => Drawer::Kernel,
+            Renderer::Interop => {
+                let device = game.pipeline().device();
+                let gl = Headless::new(device.kind() == BackendKind::Cuda)?;
+                let bodies = BodyRenderer::for_game(gl.facade(), game)?;
+                if let Some(why) = bodies.fallback() {
+                    eprintln!("gpuwars: {why}: the vertices are uploaded");
+                }
+                let target = Target::new(gl.facade(), width, height)?;
+                Drawer::Gl(Box::new((gl, bodies, target)))
+            }
+        })
+    }
+
+    /// Draws one frame of `game` after its queued steps. With `timed`, waits and returns the
+    /// device's and GL's seconds for it.
+    fn frame(
+        &mut self,
+        game: &mut Game,
+        (width, height): (u32, u32),
+        timed: bool,
+    ) -> anyhow::Result<(f64, f64)> {
+        let device = game.pipeline().device();
+        let start = timed.then(|| device.mark()).transpose()?;
+        match self {
+            Drawer::Kernel => {
+                game.render(width, height)?;
+                match start {
+                    Some(start) => Ok((device.mark()?.seconds_since(&start)?, 0.0)),
+                    None => Ok((0.0, 0.0)),
+                }
+            }
+            Drawer::Gl(gl) => {
+                let (gl, bodies, target) = &mut **gl;
+                bodies.update(game.pipeline())?;
+                let written = match start {
+                    Some(start) => device.mark()?.seconds_since(&start)?,
+                    None => 0.0,
+                };
+                let drawing = Instant::now();
+                let view = looks::whole_field(game.scene(), width, height);
+                let mut surface = target.surface(gl.facade())?;
+                surface.clear_color_and_depth(unpack(view.background), 0.0);
+                bodies.draw(&mut surface, &view)?;
+                gl.facade().finish();
+                Ok((written, drawing.elapsed().as_secs_f64()))
+            }
+        }
+    }
+}
+
+/// Sums the seconds of the named stages of a one-step profile, in µs.
+fn stages_us(profile: &Profile, names: &[&str]) -> f64 {
+    let seconds: f64 = profile
+        .stages
+        .iter()
+        .filter(|s| names.contains(&s.stage))
+        .map(|s| s.seconds)
+        .sum();
+    seconds * 1e6 / profile.steps.max(1) as f64
+}
+
+/// Runs the experiment on `device` and writes its files; returns the summary.
+pub fn run(device: &Device, options: &PaperOptions) -> anyhow::Result<PaperSummary> {
+    let outputs = Outputs::in_dir(&options.out, "paper")?;
+    let scene = built_in("paper").expect("a built-in scene")?;
+    let machine = Machine::now(device);
+    let mut game = Game::with_options(device, &scene, options.seed, Options::default())?;
+    let mut drawer = Drawer::new(options.renderer, &game, options.size)?;
+    let seconds = options.duration.as_secs().max(1);
+    let bar = progress(seconds, options.progress, "bench paper");
+    let mut rows: Vec<Second> = Vec::new();
+    let mut frames = 0u64;
+    let mut last = game.status();
+    let start = Instant::now();
+    let mut second_start = start;
+    let mut in_second = 0u64;
+    let mut sample: Option<(Profile, f64, f64)> = None;
+    while rows.len() < seconds as usize {
+        if sample.is_none() {
+            // One step of each second is profiled stage by stage (it waits for the GPU).
+            let mut profile = Profile::default();
+            game.submit_profiled(None, &mut profile)?;
+            let (render, gl) = drawer.frame(&mut game, options.size, true)?;
+            sample = Some((profile, render, gl));
+        } else {
+            game.submit(None)?;
+            drawer.frame(&mut game, options.size, false)?;
+        }
+        frames += 1;
+        in_second += 1;
+        while let Some(status) = game.ready_status() {
+            last = status;
+        }
+        let now = Instant::now();
+        let elapsed = (now - second_start).as_secs_f64();
+        if elapsed >= 1.0 {
+            let (profile, render, gl) = sample.take().expect("sampled first");
+            let rate = in_second as f64 / elapsed;
+            rows.push(Second {
+                second: rows.len() as u32 + 1,
+                frames_per_s: rate,
+                steps_per_s: rate,
+                enemies_alive: last.enemies_alive,
+                step_us: profile.step_seconds() * 1e6,
+                master_us: stages_us(&profile, &["pilot", "master", "tally"]),
+                physics_us: stages_us(
+                    &profile,
+                    &["births", "broad", "narrow", "integrate", "free"],
+                ),
+                ai_us: stages_us(&profile, &["think"]),
+                render_us: render * 1e6,
+                gl_us: gl * 1e6,
+            });
+            bar.inc(1);
+            bar.set_message(format!("{rate:.0} frames/s"));
+            second_start = now;
+            in_second = 0;
+        }
+    }
+    while let Some(status) = game.next_status()? {
+        last = status;
+    }
+    bar.finish_and_clear();
+    let sim_only = sim_only_rate(&mut game, options.duration / 10)?;
+    let summary = PaperSummary {
+        benchmark: "paper".into(),
+        machine,
+        renderer: options.renderer,
+        size: options.size,
+        seconds: rows.len() as u32,
+        frames,
+        frames_per_s: Spread::of(rows.iter().map(|r| r.frames_per_s)),
+        enemies_alive: Spread::of(rows.iter().map(|r| f64::from(r.enemies_alive))),
+        step_us: Spread::of(rows.iter().map(|r| r.step_us)),
+        render_us: Spread::of(rows.iter().map(|r| r.render_us)),
+        gl_us: Spread::of(rows.iter().map(|r| r.gl_us)),
+        sim_only_steps_per_s: sim_only,
+        game_over: last.is_over(),
+    };
+    write_csv(&outputs.csv, &rows)?;
+    write_json(&outputs.json, &summary)?;
+    plot::frames_over_time(&outputs.png, &summary, &rows)
+        .with_context(|| format!("plotting {}", outputs.png.display()))?;
+    Ok(summary)
+}
+
+/// Steps per second of the simulation alone (no frames) over about `time` (at least a
+/// second and 100 steps).
+fn sim_only_rate(game: &mut Game, time: Duration) -> anyhow::Result<f64> {
+    let time = time.max(Duration::from_secs(1));
+    let start = Instant::now();
+    let mut steps = 0u64;
+    while steps < 100 || start.elapsed() < time {
+        game.submit(None)?;
+        steps += 1;
+    }
+    while game.next_status()?.is_some() {}
+    Ok(steps as f64 / start.elapsed().as_secs_f64())
+}
+
+impl PaperSummary {
+    /// The summary as aligned lines of text.
+    pub fn to_text(&self) -> String {
+        let f = &self.frames_per_s;
+        let rows = [
+            ("backend:", self.machine.backend.clone()),
+            ("device:", self.machine.device.clone()),
+            (
+                "renderer:",
+                format!(
+                    "{} at {}x{}",
+                    self.renderer.name(),
+                    self.size.0,
+                    self.size.1
+                ),
+            ),
+            ("seconds:", self.seconds.to_string()),
+            ("frames:", self.frames.to_string()),
+            (
+                "frames_per_s:",
+                format!("min {:.1}  median {:.1}  max {:.1}", f.min, f.median, f.max),
+            ),
+            ("step_us:", format!("median {:.1}", self.step_us.median)),
+            ("render_us:", format!("median {:.1}", self.render_us.median)),
+            ("gl_us:", format!("median {:.1}", self.gl_us.median)),
+            (
+                "sim_only:",
+                format!("{:.1} steps/s", self.sim_only_steps_per_s),
+            ),
+            (
+                "enemies_alive:",
+                format!("median {:.0}", self.enemies_alive.median),
+            ),
+            (
+                "game_over:",
+                if self.game_over { "yes" } else { "no" }.into(),
+            ),
+        ];
+        rows.iter().map(|(k, v)| format!("{k:<16}{v}\n")).collect()
+    }
+}

@@ -1,0 +1,211 @@
+//! The benchmarks' plots, drawn with plotters into memory and written as PNG atomically.
+//! Text uses DejaVu Sans, compiled in (the `dejavu` crate): nothing depends on the system's
+//! fonts.
+
+use std::path::Path;
+use std::sync::Once;
+
+use anyhow::anyhow;
+use image::ImageEncoder;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::{FontStyle, register_font};
+
+use super::paper::{PAPER_BANDS, PaperSummary, Second};
+use super::scale::{ScaleRow, ScaleSummary};
+use crate::files::write_atomically;
+
+/// Width and height of every plot.
+const SIZE: (u32, u32) = (1280, 720);
+
+/// Registers the plots' font once.
+fn font() {
+    static REGISTER: Once = Once::new();
+    REGISTER.call_once(|| {
+        // The font is a valid TrueType file compiled into the `dejavu` crate.
+        let _ = register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
+    });
+}
+
+/// Draws with `draw` onto a white canvas and writes it to `path` as a PNG.
+fn png(
+    path: &Path,
+    draw: impl FnOnce(&DrawingArea<BitMapBackend, Shift>) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    font();
+    let (w, h) = SIZE;
+    let mut rgb = vec![0u8; (w * h * 3) as usize];
+    {
+        let area = BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area();
+        area.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+        draw(&area)?;
+        area.present().map_err(|e| anyhow!("{e}"))?;
+    }
+    let mut bytes = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut bytes).write_image(
+        &rgb,
+        w,
+        h,
+        image::ExtendedColorType::Rgb8,
+    )?;
+    Ok(write_atomically(path, &bytes)?)
+}
+
+/// A range `[low, high]` for a log axis that holds `values` and `also`, with some margin.
+fn log_range(values: impl IntoIterator<Item = f64>, also: &[f64]) -> std::ops::Range<f64> {
+    let all: Vec<f64> = values
+        .into_iter()
+        .chain(also.iter().copied())
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .collect();
+    let low = all.iter().copied().fold(f64::INFINITY, f64::min);
+    let high = all.iter().copied().fold(0.0, f64::max);
+    if all.is_empty() {
+        return 1.0..10.0;
+    }
+    low / 1.5..high * 1.5
+}
+
+/// Figure 8 of the paper, redrawn: frames per second against time (log scale), with the
+/// paper's two cards as bands.
+pub fn frames_over_time(
+    path: &Path,
+    summary: &PaperSummary,
+    rows: &[Second],
+) -> anyhow::Result<()> {
+    png(path, |area| {
+        let bands: Vec<f64> = PAPER_BANDS
+            .iter()
+            .flat_map(|&(_, lo, hi)| [lo, hi])
+            .collect();
+        let y = log_range(rows.iter().map(|r| r.frames_per_s), &bands);
+        let x_end = rows.len().max(1) as f64;
+        let title = format!(
+            "paper: frames/s, one step per frame, {} renderer {}x{} ({}, {})",
+            summary.renderer.name(),
+            summary.size.0,
+            summary.size.1,
+            summary.machine.device,
+            summary.machine.backend
+        );
+        let mut chart = ChartBuilder::on(area)
+            .caption(title, ("sans-serif", 22))
+            .margin(16)
+            .x_label_area_size(48)
+            .y_label_area_size(80)
+            .build_cartesian_2d(0.0..x_end, y.log_scale())
+            .map_err(|e| anyhow!("{e}"))?;
+        chart
+            .configure_mesh()
+            .x_desc("time (s)")
+            .y_desc("frames per second (log)")
+            .label_style(("sans-serif", 16))
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+        let colours = [RGBColor(230, 140, 60), RGBColor(90, 160, 90)];
+        for (&(name, lo, hi), colour) in PAPER_BANDS.iter().zip(colours) {
+            chart
+                .draw_series([Rectangle::new(
+                    [(0.0, lo), (x_end, hi)],
+                    colour.mix(0.3).filled(),
+                )])
+                .map_err(|e| anyhow!("{e}"))?
+                .label(format!("{name}: {lo:.0}–{hi:.0}"))
+                .legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 6), (x + 16, y + 6)], colour.filled())
+                });
+        }
+        chart
+            .draw_series(LineSeries::new(
+                rows.iter().map(|r| (f64::from(r.second), r.frames_per_s)),
+                BLUE.stroke_width(2),
+            ))
+            .map_err(|e| anyhow!("{e}"))?
+            .label(format!(
+                "this run: median {:.0} frames/s",
+                summary.frames_per_s.median
+            ))
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLUE.stroke_width(2)));
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 16))
+            .position(SeriesLabelPosition::LowerRight)
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+        Ok(())
+    })
+}
+
+/// One figure of a scale row.
+type Figure = fn(&ScaleRow) -> f64;
+
+/// Steps per second and frames per second against enemies, log-log.
+pub fn scaling(path: &Path, summary: &ScaleSummary) -> anyhow::Result<()> {
+    png(path, |area| {
+        let rows = &summary.rows;
+        let x_low = rows.first().map_or(1024.0, |r| r.enemies as f64);
+        let x_high = rows
+            .last()
+            .map_or(2048.0, |r| r.enemies as f64)
+            .max(x_low * 2.0);
+        let y = log_range(
+            rows.iter().flat_map(|r| [r.steps_per_s, r.frames_per_s]),
+            &[],
+        );
+        let title = format!(
+            "scaling: the paper's mix and density ({}, {})",
+            summary.machine.device, summary.machine.backend
+        );
+        let mut chart = ChartBuilder::on(area)
+            .caption(title, ("sans-serif", 22))
+            .margin(16)
+            .x_label_area_size(48)
+            .y_label_area_size(80)
+            .build_cartesian_2d((x_low / 1.2..x_high * 1.2).log_scale(), y.log_scale())
+            .map_err(|e| anyhow!("{e}"))?;
+        chart
+            .configure_mesh()
+            .x_desc("enemies (log)")
+            .y_desc("per second (log)")
+            .label_style(("sans-serif", 16))
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+        let series: [(&str, RGBColor, Figure); 2] = [
+            ("simulation steps/s", BLUE, |r| r.steps_per_s),
+            (
+                "frames/s (a step and a kernel-rendered frame each)",
+                RED,
+                |r| r.frames_per_s,
+            ),
+        ];
+        for (name, colour, value) in series {
+            let points: Vec<(f64, f64)> =
+                rows.iter().map(|r| (r.enemies as f64, value(r))).collect();
+            chart
+                .draw_series(LineSeries::new(points.clone(), colour.stroke_width(2)))
+                .map_err(|e| anyhow!("{e}"))?
+                .label(name)
+                .legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 16, y)], colour.stroke_width(2))
+                });
+            chart
+                .draw_series(
+                    points
+                        .into_iter()
+                        .map(|p| Circle::new(p, 4, colour.filled())),
+                )
+                .map_err(|e| anyhow!("{e}"))?;
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 16))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+        Ok(())
+    })
+}

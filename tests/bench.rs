@@ -1,0 +1,185 @@
+//! `gpuwars bench`: short runs of the paper's experiment and of the scaling on the CPU
+//! emulation write a CSV, a PNG and a JSON that parse and agree with each other, and
+//! `bench compare` reads two of them.
+
+use std::path::Path;
+use std::process::Command;
+
+use gpuwars::benchmark::Spread;
+use gpuwars::benchmark::paper::{PaperSummary, Second};
+use gpuwars::benchmark::scale::{self, ScaleRow, ScaleSummary};
+use proptest::prelude::*;
+
+fn gpuwars(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_gpuwars"))
+        .args(["--backend", "cpu"])
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn ok(out: &std::process::Output) -> String {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn rows<T: serde::de::DeserializeOwned>(path: &Path) -> Vec<T> {
+    csv::Reader::from_path(path)
+        .unwrap()
+        .deserialize()
+        .collect::<Result<_, _>>()
+        .unwrap()
+}
+
+fn plot_size(path: &Path) -> (u32, u32) {
+    let plot = image::open(path).unwrap();
+    (plot.width(), plot.height())
+}
+
+fn paper_run(dir: &Path, seed: &str) -> PaperSummary {
+    let out = ok(&gpuwars(&[
+        "bench",
+        "paper",
+        "--minutes",
+        "0.04",
+        "--size",
+        "320x180",
+        "--seed",
+        seed,
+        "--out",
+        dir.to_str().unwrap(),
+        "--json",
+    ]));
+    let printed: PaperSummary = serde_json::from_str(&out).unwrap();
+    let written: PaperSummary =
+        serde_json::from_slice(&std::fs::read(dir.join("bench-paper.json")).unwrap()).unwrap();
+    assert_eq!(printed, written);
+    written
+}
+
+#[test]
+fn bench_paper_writes_a_table_a_plot_and_a_summary_that_agree() {
+    let dir = tempfile::tempdir().unwrap();
+    let summary = paper_run(dir.path(), "1");
+    let seconds: Vec<Second> = rows(&dir.path().join("bench-paper.csv"));
+    assert_eq!(seconds.len() as u32, summary.seconds);
+    assert!(summary.seconds >= 2, "{summary:?}");
+    assert_eq!(
+        seconds.iter().map(|s| s.second).collect::<Vec<_>>(),
+        (1..=summary.seconds).collect::<Vec<_>>()
+    );
+    assert_eq!(
+        summary.frames_per_s,
+        Spread::of(seconds.iter().map(|s| s.frames_per_s))
+    );
+    // Frames counted second by second add up to the frames drawn (each second's rate is
+    // its frames over a little more than a second).
+    let counted: f64 = seconds.iter().map(|s| s.frames_per_s).sum();
+    assert!(
+        counted <= summary.frames as f64 + 1.0,
+        "{counted} {summary:?}"
+    );
+    for s in &seconds {
+        assert!(s.frames_per_s > 0.0 && s.enemies_alive > 0 && s.step_us > 0.0);
+        assert!(s.master_us + s.physics_us + s.ai_us <= s.step_us * 1.0001);
+    }
+    assert!(summary.sim_only_steps_per_s > 0.0);
+    assert_eq!(summary.machine.backend, "cpu");
+    assert_eq!(plot_size(&dir.path().join("bench-paper.png")), (1280, 720));
+}
+
+#[test]
+fn bench_scale_measures_each_size_and_compare_reads_two_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = ok(&gpuwars(&[
+        "bench",
+        "scale",
+        "--max",
+        "3000",
+        "--seconds",
+        "0.05",
+        "--size",
+        "320x180",
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--json",
+    ]));
+    let summary: ScaleSummary = serde_json::from_str(&out).unwrap();
+    let table: Vec<ScaleRow> = rows(&dir.path().join("bench-scale.csv"));
+    assert_eq!(table, summary.rows);
+    let sizes: Vec<u64> = table.iter().map(|r| r.enemies).collect();
+    assert_eq!(sizes, [1024, 2048, 3000]);
+    for r in &table {
+        assert!(r.steps_per_s > 0.0 && r.frames_per_s > 0.0 && r.bytes_per_step > 0);
+        let rate = r.bytes_per_step as f64 / (r.step_us / 1e6);
+        assert!((r.achieved_bandwidth - rate).abs() <= rate * 1e-9);
+        assert!((r.fraction_of_copy - rate / summary.copy_bandwidth).abs() < 1e-9);
+    }
+    assert_eq!(plot_size(&dir.path().join("bench-scale.png")), (1280, 720));
+
+    // Compare: two runs of one benchmark, figure by figure; two benchmarks are refused.
+    let other = tempfile::tempdir().unwrap();
+    paper_run(dir.path(), "1");
+    paper_run(other.path(), "2");
+    let (a, b) = (
+        dir.path().join("bench-paper.json"),
+        other.path().join("bench-paper.json"),
+    );
+    let text = ok(&gpuwars(&[
+        "bench",
+        "compare",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+    ]));
+    assert!(text.contains("frames_per_s.median"), "{text}");
+    let mixed = gpuwars(&[
+        "bench",
+        "compare",
+        a.to_str().unwrap(),
+        dir.path().join("bench-scale.json").to_str().unwrap(),
+    ]);
+    assert_eq!(mixed.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&mixed.stderr).contains("cannot be compared"));
+    let bogus = gpuwars(&["bench", "compare", a.to_str().unwrap(), "Cargo.toml"]);
+    assert!(String::from_utf8_lossy(&bogus.stderr).contains("Cargo.toml:1"));
+}
+
+#[test]
+fn scaled_scenes_keep_the_papers_mix_and_density() {
+    for enemies in [1024u64, 8192, 1 << 20, 3000, scale::MAX_ENEMIES] {
+        let scene = scale::scene(enemies).unwrap();
+        let waves = &scene.game.spawn.waves;
+        let total: u64 = waves.iter().map(|w| u64::from(w.count)).sum();
+        assert_eq!(total, enemies);
+        // A quarter polygons, an eighth of each of the six other types.
+        let polygons = waves.iter().find(|w| w.kind == "polygon").unwrap().count;
+        assert_eq!(u64::from(polygons), enemies / 4);
+        let area = f64::from(scene.world.size.x) * f64::from(scene.world.size.y);
+        let density = enemies as f64 / area;
+        let paper = 8192.0 / (4096.0 * 4096.0);
+        assert!((density / paper - 1.0).abs() < 1e-3, "{enemies}: {density}");
+    }
+    assert!(scale::scene(1000).is_err());
+    assert!(scale::scene(scale::MAX_ENEMIES + 8).is_err());
+}
+
+proptest! {
+    #[test]
+    fn spread_is_the_sorted_series_extremes_and_middle(values in prop::collection::vec(-1e6f64..1e6, 1..50)) {
+        let s = Spread::of(values.iter().copied());
+        let mut sorted = values.clone();
+        sorted.sort_by(f64::total_cmp);
+        let n = sorted.len();
+        prop_assert_eq!(s.min, sorted[0]);
+        prop_assert_eq!(s.max, sorted[n - 1]);
+        let below = sorted.iter().filter(|&&v| v < s.median).count();
+        let above = sorted.iter().filter(|&&v| v > s.median).count();
+        prop_assert!(below <= n / 2 && above <= n / 2);
+        let mean = values.iter().sum::<f64>() / n as f64;
+        prop_assert!((s.mean - mean).abs() <= 1e-9 * mean.abs().max(1.0));
+    }
+}
