@@ -175,6 +175,9 @@ enum BenchCommand {
         /// Seed of the game.
         #[arg(long, default_value_t = 1)]
         seed: u32,
+        /// Draw the frames in `play`'s window (vsync off) instead of offscreen.
+        #[arg(long)]
+        window: bool,
         #[command(flatten)]
         out: BenchOut,
     },
@@ -360,6 +363,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     size,
                     render,
                     seed,
+                    window,
                     out,
                 },
         } => {
@@ -371,7 +375,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 out: out.out,
                 progress: !out.json,
             };
-            let summary = paper::run(&device, &options)?;
+            let summary = if window {
+                paper::run_in_window(&device, &options)?
+            } else {
+                paper::run(&device, &options)?
+            };
             print_summary(&summary, out.json, PaperSummary::to_text)?;
         }
         Command::Bench {

@@ -93,6 +93,41 @@ fn bench_paper_writes_a_table_a_plot_and_a_summary_that_agree() {
 }
 
 #[test]
+fn bench_paper_runs_in_the_window_too() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1024x768x24"])
+        .arg(env!("CARGO_BIN_EXE_gpuwars"))
+        .args([
+            "--backend",
+            "cpu",
+            "bench",
+            "paper",
+            "--window",
+            "--minutes",
+            "0.04",
+            "--size",
+            "320x180",
+            "--json",
+            "--out",
+        ])
+        .arg(dir.path())
+        .env("GPUWARS_DATA_DIR", dir.path())
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("xvfb-run runs (see scripts/setup)");
+    let summary: PaperSummary = serde_json::from_str(&ok(&out)).unwrap();
+    let seconds: Vec<Second> = rows(&dir.path().join("bench-paper.csv"));
+    assert_eq!(seconds.len() as u32, summary.seconds);
+    assert!(
+        summary.seconds >= 2 && summary.frames_per_s.median > 0.0,
+        "{summary:?}"
+    );
+    // The window's frames are timed too: the renderer's device work and GL's part.
+    assert!(seconds.iter().all(|s| s.render_us > 0.0 && s.gl_us > 0.0));
+}
+
+#[test]
 fn bench_scale_measures_each_size_and_compare_reads_two_runs() {
     let dir = tempfile::tempdir().unwrap();
     let out = ok(&gpuwars(&[

@@ -17,6 +17,7 @@ use crate::graphics::bodies::BodyRenderer;
 use crate::graphics::headless::{Headless, Target};
 use crate::graphics::unpack;
 use crate::pipeline::Profile;
+use crate::play::{Pilot, PlayOptions};
 use crate::{BackendKind, Device};
 
 /// The paper's Figure 8: frames per second over five minutes, on its two cards.
@@ -99,6 +100,81 @@ pub struct PaperSummary {
     pub game_over: bool,
 }
 
+/// Frames counted second by second, with one profiled frame per second.
+pub struct Seconds {
+    rows: Vec<Second>,
+    frames: u64,
+    second_start: Instant,
+    in_second: u64,
+    /// This second's profiled step, and its frame's device and GL seconds.
+    sample: Option<(Profile, f64, f64)>,
+}
+
+impl Seconds {
+    /// Counting from `now`.
+    pub fn new(now: Instant) -> Self {
+        Seconds {
+            rows: Vec::new(),
+            frames: 0,
+            second_start: now,
+            in_second: 0,
+            sample: None,
+        }
+    }
+
+    /// Whether the current second still wants its profiled frame (the next one).
+    pub fn wants_sample(&self) -> bool {
+        self.sample.is_none()
+    }
+
+    /// The profiled step of this second, and its frame's device and GL seconds.
+    pub fn sampled(&mut self, profile: Profile, render: f64, gl: f64) {
+        self.sample = Some((profile, render, gl));
+    }
+
+    /// One frame finished at `now` with `enemies_alive`; closes the second once a second
+    /// has passed and it has its sample.
+    pub fn frame(&mut self, now: Instant, enemies_alive: u32) {
+        self.frames += 1;
+        self.in_second += 1;
+        let elapsed = (now - self.second_start).as_secs_f64();
+        if elapsed < 1.0 {
+            return;
+        }
+        let Some((profile, render, gl)) = self.sample.take() else {
+            return;
+        };
+        let rate = self.in_second as f64 / elapsed;
+        self.rows.push(Second {
+            second: self.rows.len() as u32 + 1,
+            frames_per_s: rate,
+            steps_per_s: rate,
+            enemies_alive,
+            step_us: profile.step_seconds() * 1e6,
+            master_us: stages_us(&profile, &["pilot", "master", "tally"]),
+            physics_us: stages_us(
+                &profile,
+                &["births", "broad", "narrow", "integrate", "free"],
+            ),
+            ai_us: stages_us(&profile, &["think"]),
+            render_us: render * 1e6,
+            gl_us: gl * 1e6,
+        });
+        self.second_start = now;
+        self.in_second = 0;
+    }
+
+    /// The seconds closed so far.
+    pub fn rows(&self) -> &[Second] {
+        &self.rows
+    }
+
+    /// Frames counted in all.
+    pub fn frames(&self) -> u64 {
+        self.frames
+    }
+}
+
 /// What draws each frame offscreen.
 enum Drawer {
     /// The kernel renderer; its image stays on the device.
@@ -179,55 +255,32 @@ pub fn run(device: &Device, options: &PaperOptions) -> anyhow::Result<PaperSumma
     let machine = Machine::now(device);
     let mut game = Game::with_options(device, &scene, options.seed, Options::default())?;
     let mut drawer = Drawer::new(options.renderer, &game, options.size)?;
-    let seconds = options.duration.as_secs().max(1);
-    let bar = progress(seconds, options.progress, "bench paper");
-    let mut rows: Vec<Second> = Vec::new();
-    let mut frames = 0u64;
+    let seconds = options.duration.as_secs().max(1) as usize;
+    let bar = progress(seconds as u64, options.progress, "bench paper");
+    let mut counter = Seconds::new(Instant::now());
     let mut last = game.status();
-    let start = Instant::now();
-    let mut second_start = start;
-    let mut in_second = 0u64;
-    let mut sample: Option<(Profile, f64, f64)> = None;
-    while rows.len() < seconds as usize {
-        if sample.is_none() {
+    while counter.rows().len() < seconds {
+        if counter.wants_sample() {
             // One step of each second is profiled stage by stage (it waits for the GPU).
             let mut profile = Profile::default();
             game.submit_profiled(None, &mut profile)?;
             let (render, gl) = drawer.frame(&mut game, options.size, true)?;
-            sample = Some((profile, render, gl));
+            counter.sampled(profile, render, gl);
         } else {
             game.submit(None)?;
             drawer.frame(&mut game, options.size, false)?;
         }
-        frames += 1;
-        in_second += 1;
         while let Some(status) = game.ready_status() {
             last = status;
         }
-        let now = Instant::now();
-        let elapsed = (now - second_start).as_secs_f64();
-        if elapsed >= 1.0 {
-            let (profile, render, gl) = sample.take().expect("sampled first");
-            let rate = in_second as f64 / elapsed;
-            rows.push(Second {
-                second: rows.len() as u32 + 1,
-                frames_per_s: rate,
-                steps_per_s: rate,
-                enemies_alive: last.enemies_alive,
-                step_us: profile.step_seconds() * 1e6,
-                master_us: stages_us(&profile, &["pilot", "master", "tally"]),
-                physics_us: stages_us(
-                    &profile,
-                    &["births", "broad", "narrow", "integrate", "free"],
-                ),
-                ai_us: stages_us(&profile, &["think"]),
-                render_us: render * 1e6,
-                gl_us: gl * 1e6,
-            });
+        let closed = counter.rows().len();
+        counter.frame(Instant::now(), last.enemies_alive);
+        if counter.rows().len() > closed {
             bar.inc(1);
-            bar.set_message(format!("{rate:.0} frames/s"));
-            second_start = now;
-            in_second = 0;
+            bar.set_message(format!(
+                "{:.0} frames/s",
+                counter.rows()[closed].frames_per_s
+            ));
         }
     }
     while let Some(status) = game.next_status()? {
@@ -235,24 +288,66 @@ pub fn run(device: &Device, options: &PaperOptions) -> anyhow::Result<PaperSumma
     }
     bar.finish_and_clear();
     let sim_only = sim_only_rate(&mut game, options.duration / 10)?;
+    finish(
+        options,
+        machine,
+        &counter,
+        sim_only,
+        last.is_over(),
+        &outputs,
+    )
+}
+
+/// `bench paper --window`: the same experiment in `play`'s window (the autopilot playing,
+/// one step per frame, vsync off); the simulation alone is then timed on a new game.
+pub fn run_in_window(device: &Device, options: &PaperOptions) -> anyhow::Result<PaperSummary> {
+    let outputs = Outputs::in_dir(&options.out, "paper")?;
+    let scene = built_in("paper").expect("a built-in scene")?;
+    let machine = Machine::now(device);
+    let play = PlayOptions {
+        seed: options.seed,
+        pilot: Pilot::Auto,
+        muted: true,
+        vsync: false,
+        renderer: options.renderer,
+        record: None,
+        size: options.size,
+        lag: Options::default().lag,
+    };
+    let (counter, game_over) = crate::play::measure(device, &scene, play, options.duration)?;
+    let mut game = Game::with_options(device, &scene, options.seed, Options::default())?;
+    let sim_only = sim_only_rate(&mut game, options.duration / 10)?;
+    finish(options, machine, &counter, sim_only, game_over, &outputs)
+}
+
+/// The summary of `counter`'s seconds, written with them and their plot.
+fn finish(
+    options: &PaperOptions,
+    machine: Machine,
+    counter: &Seconds,
+    sim_only: f64,
+    game_over: bool,
+    outputs: &Outputs,
+) -> anyhow::Result<PaperSummary> {
+    let rows = counter.rows();
     let summary = PaperSummary {
         benchmark: "paper".into(),
         machine,
         renderer: options.renderer,
         size: options.size,
         seconds: rows.len() as u32,
-        frames,
+        frames: counter.frames(),
         frames_per_s: Spread::of(rows.iter().map(|r| r.frames_per_s)),
         enemies_alive: Spread::of(rows.iter().map(|r| f64::from(r.enemies_alive))),
         step_us: Spread::of(rows.iter().map(|r| r.step_us)),
         render_us: Spread::of(rows.iter().map(|r| r.render_us)),
         gl_us: Spread::of(rows.iter().map(|r| r.gl_us)),
         sim_only_steps_per_s: sim_only,
-        game_over: last.is_over(),
+        game_over,
     };
-    write_csv(&outputs.csv, &rows)?;
+    write_csv(&outputs.csv, rows)?;
     write_json(&outputs.json, &summary)?;
-    plot::frames_over_time(&outputs.png, &summary, &rows)
+    plot::frames_over_time(&outputs.png, &summary, rows)
         .with_context(|| format!("plotting {}", outputs.png.display()))?;
     Ok(summary)
 }

@@ -25,6 +25,7 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::PhysicalKey;
 use winit::window::{Fullscreen, Window, WindowId};
 
+use crate::benchmark::paper::Seconds;
 use crate::game::demo::{Record, device_name};
 use crate::game::highscore::{self, HighScores};
 use crate::game::replay::Replay;
@@ -34,6 +35,7 @@ use crate::graphics::headless::Target;
 use crate::graphics::hud::text_image;
 use crate::graphics::picture::{Blit, DeviceImage, Upload};
 use crate::graphics::{Renderer, unpack};
+use crate::pipeline::Profile;
 use crate::sound::Sound;
 use crate::{BackendKind, Device};
 use keys::{Action, HELP, Held};
@@ -165,6 +167,41 @@ pub fn play(device: &Device, scene: &Scene, options: PlayOptions) -> anyhow::Res
     app.finish()
 }
 
+/// Runs `scene` in the window for `duration` as the benchmark's loop does (one step per
+/// frame, whatever the time), counting frames second by second with one profiled frame per
+/// second; returns the seconds and whether the game ended.
+pub fn measure(
+    device: &Device,
+    scene: &Scene,
+    options: PlayOptions,
+    duration: Duration,
+) -> anyhow::Result<(Seconds, bool)> {
+    let event_loop = EventLoop::new()
+        .context("no display to open a window on (leave out --window to render offscreen)")?;
+    event_loop.set_control_flow(ControlFlow::Poll);
+    let mut app = App::new(device, scene, options)?;
+    app.bench = Some(Bench {
+        seconds: Seconds::new(Instant::now()),
+        duration,
+        until: None,
+    });
+    event_loop.run_app(&mut app).context("running the window")?;
+    app.screen = None;
+    if let Some(error) = app.failure.take() {
+        return Err(error);
+    }
+    let bench = app.bench.take().expect("set above");
+    Ok((bench.seconds, app.round.record.over))
+}
+
+/// The benchmark's loop in the window: its frame counter, and when it ends.
+struct Bench {
+    seconds: Seconds,
+    duration: Duration,
+    /// Set at the first frame, so that opening the window is not counted.
+    until: Option<Instant>,
+}
+
 /// Game time: runs while the game is neither paused nor over, and tells how many steps are
 /// due.
 struct Clock {
@@ -294,6 +331,8 @@ struct App<'d> {
     hud_at: Option<Instant>,
     renderer: String,
     failure: Option<anyhow::Error>,
+    /// The benchmark's loop, when `measure` runs the window.
+    bench: Option<Bench>,
 }
 
 impl<'d> App<'d> {
@@ -330,6 +369,7 @@ impl<'d> App<'d> {
             hud_at: None,
             renderer: String::new(),
             failure: None,
+            bench: None,
         })
     }
 
@@ -391,23 +431,54 @@ impl<'d> App<'d> {
         }
     }
 
-    /// Plays the due steps and takes the statuses that came back.
-    fn advance(&mut self, now: Instant) -> anyhow::Result<()> {
+    /// Plays the due steps (the benchmark's one step, profiled when `profiled`) and takes
+    /// the statuses that came back; returns the profile of a profiled step.
+    fn advance(&mut self, now: Instant, profiled: bool) -> anyhow::Result<Option<Profile>> {
         let running = !self.paused && !self.round.record.over;
         self.round.clock.run(running, now);
-        let due = if running {
-            self.round.clock.due(self.round.submitted, now)
-        } else {
-            0
+        let due = match (running, &self.bench) {
+            (false, _) => 0,
+            (true, Some(_)) => 1,
+            (true, None) => self.round.clock.due(self.round.submitted, now),
         };
+        let mut profile = None;
         for _ in 0..due {
             let input = self.input();
-            self.round.game.submit(input)?;
+            if profiled {
+                let mut p = Profile::default();
+                self.round.game.submit_profiled(input, &mut p)?;
+                profile = Some(p);
+            } else {
+                self.round.game.submit(input)?;
+            }
             self.round.submitted += 1;
             self.rates.1 += 1;
         }
         while let Some(status) = self.round.game.ready_status() {
             self.take(status);
+        }
+        Ok(profile)
+    }
+
+    /// One frame: the due steps, then the drawing; in the benchmark's loop, counted.
+    fn frame(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
+        let now = Instant::now();
+        let sample = self
+            .bench
+            .as_ref()
+            .is_some_and(|b| b.seconds.wants_sample());
+        let profile = self.advance(now, sample)?;
+        let (render, gl) = self.draw(profile.is_some())?;
+        let alive = self.round.record.last.enemies_alive;
+        if let Some(bench) = &mut self.bench {
+            if let Some(profile) = profile {
+                bench.seconds.sampled(profile, render, gl);
+            }
+            let now = Instant::now();
+            bench.seconds.frame(now, alive);
+            if *bench.until.get_or_insert(now + bench.duration) <= now {
+                event_loop.exit();
+            }
         }
         Ok(())
     }
@@ -442,15 +513,18 @@ impl<'d> App<'d> {
         }
     }
 
-    /// Draws one frame.
-    fn draw(&mut self) -> anyhow::Result<()> {
+    /// Draws one frame. When `timed`, waits and returns the renderer's device seconds and
+    /// the seconds GL took after them (the HUD, and the swap); zeros otherwise.
+    fn draw(&mut self, timed: bool) -> anyhow::Result<(f64, f64)> {
         let Some(screen) = &mut self.screen else {
-            return Ok(());
+            return Ok((0.0, 0.0));
         };
         let (width, height) = screen.window.inner_size().into();
         if width == 0 || height == 0 {
-            return Ok(());
+            return Ok((0.0, 0.0));
         }
+        let device = self.device;
+        let start = timed.then(|| device.mark()).transpose()?;
         let view = looks::whole_field(&self.scene, width, height);
         let mut frame = screen.display.draw();
         match &mut screen.bodies {
@@ -475,6 +549,11 @@ impl<'d> App<'d> {
                     .draw(&mut frame, target.colour(), false, (0, 0), height, false)?;
             }
         }
+        let device_s = match start {
+            Some(start) => device.mark()?.seconds_since(&start)?,
+            None => 0.0,
+        };
+        let gl_start = Instant::now();
         if self.flash > 0 {
             self.flash -= 1;
             let w = FLASH_WIDTH.min(width).min(height);
@@ -498,7 +577,12 @@ impl<'d> App<'d> {
         frame.finish().context("showing the frame")?;
         self.frames += 1;
         self.rates.0 += 1;
-        Ok(())
+        let gl_s = if timed {
+            gl_start.elapsed().as_secs_f64()
+        } else {
+            0.0
+        };
+        Ok((device_s, gl_s))
     }
 
     /// The HUD, and the help or the game-over banner when they show.
@@ -755,7 +839,7 @@ impl ApplicationHandler for App<'_> {
                     Ok(())
                 }
             }
-            WindowEvent::RedrawRequested => self.advance(Instant::now()).and_then(|()| self.draw()),
+            WindowEvent::RedrawRequested => self.frame(event_loop),
             _ => Ok(()),
         };
         if let Err(e) = result {
