@@ -421,7 +421,7 @@ fn behaviours() {
         &text,
         line,
         "kinds[2].behaviour.speed",
-        &["75 is out of range (allowed (0, 70])"],
+        &["75.0 is out of range (allowed (0, 70])"],
     );
 }
 

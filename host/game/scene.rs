@@ -664,7 +664,13 @@ fn read_kind(node: &Node<'_>) -> Result<(KindSpec, Option<Behaviour>), SceneErro
             .map(|name| Ok(name.text("a kind's name in quotes")?.to_owned()))
             .collect()
     })?;
-    let behaviour = kind.or("behaviour", None, |n| read_behaviour(n).map(Some))?;
+    // inf: no speed limit.
+    let max_speed = kind.or("max_speed", f32::INFINITY, |n| {
+        n.real(above(0.0, f32::INFINITY))
+    })?;
+    let behaviour = kind.or("behaviour", None, |n| {
+        read_behaviour(n, max_speed).map(Some)
+    })?;
     let spec = KindSpec {
         name,
         shape,
@@ -674,10 +680,7 @@ fn read_kind(node: &Node<'_>) -> Result<(KindSpec, Option<Behaviour>), SceneErro
         energy: kind.need("energy")?.whole(1, i32::MAX)?,
         damage: kind.or("damage", 0, |n| n.whole(0, i32::MAX))?,
         restitution: kind.or("restitution", 0.0, |n| n.real(within(0.0, 1.0)))?,
-        // inf: no speed limit.
-        max_speed: kind.or("max_speed", f32::INFINITY, |n| {
-            n.real(above(0.0, f32::INFINITY))
-        })?,
+        max_speed,
         collides_with,
         // inf: lives for ever.
         lifetime: kind.or("lifetime", f32::INFINITY, |n| {
@@ -688,9 +691,9 @@ fn read_kind(node: &Node<'_>) -> Result<(KindSpec, Option<Behaviour>), SceneErro
     Ok((spec, behaviour))
 }
 
-/// A kind's behaviour. Settings the machine ignores must be left at their defaults, so that
-/// a file never says something the game does not do.
-fn read_behaviour(node: &Node<'_>) -> Result<Behaviour, SceneError> {
+/// A kind's behaviour, for a kind of `max_speed`. Settings the machine ignores must be left
+/// at their defaults, so that a file never says something the game does not do.
+fn read_behaviour(node: &Node<'_>, max_speed: f32) -> Result<Behaviour, SceneError> {
     let b = node.table(&[
         "machine",
         "vision",
@@ -736,7 +739,8 @@ fn read_behaviour(node: &Node<'_>) -> Result<Behaviour, SceneError> {
     Ok(Behaviour {
         machine,
         vision: b.need("vision")?.real(side())?,
-        speed: b.need("speed")?.real(side())?,
+        // At most the kind's speed limit, as written.
+        speed: b.need("speed")?.real(above(0.0, max_speed.min(MAX)))?,
         avoid_bullets,
         low_energy,
         recovery,
