@@ -78,16 +78,15 @@ pub fn line_of(text: &[u8], at: usize) -> usize {
 /// terminal.
 pub fn excerpt(text: &str) -> String {
     let mut lines = text.lines();
-    let (mut out, mut cut) = shorten(lines.next().unwrap_or_default(), EXCERPT_CHARS);
-    cut |= lines.next().is_some();
-    out = out
-        .chars()
-        .flat_map(|c| match c.is_control() {
-            true => c.escape_default().collect::<Vec<_>>(),
-            false => vec![c],
-        })
-        .collect();
-    if cut {
+    let (first, cut) = shorten(lines.next().unwrap_or_default(), EXCERPT_CHARS);
+    let mut out = String::with_capacity(first.len() + 3);
+    for c in first.chars() {
+        match c.is_control() {
+            true => out.extend(c.escape_default()),
+            false => out.push(c),
+        }
+    }
+    if cut || lines.next().is_some() {
         out.push('…');
     }
     out

@@ -252,7 +252,8 @@ impl<'a> Node<'a> {
         )
     }
 
-    /// The value as an error quotes it: as written, or what it is if it is long.
+    /// The value as an error quotes it: an excerpt as written, or what it is for a table or
+    /// an array.
     fn written(&self) -> String {
         match self.value.get_ref() {
             DeValue::Table(_) => "a table".to_owned(),
@@ -266,6 +267,7 @@ impl<'a> Node<'a> {
         self.fail(format!("expected {what}, found {}", self.written()))
     }
 
+    /// `value`, inside this one, at `path`.
     fn child(&self, value: &'a Spanned<DeValue<'a>>, path: String) -> Node<'a> {
         Node {
             doc: self.doc,
@@ -711,7 +713,7 @@ fn read_behaviour(node: &Node<'_>, max_speed: f32) -> Result<Behaviour, SceneErr
             ("tricky", Machine::Tricky),
         ],
     )?;
-    let name = machine_node.text("")?;
+    let name = machine_node.text("a machine in quotes")?;
     let avoid_bullets = match b.get("avoid_bullets") {
         Some(avoid) => match (machine, avoid.flag()?) {
             (Machine::Kamikaze, true) => {
