@@ -16,7 +16,7 @@ use std::fmt::Write;
 use std::path::PathBuf;
 use std::sync::mpsc;
 
-use anyhow::{Context, bail};
+use anyhow::bail;
 use clap::Parser;
 use gpuwars_kernels::rng::dcmt::{Creator, tempering_parameters};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -84,8 +84,7 @@ fn main() -> anyhow::Result<()> {
             p.matrix_a, p.mask_b, p.mask_c
         )?;
     }
-    gpuwars::files::write_atomically(&args.out, text.as_bytes())
-        .with_context(|| format!("writing {}", args.out.display()))?;
+    gpuwars::files::write_atomically(&args.out, text.as_bytes())?;
     eprintln!(
         "wrote {} parameter sets to {}",
         sets.len(),

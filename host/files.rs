@@ -1,11 +1,23 @@
-//! Files the program reads and writes: errors that say where a file is wrong, and writes
-//! that happen whole or not at all.
+//! Files the program reads and writes: errors that say where a file is wrong, in the user's
+//! words; reads that take only regular files of a bounded size; and writes that happen whole
+//! or not at all, and only over what the program may replace.
 
 use std::fmt;
-use std::io::Write;
-use std::path::Path;
+use std::fs::{File, FileType};
+use std::io::{ErrorKind, Read, Write};
+use std::path::{Path, PathBuf};
 
-/// What is wrong with a file the program reads (a scene, a replay), and where.
+/// Most bytes of a scene file (the built-in ones take a few thousand).
+pub const MAX_SCENE_BYTES: u64 = 1 << 20;
+
+/// Most characters of a value an error quotes.
+const EXCERPT_CHARS: usize = 40;
+/// Most characters of an error's field and problem: a backstop, in case some message quotes
+/// more of a huge input than it should.
+const MAX_FIELD_CHARS: usize = 120;
+const MAX_PROBLEM_CHARS: usize = 600;
+
+/// What is wrong with a file the program reads (a scene, a replay) or writes, and where.
 ///
 /// Displays as `{file}:{line}: {field}: {problem}`, without `:{line}` when the line is
 /// unknown and without `{field}: ` when no field is concerned.
@@ -23,7 +35,7 @@ pub struct FileError {
 }
 
 impl FileError {
-    /// An error in `file`.
+    /// An error in `file` (field and problem cut short if some input made them huge).
     pub fn new(
         file: &str,
         line: Option<usize>,
@@ -33,8 +45,8 @@ impl FileError {
         FileError {
             file: file.to_owned(),
             line,
-            field: field.to_string(),
-            problem: problem.to_string(),
+            field: cap(&field.to_string(), MAX_FIELD_CHARS),
+            problem: cap(&problem.to_string(), MAX_PROBLEM_CHARS),
         }
     }
 }
@@ -61,26 +73,264 @@ pub fn line_of(text: &[u8], at: usize) -> usize {
         .count()
 }
 
-/// Writes `bytes` to `path` atomically: into a temporary file in the same directory, flushed
-/// and synced to disk, readable by all like any data file (0644 on Unix; a temporary file
-/// starts private), then renamed over `path`. On any error `path` is left as it was and the
-/// temporary file is removed.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    // `Path::new("x").parent()` is the empty path, which `new_in` does not take.
-    let dir = match path.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() => dir,
-        _ => Path::new("."),
+/// `text` as an error may quote it: its first line, at most a few dozen characters (`…`
+/// marks a cut), control characters escaped so that a hostile file cannot drive the
+/// terminal.
+pub fn excerpt(text: &str) -> String {
+    let mut lines = text.lines();
+    let (first, cut) = shorten(lines.next().unwrap_or_default(), EXCERPT_CHARS);
+    let mut out = String::with_capacity(first.len() + 3);
+    for c in first.chars() {
+        match c.is_control() {
+            true => out.extend(c.escape_default()),
+            false => out.push(c),
+        }
+    }
+    if cut || lines.next().is_some() {
+        out.push('…');
+    }
+    out
+}
+
+/// The first `max` characters of `text`, and whether there were more.
+fn shorten(text: &str, max: usize) -> (String, bool) {
+    match text.char_indices().nth(max) {
+        Some((at, _)) => (text[..at].to_owned(), true),
+        None => (text.to_owned(), false),
+    }
+}
+
+/// [`shorten`], with `…` where it cut.
+fn cap(text: &str, max: usize) -> String {
+    match shorten(text, max) {
+        (out, true) => out + "…",
+        (out, false) => out,
+    }
+}
+
+/// `n` with its thousands separated by commas: `16,777,216`.
+pub fn thousands(n: impl Into<i128>) -> String {
+    let n: i128 = n.into();
+    let digits = n.unsigned_abs().to_string();
+    let mut out = String::with_capacity(digits.len() + digits.len() / 3 + 1);
+    if n < 0 {
+        out.push('-');
+    }
+    for (i, d) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(d);
+    }
+    out
+}
+
+/// `x` as a person writes it, in the fewest digits that read back as `x`: `0.5`, `60`,
+/// `1000000`; `1e30`, `1.1754944e-38` beyond those; `inf` and `NaN`.
+pub fn number(x: f32) -> String {
+    let plain = x == 0.0 || !x.is_finite() || (1e-4..1e16).contains(&x.abs());
+    if plain {
+        format!("{x}")
+    } else {
+        format!("{x:?}")
+    }
+}
+
+/// What a file system entry is, in words.
+fn kind_of(file_type: FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if file_type.is_fifo() {
+            return "a named pipe";
+        }
+        if file_type.is_char_device() || file_type.is_block_device() {
+            return "a device";
+        }
+        if file_type.is_socket() {
+            return "a socket";
+        }
+    }
+    if file_type.is_dir() {
+        "a folder"
+    } else if file_type.is_symlink() {
+        "a symbolic link"
+    } else if file_type.is_file() {
+        "a regular file"
+    } else {
+        "not a regular file"
+    }
+}
+
+/// An I/O error in words, without the system's error number.
+fn io_words(e: &std::io::Error) -> String {
+    match e.kind() {
+        ErrorKind::NotFound => "no such file".to_owned(),
+        ErrorKind::PermissionDenied => "permission denied".to_owned(),
+        _ => {
+            let text = e.to_string();
+            let text = text.split(" (os error").next().unwrap_or_default();
+            let mut chars = text.chars();
+            chars.next().map_or_else(String::new, |first| {
+                first.to_lowercase().chain(chars).collect()
+            })
+        }
+    }
+}
+
+/// How errors name `path`: as given, and `""` for the empty path.
+fn origin(path: &Path) -> String {
+    match path.as_os_str().is_empty() {
+        true => "\"\"".to_owned(),
+        false => path.display().to_string(),
+    }
+}
+
+/// The text of the regular file at `path`, at most `limit` bytes of UTF-8. Anything else is
+/// refused before a byte is read: a folder, a named pipe (which would wait for a writer), a
+/// device (which may never end), a larger file. Invalid UTF-8 is reported with its line and
+/// column.
+pub fn read_text(path: &Path, limit: u64) -> Result<String, FileError> {
+    let name = origin(path);
+    let fail = |problem: String| FileError::new(&name, None, "", problem);
+    let cannot = |e: std::io::Error| fail(format!("cannot read: {}", io_words(&e)));
+    let check = |meta: &std::fs::Metadata| {
+        if !meta.is_file() {
+            let what = kind_of(meta.file_type());
+            return Err(fail(format!(
+                "cannot read: it is {what} (allowed a regular file)"
+            )));
+        }
+        if meta.len() > limit {
+            return Err(fail(too_large(meta.len(), limit)));
+        }
+        Ok(())
     };
-    let mut file = tempfile::NamedTempFile::new_in(dir)?;
-    file.write_all(bytes)?;
-    file.flush()?;
+    // The path first, so that a named pipe is never opened (opening one waits for a writer).
+    check(&std::fs::metadata(path).map_err(cannot)?)?;
+    let file = File::open(path).map_err(cannot)?;
+    // Then what was opened, in case the path changed in between.
+    let meta = file.metadata().map_err(cannot)?;
+    check(&meta)?;
+    let mut bytes = Vec::with_capacity(usize::try_from(meta.len()).unwrap_or(0));
+    file.take(limit.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(cannot)?;
+    if bytes.len() as u64 > limit {
+        return Err(fail(too_large(bytes.len() as u64, limit)));
+    }
+    utf8(bytes, &name)
+}
+
+/// The problem of a file of `bytes` bytes where at most `limit` are allowed.
+fn too_large(bytes: u64, limit: u64) -> String {
+    format!(
+        "cannot read: it is {} bytes (allowed at most {})",
+        thousands(bytes),
+        thousands(limit)
+    )
+}
+
+/// `bytes` as text, or an error at the line and column of the first byte that is not UTF-8.
+fn utf8(bytes: Vec<u8>, origin: &str) -> Result<String, FileError> {
+    String::from_utf8(bytes).map_err(|e| {
+        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let line_start = valid.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+        // Every byte before the bad one is valid: the column counts characters.
+        let column = 1 + String::from_utf8_lossy(&valid[line_start..])
+            .chars()
+            .count();
+        let byte = e.as_bytes()[valid.len()];
+        let problem = format!(
+            "not UTF-8 text: the byte 0x{byte:02x} at column {column} is not part of a character"
+        );
+        FileError::new(origin, Some(line_of(valid, valid.len())), "", problem)
+    })
+}
+
+/// Checks that a file may be written at `path`: there is nothing there yet, or a regular
+/// file that it replaces, in a folder that exists. A folder, a device, a named pipe or a
+/// socket is never replaced; a symbolic link neither, and the error says how to write
+/// through it or over it.
+pub fn check_output(path: &Path) -> Result<(), FileError> {
+    let name = origin(path);
+    let fail =
+        |problem: String| FileError::new(&name, None, "", format!("cannot write: {problem}"));
+    if path.file_name().is_none() {
+        return Err(fail("not a file name".to_owned()));
+    }
+    match std::fs::symlink_metadata(path) {
+        Ok(meta) if meta.is_file() => {}
+        Ok(meta) if meta.file_type().is_symlink() => {
+            // A relative target is relative to the link's folder.
+            let target = match (std::fs::read_link(path), path.parent()) {
+                (Ok(target), Some(dir)) => dir.join(target).display().to_string(),
+                (Ok(target), None) => target.display().to_string(),
+                (Err(_), _) => "its target".to_owned(),
+            };
+            return Err(fail(format!(
+                "it is a symbolic link, left as it is: to write to the file it points to, \
+                 give {target}; to write a file in its place, remove the link first"
+            )));
+        }
+        Ok(meta) => {
+            let what = kind_of(meta.file_type());
+            return Err(fail(format!(
+                "it is {what}, left as it is (allowed a new or a regular file)"
+            )));
+        }
+        Err(e) if e.kind() == ErrorKind::NotFound => {}
+        Err(e) => return Err(fail(io_words(&e))),
+    }
+    let dir = folder(path);
+    match std::fs::metadata(&dir) {
+        Ok(meta) if meta.is_dir() => Ok(()),
+        Ok(meta) => Err(fail(format!(
+            "{} is {}, not a folder",
+            dir.display(),
+            kind_of(meta.file_type())
+        ))),
+        Err(e) if e.kind() == ErrorKind::NotFound => {
+            Err(fail(format!("the folder {} does not exist", dir.display())))
+        }
+        Err(e) => Err(fail(format!("{}: {}", dir.display(), io_words(&e)))),
+    }
+}
+
+/// The folder `path` is in (`.` for a bare file name).
+fn folder(path: &Path) -> PathBuf {
+    // `Path::new("x").parent()` is the empty path, which the file system does not take.
+    match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Writes `bytes` to `path` atomically, where [`check_output`] allows it: into a temporary
+/// file in the same folder, flushed and synced to disk, readable by all like any data file
+/// (0644 on Unix; a temporary file starts private), then renamed over `path`. On any error
+/// `path` is left as it was and the temporary file is removed.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
+    check_output(path)?;
+    let fail = |e: std::io::Error| {
+        FileError::new(
+            &origin(path),
+            None,
+            "",
+            format!("cannot write: {}", io_words(&e)),
+        )
+    };
+    let mut file = tempfile::NamedTempFile::new_in(folder(path)).map_err(fail)?;
+    file.write_all(bytes).map_err(fail)?;
+    file.flush().map_err(fail)?;
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt;
         file.as_file()
-            .set_permissions(std::fs::Permissions::from_mode(0o644))?;
+            .set_permissions(std::fs::Permissions::from_mode(0o644))
+            .map_err(fail)?;
     }
-    file.as_file().sync_all()?;
-    file.persist(path).map_err(|e| e.error)?;
+    file.as_file().sync_all().map_err(fail)?;
+    file.persist(path).map_err(|e| fail(e.error))?;
     Ok(())
 }

@@ -7,6 +7,7 @@
 
 pub mod backend;
 pub mod benchmark;
+pub mod cli;
 pub mod files;
 pub mod game;
 pub mod graphics;

@@ -117,7 +117,11 @@ fn bad_flags_name_the_allowed_values() {
     );
     let out = gpuwars(&["info", "--cpu-threads", "0"]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("1..=1024"));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("allowed a whole number from 1 to 1,024"),
+        "{stderr}"
+    );
 }
 
 #[test]
@@ -337,7 +341,7 @@ fn demo_writes_a_screenshot_of_the_final_state() {
         assert!(!out.status.success());
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(
-            stderr.contains("WIDTHxHEIGHT") && stderr.contains("16384"),
+            stderr.contains("WIDTHxHEIGHT") && stderr.contains("16,384"),
             "{stderr}"
         );
     }
@@ -377,4 +381,158 @@ fn demo_writes_numbered_frames_and_plays_the_same_game() {
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(stderr.contains(says), "{stderr}");
     }
+}
+
+/// Runs `gpuwars --backend cpu ARGS`, which must fail with exit code `code` and, on stderr,
+/// each of `says`, and no panic.
+fn refused(args: &[&str], code: i32, says: &[&str]) -> String {
+    let mut all = vec!["--backend", "cpu"];
+    all.extend_from_slice(args);
+    let start = std::time::Instant::now();
+    let out = gpuwars(&all);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(code), "{args:?}: {stderr}");
+    for part in says {
+        assert!(stderr.contains(part), "{args:?}: {stderr:?} lacks {part:?}");
+    }
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    // Refused at once, not after a game.
+    assert!(
+        start.elapsed().as_secs() < 20,
+        "{args:?} took {:?}",
+        start.elapsed()
+    );
+    stderr
+}
+
+#[test]
+fn outputs_replace_only_regular_files_and_are_checked_before_the_game() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("folder");
+    std::fs::create_dir(&folder).unwrap();
+    let folder = folder.to_str().unwrap();
+    // A billion steps: refused at once, not after the game, because of the output.
+    let steps = ["demo", "--steps", "1000000"];
+    for flag in ["--record", "--screenshot"] {
+        let args = [&steps[..], &[flag, folder]].concat();
+        refused(&args, 1, &["cannot write: it is a folder, left as it is"]);
+    }
+    let target = dir.path().join("target.json");
+    std::fs::write(&target, "kept").unwrap();
+    let link = dir.path().join("link.json");
+    std::os::unix::fs::symlink(&target, &link).unwrap();
+    let args = [&steps[..], &["--record", link.to_str().unwrap()]].concat();
+    refused(&args, 1, &["symbolic link", "remove the link first"]);
+    assert_eq!(std::fs::read_to_string(&target).unwrap(), "kept");
+    let missing = dir.path().join("missing").join("game.json");
+    let args = [&steps[..], &["--record", missing.to_str().unwrap()]].concat();
+    refused(&args, 1, &["does not exist"]);
+    let pipe = dir.path().join("pipe.json");
+    if Command::new("mkfifo")
+        .arg(&pipe)
+        .status()
+        .is_ok_and(|s| s.success())
+    {
+        let args = [&steps[..], &["--record", pipe.to_str().unwrap()]].concat();
+        refused(&args, 1, &["it is a named pipe, left as it is"]);
+    }
+    let mut left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    left.sort();
+    left.retain(|name| name != "pipe.json");
+    assert_eq!(
+        left,
+        ["folder", "link.json", "target.json"],
+        "nothing is left behind"
+    );
+}
+
+#[test]
+fn inputs_that_would_hang_are_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().to_str().unwrap();
+    refused(&["demo", "--scene", folder], 1, &["it is a folder"]);
+    refused(&["demo", "--scene", "/dev/zero"], 1, &["it is a device"]);
+    refused(&["replay", "/dev/zero"], 1, &["it is a device"]);
+    let pipe = dir.path().join("pipe");
+    if Command::new("mkfifo")
+        .arg(&pipe)
+        .status()
+        .is_ok_and(|s| s.success())
+    {
+        let pipe = pipe.to_str().unwrap();
+        refused(&["demo", "--scene", pipe], 1, &["it is a named pipe"]);
+        refused(&["replay", pipe], 1, &["it is a named pipe"]);
+    }
+    // A replay of a billion steps: refused before its inputs are allocated.
+    let file = dir.path().join("billion.json");
+    let replay = gpuwars::game::replay::Replay {
+        scene: "kamikaze".into(),
+        scene_toml: gpuwars::game::scene::BUILT_IN[1].source.into(),
+        seed: 1,
+        backend: "cpu".into(),
+        state_hash: 0,
+        inputs: Vec::new(),
+    };
+    let text = replay
+        .to_json()
+        .replace("\"steps\": 0", "\"steps\": 1000000000")
+        .replace("\"inputs\": []", "\"inputs\": [[1000000000, 0, 0, 0, 0]]");
+    std::fs::write(&file, text).unwrap();
+    refused(
+        &["replay", file.to_str().unwrap()],
+        1,
+        &["steps: 1000000000 is out of range (allowed 0 to 1,000,000)"],
+    );
+    // A world of more slots than any device takes.
+    let scene = dir.path().join("huge.toml");
+    let source = gpuwars::game::scene::BUILT_IN[1]
+        .source
+        .replace("capacity = 128", "capacity = 16777216");
+    std::fs::write(&scene, source).unwrap();
+    refused(
+        &["demo", "--scene", scene.to_str().unwrap()],
+        1,
+        &["slots in all (allowed at most 16,777,216"],
+    );
+}
+
+#[test]
+fn flag_values_are_checked_in_words() {
+    let cases: [(&[&str], &str); 8] = [
+        (
+            &["demo", "--steps", "0"],
+            "allowed a whole number from 1 to 1,000,000",
+        ),
+        (
+            &["demo", "--steps", "1000001"],
+            "allowed a whole number from 1 to 1,000,000",
+        ),
+        (&["demo", "--steps", "many"], "not a whole number"),
+        (&["demo", "--seed", "4294967296"], "from 0 to 4,294,967,295"),
+        (&["demo", "--seed", "1.5"], "not a whole number"),
+        (&["demo", "--lag", "0"], "from 1 to 1,024"),
+        (&["replay", "x.json", "--lag", "2000"], "from 1 to 1,024"),
+        (&["demo", "--size", "0x10"], "WIDTHxHEIGHT"),
+    ];
+    for (args, says) in cases {
+        let stderr = refused(args, 2, &[says]);
+        for rust in ["..=", "invalid digit", "ParseIntError", "u64", "u32", "u16"] {
+            assert!(!stderr.contains(rust), "{stderr} speaks of `{rust}`");
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let dir = dir.path().to_str().unwrap();
+    refused(
+        &["demo", "--frames-every", "0", dir],
+        1,
+        &["is not a step count"],
+    );
+    refused(
+        &["demo", "--frames-every", "1", "/dev/null"],
+        1,
+        &["is not a folder"],
+    );
 }

@@ -96,6 +96,20 @@ fn assert_reported_and_replaced(contents: &[u8], line: Option<usize>, problem: &
     assert_eq!(warning.file, path.display().to_string());
     assert_eq!(warning.line, line, "{warning}");
     assert!(warning.problem.contains(problem), "{warning}");
+    for rust in [
+        "u32",
+        "u64",
+        "i128",
+        "invalid type",
+        "invalid value",
+        "map",
+        "struct",
+    ] {
+        assert!(
+            !warning.problem.contains(rust),
+            "{warning} speaks of `{rust}`"
+        );
+    }
     assert!(warning.to_string().starts_with(&warning.file));
     assert_eq!(scores.best("paper"), None);
 
@@ -110,25 +124,34 @@ fn corrupt_files_are_reported_and_replaced() {
     assert_reported_and_replaced(
         b"[scenes.paper]\nscore = \"lots\"\nwhen = 1\n",
         Some(2),
-        "invalid type",
+        "expected a whole number from 0 to 4,294,967,295, found \"lots\"",
     );
     assert_reported_and_replaced(
         b"[scenes.paper]\nscore = -3\nwhen = 1\n",
         Some(2),
-        "invalid value",
+        "expected a whole number from 0 to 4,294,967,295, found -3",
     );
     assert_reported_and_replaced(
         b"[scenes.paper]\nscore = 4294967296\nwhen = 1\n",
         Some(2),
-        "invalid value",
+        "found 4294967296",
     );
     assert_reported_and_replaced(
         b"[scenes.paper]\nscore = 1\nwhen = -1\n",
         Some(3),
-        "invalid value",
+        "expected a whole number from 0 to 18,446,744,073,709,551,615, found -1",
     );
-    assert_reported_and_replaced(b"[scenes.paper]\nwhen = 1\n", Some(1), "missing field");
-    assert_reported_and_replaced(b"scenes = 3\n", Some(1), "invalid type");
+    assert_reported_and_replaced(
+        b"[scenes.paper]\nwhen = 1\n",
+        Some(1),
+        "missing key `score`",
+    );
+    assert_reported_and_replaced(b"scenes = 3\n", Some(1), "expected a table, found 3");
+    assert_reported_and_replaced(
+        b"[scenes.paper]\nscore = 99999999999999999999\nwhen = 1\n",
+        Some(2),
+        "found 99999999999999999999",
+    );
     assert_reported_and_replaced(b"# ok\n\xff\xfe\n", Some(2), "not UTF-8");
 }
 

@@ -269,7 +269,12 @@ const RUN: &str = "[1, 5, -5, 100, 1]";
 #[test]
 fn wrong_types() {
     let (text, line) = mutate("\"seed\": 4294967295", "\"seed\": \"one\"");
-    expect_error(&text, Some(line), "seed", &["\"one\"", "0 to 4294967295"]);
+    expect_error(
+        &text,
+        Some(line),
+        "seed",
+        &["expected a whole number (allowed 0 to 4,294,967,295), found \"one\""],
+    );
 
     let (text, line) = mutate("\"scene\": \"paper\"", "\"scene\": 5");
     expect_error(&text, Some(line), "scene", &["expected a string"]);
@@ -286,7 +291,12 @@ fn wrong_types() {
     expect_error(&text, Some(line), &field, &["6 numbers", "expected 5"]);
 
     let (text, line) = mutate(RUN, "{\"repeat\": 1}");
-    expect_error(&text, Some(line), &field, &["map", "[repeat, move_x"]);
+    expect_error(
+        &text,
+        Some(line),
+        &field,
+        &["expected a run [repeat, move_x, move_y, aim, fire], found an object"],
+    );
 
     let (text, line) = mutate(RUN, "[1, 5, -5, 100.5, 1]");
     let field = format!("inputs[{run}].aim");
@@ -335,12 +345,12 @@ fn out_of_range() {
         (
             "[0, 5, -5, 100, 1]",
             "repeat",
-            "0 is out of range (allowed 1 to 1000000000)",
+            "0 is out of range (allowed 1 to 1,000,000)",
         ),
         (
-            "[1000000000, 5, -5, 100, 1]",
+            "[1000000, 5, -5, 100, 1]",
             "repeat",
-            "(allowed at most 1000000000)",
+            "(allowed at most 1,000,000)",
         ),
     ];
     for (to, name, shows) in cases {
@@ -353,14 +363,14 @@ fn out_of_range() {
         &text,
         Some(line),
         "seed",
-        &["-1 is out of range (allowed 0 to 4294967295)"],
+        &["-1 is out of range (allowed 0 to 4,294,967,295)"],
     );
 
     let (text, line) = mutate("\"seed\": 4294967295", "\"seed\": 4294967296");
     expect_error(&text, Some(line), "seed", &["4294967296 is out of range"]);
 
-    let (text, line) = mutate("\"steps\": 28", "\"steps\": 1000000001");
-    expect_error(&text, Some(line), "steps", &["allowed 0 to 1000000000"]);
+    let (text, line) = mutate("\"steps\": 28", "\"steps\": 1000001");
+    expect_error(&text, Some(line), "steps", &["allowed 0 to 1,000,000"]);
 }
 
 #[test]
@@ -425,7 +435,12 @@ fn bad_hash() {
         expect_error(&text, Some(line), "state_hash", &[bad, "16 hex digits"]);
     }
     let (text, line) = mutate(hash, "81985529216486895");
-    expect_error(&text, Some(line), "state_hash", &["integer", "a string"]);
+    expect_error(
+        &text,
+        Some(line),
+        "state_hash",
+        &["expected a string, found 81985529216486895"],
+    );
 }
 
 #[test]
@@ -520,4 +535,218 @@ proptest! {
             prop_assert!(e.line.is_none_or(|line| (1..=lines).contains(&line)), "{}", e);
         }
     }
+}
+
+#[test]
+fn a_byte_order_mark_is_skipped_as_in_a_scene() {
+    let text = format!("\u{feff}{}", sample().to_json());
+    assert_eq!(Replay::parse(&text, "bom.json"), Ok(sample()));
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let path = dir.path().join("bom.json");
+    std::fs::write(&path, &text).expect("written");
+    assert_eq!(Replay::load(&path), Ok(sample()));
+}
+
+#[test]
+fn a_billion_steps_are_refused_before_anything_is_allocated() {
+    let (text, line) = mutate("\"steps\": 28", "\"steps\": 1000000000");
+    let text = text.replace(RUN, "[999999975, 5, -5, 100, 1]");
+    expect_error(
+        &text,
+        Some(line),
+        "steps",
+        &["1000000000 is out of range (allowed 0 to 1,000,000)"],
+    );
+    // The runs alone: refused at the run that passes the limit, on its line.
+    let (text, line) = mutate(RUN, "[999999975, 5, -5, 100, 1]");
+    let run = run_index(RUN);
+    let field = format!("inputs[{run}].repeat");
+    expect_error(
+        &text,
+        Some(line),
+        &field,
+        &["out of range (allowed 1 to 1,000,000)"],
+    );
+    let (text, line) = mutate(RUN, "[999990, 5, -5, 100, 1]");
+    expect_error(
+        &text,
+        Some(line),
+        &field,
+        &["the runs so far add up to 1,000,007 steps (allowed at most 1,000,000)"],
+    );
+    // Exactly the limit reads.
+    let (text, _) = mutate(RUN, "[999973, 5, -5, 100, 1]");
+    let text = text.replace("\"steps\": 28", "\"steps\": 1000000");
+    let replay = Replay::parse(&text, "limit.json").expect("at the limit");
+    assert_eq!(replay.inputs.len(), 1_000_000);
+}
+
+#[test]
+fn errors_speak_of_the_file_not_of_rust() {
+    let run = run_index(RUN);
+    let cases = [
+        ("\"seed\": 4294967295", "\"seed\": 1.5", "seed", "found 1.5"),
+        (
+            "\"seed\": 4294967295",
+            "\"seed\": [1]",
+            "seed",
+            "found an array",
+        ),
+        (
+            "\"seed\": 4294967295",
+            "\"seed\": 1e30",
+            "seed",
+            "1e30 is out of range",
+        ),
+        (
+            "\"scene\": \"paper\"",
+            "\"scene\": null",
+            "scene",
+            "expected a string, found null",
+        ),
+        (
+            "\"scene\": \"paper\"",
+            "\"scene\": {}",
+            "scene",
+            "found an object",
+        ),
+        (
+            "\"version\": 1",
+            "\"version\": true",
+            "version",
+            "found true",
+        ),
+        (RUN, "[1, 5, -5, \"up\", 1]", "aim", "found \"up\""),
+        (
+            RUN,
+            "[1, 5, -5, 100, 100000000000000000000]",
+            "fire",
+            "is out of range",
+        ),
+    ];
+    for (from, to, field, says) in cases {
+        let (text, line) = mutate(from, to);
+        let field = match field {
+            "aim" | "fire" => format!("inputs[{run}].{field}"),
+            key => key.to_owned(),
+        };
+        let e = expect_error(&text, Some(line), &field, &[says]);
+        for rust in [
+            "i64",
+            "u64",
+            "i128",
+            "u32",
+            "invalid type",
+            "map",
+            "sequence",
+            "unit",
+        ] {
+            assert!(!e.to_string().contains(rust), "{e} speaks of `{rust}`");
+        }
+    }
+    expect_error(
+        "[1, 2]",
+        Some(1),
+        "",
+        &["expected a replay (a JSON object), found an array"],
+    );
+}
+
+#[test]
+fn errors_quote_only_an_excerpt_of_a_huge_value() {
+    let huge = "y".repeat(100_000);
+    let cases = [
+        ("\"gpuwars-replay\"", format!("\"{huge}\""), "format"),
+        (
+            "\"0x0123456789abcdef\"",
+            format!("\"{huge}\""),
+            "state_hash",
+        ),
+        (
+            "\"seed\": 4294967295",
+            format!("\"seed\": \"{huge}\""),
+            "seed",
+        ),
+    ];
+    for (from, to, field) in cases {
+        let (text, line) = mutate(from, &to);
+        let e = expect_error(&text, Some(line), field, &["…"]);
+        assert!(e.to_string().len() < 400, "{e}");
+    }
+    let (text, line) = mutate("\"seed\"", &format!("\"{huge}\": 1,\n  \"seed\""));
+    let e = Replay::parse(&text, "key.json").expect_err("an unknown key");
+    assert_eq!(e.line, Some(line));
+    assert!(e.to_string().len() < 400, "{e}");
+}
+
+#[test]
+fn nesting_too_deep_has_a_line() {
+    let (text, line) = mutate(RUN, &format!("{}1{}", "[".repeat(1000), "]".repeat(1000)));
+    let e = Replay::parse(&text, "deep.json").expect_err("too deep");
+    assert_eq!(e.line, Some(line), "{e}");
+}
+
+#[test]
+fn only_regular_files_of_a_bounded_size_are_read() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let e = Replay::load(dir.path()).expect_err("a folder");
+    assert!(e.problem.contains("it is a folder"), "{e}");
+    let e = Replay::load(Path::new("/dev/zero")).expect_err("a device");
+    assert!(e.problem.contains("it is a device"), "{e}");
+    let fifo = dir.path().join("pipe.json");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    if made.is_ok_and(|status| status.success()) {
+        let e = Replay::load(&fifo).expect_err("a named pipe");
+        assert!(e.problem.contains("it is a named pipe"), "{e}");
+    }
+    let big = dir.path().join("big.json");
+    let file = std::fs::File::create(&big).expect("created");
+    file.set_len(gpuwars::game::replay::MAX_REPLAY_BYTES + 1)
+        .expect("a sparse file");
+    let e = Replay::load(&big).expect_err("too large");
+    assert!(e.problem.contains("(allowed at most 67,108,864)"), "{e}");
+}
+
+#[test]
+fn save_leaves_what_it_does_not_own_alone() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let folder = dir.path().join("folder");
+    std::fs::create_dir(&folder).expect("a folder");
+    let e = sample().save(&folder).expect_err("a folder");
+    assert!(e.problem.contains("it is a folder, left as it is"), "{e}");
+    assert!(folder.is_dir());
+
+    let target = dir.path().join("target.json");
+    std::fs::write(&target, "kept").expect("written");
+    let link = dir.path().join("link.json");
+    std::os::unix::fs::symlink("target.json", &link).expect("a symbolic link");
+    let e = sample().save(&link).expect_err("a symbolic link");
+    let advice = format!("give {}", target.display());
+    assert!(
+        e.problem.contains("symbolic link") && e.problem.contains(&advice),
+        "{e}"
+    );
+    assert!(e.problem.contains("remove the link first"), "{e}");
+    assert!(link.symlink_metadata().unwrap().file_type().is_symlink());
+    assert_eq!(std::fs::read_to_string(&target).unwrap(), "kept");
+
+    let fifo = dir.path().join("pipe.json");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    if made.is_ok_and(|status| status.success()) {
+        let e = sample().save(&fifo).expect_err("a named pipe");
+        assert!(
+            e.problem.contains("it is a named pipe, left as it is"),
+            "{e}"
+        );
+        use std::os::unix::fs::FileTypeExt;
+        assert!(fifo.symlink_metadata().unwrap().file_type().is_fifo());
+    }
+    let mut names = entries(dir.path());
+    names.retain(|name| name != "pipe.json");
+    assert_eq!(
+        names,
+        ["folder", "link.json", "target.json"],
+        "nothing is left behind"
+    );
+    assert!(entries(&folder).is_empty());
 }

@@ -64,7 +64,11 @@ pub enum Error {
         message: String,
     },
     /// A world larger than the device's free memory.
-    #[error("{what} needs {needed} bytes of {place} memory, but only {free} are free")]
+    #[error(
+        "{what} needs {} bytes of {place} memory, but only {} are free",
+        crate::files::thousands(*.needed),
+        crate::files::thousands(*.free)
+    )]
     OutOfMemory {
         /// What was being made.
         what: String,
@@ -75,6 +79,9 @@ pub enum Error {
         /// "device" or "host".
         place: &'static str,
     },
+    /// A file could not be written (a frame) or read.
+    #[error(transparent)]
+    File(#[from] crate::files::FileError),
 }
 
 /// Which backend runs the kernels.

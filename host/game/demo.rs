@@ -309,10 +309,7 @@ fn play(
             let (width, height) = frames.size;
             let path = frames.dir.join(format!("frame-{:06}.png", i + 1));
             let painter = painter.as_mut().expect("made when frames are asked for");
-            painter
-                .draw(game, width, height)?
-                .save_png(&path)
-                .map_err(|e| Error::Invalid(format!("writing {}: {e}", path.display())))?;
+            painter.draw(game, width, height)?.save_png(&path)?;
         }
         if record.over {
             break;

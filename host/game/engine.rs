@@ -12,8 +12,8 @@ use super::looks;
 use super::spec::{Machine, Scene};
 use crate::backend::Ring;
 use crate::pipeline::{Frame, GameConfig, Pipeline, Profile};
-use crate::sim::Snapshot;
-use crate::sim::layout::{Layout, steps};
+use crate::sim::layout::{self, Layout, steps};
+use crate::sim::{Snapshot, WorldSpec, state};
 use crate::{Device, Error};
 
 /// How a game runs on its device.
@@ -45,6 +45,26 @@ pub struct Game<'d> {
     /// Statuses read back and not yet handed out, oldest first.
     arrived: VecDeque<Status>,
     last: Status,
+}
+
+/// The world a game of `scene` runs in. The enemies and the autopilot look through the
+/// grid: its cells must be as large as the farthest sight.
+fn game_world(scene: &Scene) -> WorldSpec {
+    let mut world = scene.world.clone();
+    let enemies = scene.game.behaviours.iter().flatten().map(|b| b.vision);
+    world.vision = enemies.fold(world.vision.max(scene.game.ship.autopilot_sight), f32::max);
+    world
+}
+
+/// The slots of a game of `scene` (padding included) and the bytes of device memory its
+/// world takes: what [`Game::new`] checks against the device's free memory before it
+/// allocates anything.
+pub fn footprint(scene: &Scene) -> (u32, u64) {
+    let world = game_world(scene);
+    let layout = Layout::new(&world);
+    let space = layout::space(&world);
+    let bytes = state::bytes_needed(&layout, &space, world.kinds.len());
+    (layout.slots, bytes)
 }
 
 /// The rules of `scene` in the kernels' terms (steps instead of seconds, kind indices).
@@ -136,11 +156,7 @@ impl<'d> Game<'d> {
         seed: u32,
         options: Options,
     ) -> Result<Self, Error> {
-        let mut world = scene.world.clone();
-        // The enemies and the autopilot look through the grid: its cells must be as large as
-        // the farthest sight.
-        let enemies = scene.game.behaviours.iter().flatten().map(|b| b.vision);
-        world.vision = enemies.fold(world.vision.max(scene.game.ship.autopilot_sight), f32::max);
+        let world = game_world(scene);
         let layout = Layout::new(&world);
         let game = GameConfig {
             rules: rules(scene, &layout),

@@ -18,13 +18,16 @@ use std::time::{SystemTime, UNIX_EPOCH};
 
 use serde::{Deserialize, Serialize};
 
-use crate::files::{FileError, line_of};
+use crate::files::{FileError, excerpt, line_of, read_text, thousands};
 
 /// The environment variable that, when set and not empty, names the directory of the file
 /// instead of the user's data directory.
 pub const DATA_DIR_VAR: &str = "GPUWARS_DATA_DIR";
 /// The file's name in its directory.
 pub const FILE_NAME: &str = "highscores.toml";
+
+/// Most bytes of the file: far more than the scores of every scene take.
+const MAX_BYTES: u64 = 1 << 20;
 
 /// Written at the top of the file.
 const HEADER: &str =
@@ -128,30 +131,67 @@ impl HighScores {
             })?;
         }
         crate::files::write_atomically(&self.path, format!("{HEADER}{body}").as_bytes())
-            .map_err(|e| fail(format!("cannot write: {e}")))
     }
 }
 
 /// The scenes in the file at `path`: none if it does not exist.
 fn read(path: &Path) -> Result<BTreeMap<String, Entry>, FileError> {
     let origin = path.display().to_string();
-    let bytes = match std::fs::read(path) {
-        Ok(bytes) => bytes,
-        Err(e) if e.kind() == ErrorKind::NotFound => return Ok(BTreeMap::new()),
-        Err(e) => {
-            let problem = format!("cannot read: {e}; starting afresh");
-            return Err(FileError::new(&origin, None, "", problem));
-        }
+    if let Err(e) = std::fs::metadata(path)
+        && e.kind() == ErrorKind::NotFound
+    {
+        return Ok(BTreeMap::new());
+    }
+    let afresh = |e: FileError| FileError {
+        problem: format!("{}; starting afresh", e.problem),
+        ..e
     };
-    let text = String::from_utf8(bytes).map_err(|e| {
-        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
-        let line = line_of(valid, valid.len());
-        FileError::new(&origin, Some(line), "", "not UTF-8 text; starting afresh")
-    })?;
+    let text = read_text(path, MAX_BYTES).map_err(afresh)?;
     let stored: Stored = toml::from_str(&text).map_err(|e| {
         let line = e.span().map(|span| line_of(text.as_bytes(), span.start));
-        let problem = format!("{}; starting afresh", e.message().trim_end());
-        FileError::new(&origin, line, "", problem)
+        afresh(FileError::new(
+            &origin,
+            line,
+            "",
+            reword(e.message().trim_end()),
+        ))
     })?;
     Ok(stored.scenes)
+}
+
+/// A message of serde's (through the toml crate) in the file's terms: `expected u32`
+/// becomes what a score may be, `map` a table, `missing field` a missing key.
+fn reword(message: &str) -> String {
+    let words = |text: &str| {
+        let text = text.replace(" as i128", "");
+        match text.as_str() {
+            "u32" | "u64" => {
+                let max = if text == "u32" {
+                    u64::from(u32::MAX)
+                } else {
+                    u64::MAX
+                };
+                format!("a whole number from 0 to {}", thousands(max))
+            }
+            "map" | "a map" => "a table".to_owned(),
+            "sequence" | "a sequence" => "an array".to_owned(),
+            other if other.starts_with("struct ") => "a table".to_owned(),
+            // `integer `-3``, `string "lots"`: the value as written.
+            other => match other.split_once(' ') {
+                Some((_, value)) => excerpt(value.trim_matches('`')),
+                None => excerpt(other),
+            },
+        }
+    };
+    let found_expected = message
+        .strip_prefix("invalid type: ")
+        .or_else(|| message.strip_prefix("invalid value: "))
+        .and_then(|rest| rest.split_once(", expected "));
+    if let Some((found, expected)) = found_expected {
+        return format!("expected {}, found {}", words(expected), words(found));
+    }
+    match message.strip_prefix("missing field ") {
+        Some(key) => format!("missing key {key}"),
+        None => message.to_owned(),
+    }
 }

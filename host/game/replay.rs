@@ -21,7 +21,10 @@
 //! ```
 //!
 //! Each run is `[repeat, move_x, move_y, aim, fire]`. Reading checks everything and reports
-//! the line and the field of the first problem; it never panics.
+//! the line and the field of the first problem, in words (never a Rust type), quoting at
+//! most a short excerpt of a value; it never panics. A replay holds at most [`MAX_STEPS`]
+//! steps, its scene at most [`MAX_SCENE_BYTES`] bytes, and its file at most
+//! [`MAX_REPLAY_BYTES`] bytes: anything larger is refused before its inputs are allocated.
 
 use std::cell::Cell;
 use std::fmt::{self, Display};
@@ -29,15 +32,19 @@ use std::path::Path;
 
 use gpuwars_kernels::game::control::Input;
 
-use crate::files::line_of;
+use crate::files::{MAX_SCENE_BYTES, excerpt, line_of, read_text, thousands};
 use serde::de::{self, DeserializeSeed, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
 
 /// The `format` of every replay file.
 pub const FORMAT: &str = "gpuwars-replay";
 /// The `version` this build reads and writes.
 pub const VERSION: u64 = 1;
-/// The most steps a replay may hold.
-pub const MAX_STEPS: u64 = 1_000_000_000;
+/// The most steps a replay, and a game played without a window, may hold: 4.6 hours of
+/// game time at 60 steps a second, 16 MB of inputs in memory.
+pub const MAX_STEPS: u64 = 1_000_000;
+/// Most bytes of a replay file: more than a replay of [`MAX_STEPS`] steps, each a run of
+/// its own, and a scene of [`MAX_SCENE_BYTES`] bytes, escaped, take.
+pub const MAX_REPLAY_BYTES: u64 = 64 << 20;
 
 /// The keys of the top-level object, in the order they are written.
 const KEYS: [&str; 9] = [
@@ -109,8 +116,10 @@ impl Replay {
         )
     }
 
-    /// Parses and validates; `origin` names the file in errors.
+    /// Parses and validates; `origin` names the file in errors. A byte-order mark at the
+    /// start is skipped, as the scene reader does.
     pub fn parse(text: &str, origin: &str) -> Result<Replay, ReplayError> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         // The header first: a file of another version is reported as such, not as a pile of
         // keys this build does not know.
         let header = read_fields(text, origin, true)?;
@@ -136,7 +145,8 @@ impl Replay {
                 "{steps} does not match the inputs, whose runs add up to {total} steps"
             )));
         }
-        // Reserved up front so that a huge replay is an error, not an abort.
+        // Reserved up front (at most MAX_STEPS inputs) so that a failure is an error, not
+        // an abort.
         let mut inputs = Vec::new();
         usize::try_from(total)
             .ok()
@@ -156,38 +166,35 @@ impl Replay {
         })
     }
 
-    /// Reads and parses a file.
+    /// Reads and parses a file: a regular file of at most [`MAX_REPLAY_BYTES`] bytes of
+    /// UTF-8 (see [`crate::files::read_text`]).
     pub fn load(path: &Path) -> Result<Replay, ReplayError> {
-        let origin = path.display().to_string();
-        let bytes = std::fs::read(path)
-            .map_err(|e| ReplayError::new(&origin, None, "", format!("cannot read: {e}")))?;
-        let text = String::from_utf8(bytes).map_err(|e| {
-            let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
-            let line = line_of(valid, valid.len());
-            ReplayError::new(&origin, Some(line), "", "not UTF-8 text")
-        })?;
-        Replay::parse(&text, &origin)
+        let text = read_text(path, MAX_REPLAY_BYTES)?;
+        Replay::parse(&text, &path.display().to_string())
     }
 
-    /// Writes atomically: a temporary file in the same directory, flushed and synced, then
-    /// renamed over `path`. An existing file is replaced only on success; on failure nothing
-    /// is left behind. A replay that could not be read back (an input out of range, too many
-    /// steps) is refused before anything is written.
+    /// Writes atomically (see [`crate::files::write_atomically`]): an existing regular file
+    /// is replaced only on success, anything else at `path` is left alone, and on failure
+    /// nothing is left behind. A replay that could not be read back (an input out of range,
+    /// too many steps, too large a scene) is refused before anything is written.
     pub fn save(&self, path: &Path) -> Result<(), ReplayError> {
-        let origin = path.display().to_string();
-        self.check(&origin)?;
+        self.check(&path.display().to_string())?;
         crate::files::write_atomically(path, self.to_json().as_bytes())
-            .map_err(|e| ReplayError::new(&origin, None, "", format!("cannot write: {e}")))
     }
 
     /// What [`Replay::parse`] would refuse in this replay's file.
     fn check(&self, origin: &str) -> Result<(), ReplayError> {
         if self.inputs.len() as u64 > MAX_STEPS {
             let problem = format!(
-                "{} steps is out of range (allowed 0 to {MAX_STEPS}); not saved",
-                self.inputs.len()
+                "{} steps is out of range (allowed 0 to {}); not saved",
+                thousands(self.inputs.len() as u64),
+                thousands(MAX_STEPS)
             );
             return Err(ReplayError::new(origin, None, "inputs", problem));
+        }
+        if self.scene_toml.len() as u64 > MAX_SCENE_BYTES {
+            let problem = scene_too_large(self.scene_toml.len()) + "; not saved";
+            return Err(ReplayError::new(origin, None, "scene_toml", problem));
         }
         for (step, input) in self.inputs.iter().enumerate() {
             if let Some((field, allowed)) = input.problem() {
@@ -233,6 +240,66 @@ fn key_line(text: &str, key: &str) -> Option<usize> {
         i += 1;
     }
     None
+}
+
+/// The problem of a scene text of `bytes` bytes.
+fn scene_too_large(bytes: usize) -> String {
+    format!(
+        "the scene is {} bytes (allowed at most {})",
+        thousands(bytes as u64),
+        thousands(MAX_SCENE_BYTES)
+    )
+}
+
+/// The visitor methods for the JSON values a reader does not take: each is a [`refusal`]
+/// that says what it found in words (`"ten"`, `an array`), never in serde's terms.
+macro_rules! refuse {
+    ($($kind:ident),*) => { $(refuse!(@ $kind);)* };
+    (@ bool) => {
+        fn visit_bool<E: de::Error>(self, v: bool) -> Result<Self::Value, E> {
+            Err(refusal(&self, v))
+        }
+    };
+    (@ integer) => {
+        fn visit_i64<E: de::Error>(self, v: i64) -> Result<Self::Value, E> {
+            Err(refusal(&self, v))
+        }
+        fn visit_u64<E: de::Error>(self, v: u64) -> Result<Self::Value, E> {
+            Err(refusal(&self, v))
+        }
+    };
+    (@ float) => {
+        fn visit_f64<E: de::Error>(self, v: f64) -> Result<Self::Value, E> {
+            Err(refusal(&self, format_args!("{v:?}")))
+        }
+    };
+    (@ str) => {
+        fn visit_str<E: de::Error>(self, v: &str) -> Result<Self::Value, E> {
+            Err(refusal(&self, format_args!("\"{}\"", excerpt(v))))
+        }
+    };
+    (@ null) => {
+        fn visit_unit<E: de::Error>(self) -> Result<Self::Value, E> {
+            Err(refusal(&self, "null"))
+        }
+    };
+    (@ array) => {
+        fn visit_seq<A: SeqAccess<'de>>(self, _: A) -> Result<Self::Value, A::Error> {
+            Err(refusal(&self, "an array"))
+        }
+    };
+    (@ object) => {
+        fn visit_map<A: MapAccess<'de>>(self, _: A) -> Result<Self::Value, A::Error> {
+            Err(refusal(&self, "an object"))
+        }
+    };
+}
+
+/// The error of a `visitor` given a value it does not take: what it expected, and what it
+/// `found`.
+fn refusal<'de, E: de::Error>(visitor: &impl Visitor<'de>, found: impl Display) -> E {
+    let expected: &dyn de::Expected = visitor;
+    E::custom(format_args!("expected {expected}, found {found}"))
 }
 
 /// Runs the strict reader (or, with `header_only`, the one that reads only `format` and
@@ -342,6 +409,8 @@ impl<'de> Visitor<'de> for Top<'_> {
         f.write_str("a replay (a JSON object)")
     }
 
+    refuse!(bool, integer, float, str, null, array);
+
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Fields, A::Error> {
         let blame = self.blame;
         let mut f = Fields::default();
@@ -352,7 +421,8 @@ impl<'de> Visitor<'de> for Top<'_> {
                     let value = text(blame, "format", |s| match s {
                         FORMAT => Ok(()),
                         _ => Err(format!(
-                            "{s:?} is not a GpuWars replay (allowed {FORMAT:?})"
+                            "\"{}\" is not a GpuWars replay (allowed {FORMAT:?})",
+                            excerpt(s)
                         )),
                     });
                     store(map, blame, &mut f.format, "format", value)?;
@@ -376,7 +446,12 @@ impl<'de> Visitor<'de> for Top<'_> {
                 }
                 "scene" => store(map, blame, &mut f.scene, "scene", string(blame, "scene"))?,
                 "scene_toml" => {
-                    let value = string(blame, "scene_toml");
+                    let value = text(blame, "scene_toml", |s| {
+                        match s.len() as u64 > MAX_SCENE_BYTES {
+                            true => Err(scene_too_large(s.len())),
+                            false => Ok(s.to_owned()),
+                        }
+                    });
                     store(map, blame, &mut f.scene_toml, "scene_toml", value)?;
                 }
                 "seed" => {
@@ -398,7 +473,8 @@ impl<'de> Visitor<'de> for Top<'_> {
                 "inputs" => store(map, blame, &mut f.inputs, "inputs", Runs { blame })?,
                 other => {
                     let allowed = KEYS.join(", ");
-                    return Err(blame.fail(other, format!("unknown key (allowed {allowed})")));
+                    let problem = format!("unknown key (allowed {allowed})");
+                    return Err(blame.fail(excerpt(other), problem));
                 }
             }
         }
@@ -427,7 +503,10 @@ fn parse_hash(s: &str) -> Result<u64, String> {
         .or_else(|| s.strip_prefix("0X"))
         .filter(|digits| digits.len() == 16 && digits.bytes().all(|b| b.is_ascii_hexdigit()))
         .and_then(|digits| u64::from_str_radix(digits, 16).ok())
-        .ok_or_else(|| format!("{s:?} is not a hash (allowed \"0x\" and 16 hex digits)"))
+        .ok_or_else(|| {
+            let s = excerpt(s);
+            format!("\"{s}\" is not a hash (allowed \"0x\" and 16 hex digits)")
+        })
 }
 
 /// A JSON string, turned into a `T` by `convert` (whose error is the problem).
@@ -474,6 +553,8 @@ impl<'de, T, F: FnOnce(&str) -> Result<T, String>> Visitor<'de> for Text<'_, F> 
         f.write_str("a string")
     }
 
+    refuse!(bool, integer, float, null, array, object);
+
     fn visit_str<E: de::Error>(self, s: &str) -> Result<T, E> {
         (self.convert)(s).map_err(E::custom)
     }
@@ -501,7 +582,20 @@ impl<'de, T, F: FnOnce(i128) -> Result<T, String>> Visitor<'de> for Int<'_, F> {
     type Value = T;
 
     fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "an integer (allowed {})", self.allowed)
+        write!(f, "a whole number (allowed {})", self.allowed)
+    }
+
+    refuse!(bool, str, null, array, object);
+
+    /// serde_json reads an integer beyond 64 bits as a float.
+    fn visit_f64<E: de::Error>(self, v: f64) -> Result<T, E> {
+        match v.abs() >= 2f64.powi(63) {
+            true => Err(E::custom(format_args!(
+                "{v:?} is out of range (allowed {})",
+                self.allowed
+            ))),
+            false => Err(refusal(&self, format_args!("{v:?}"))),
+        }
     }
 
     fn visit_i64<E: de::Error>(self, v: i64) -> Result<T, E> {
@@ -514,15 +608,20 @@ impl<'de, T, F: FnOnce(i128) -> Result<T, String>> Visitor<'de> for Int<'_, F> {
 }
 
 /// `v` as a `T` in `lo..=hi`.
-fn in_range<T: TryFrom<i128> + PartialOrd + Display>(v: i128, lo: T, hi: T) -> Result<T, String> {
+fn in_range<T: TryFrom<i128> + Into<i128> + Copy>(v: i128, lo: T, hi: T) -> Result<T, String> {
     T::try_from(v)
         .ok()
-        .filter(|t| *t >= lo && *t <= hi)
-        .ok_or_else(|| format!("{v} is out of range (allowed {lo} to {hi})"))
+        .filter(|&t| (lo.into()..=hi.into()).contains(&t.into()))
+        .ok_or_else(|| format!("{v} is out of range (allowed {})", span(lo, hi)))
+}
+
+/// `lo to hi`, with thousands separated.
+fn span(lo: impl Into<i128>, hi: impl Into<i128>) -> String {
+    format!("{} to {}", thousands(lo), thousands(hi))
 }
 
 /// An integer in `lo..=hi`.
-fn ranged<T: TryFrom<i128> + PartialOrd + Display + Copy>(
+fn ranged<T: TryFrom<i128> + Into<i128> + Copy>(
     blame: &Blame,
     field: Field,
     lo: T,
@@ -531,7 +630,7 @@ fn ranged<T: TryFrom<i128> + PartialOrd + Display + Copy>(
     Int {
         blame,
         field,
-        allowed: format!("{lo} to {hi}"),
+        allowed: span(lo, hi),
         convert: move |v| in_range(v, lo, hi),
     }
 }
@@ -613,6 +712,8 @@ impl<'de> Visitor<'de> for Runs<'_> {
         f.write_str("an array of runs [repeat, move_x, move_y, aim, fire]")
     }
 
+    refuse!(bool, integer, float, str, null, object);
+
     fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
         let mut runs = Vec::new();
         let mut total = 0;
@@ -652,6 +753,8 @@ impl<'de> Visitor<'de> for Run<'_> {
         f.write_str("a run [repeat, move_x, move_y, aim, fire]")
     }
 
+    refuse!(bool, integer, float, str, null, object);
+
     fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
         let Run {
             blame,
@@ -668,12 +771,14 @@ impl<'de> Visitor<'de> for Run<'_> {
         let repeat = Int {
             blame,
             field: Field::Number(index, "repeat"),
-            allowed: format!("1 to {MAX_STEPS}"),
+            allowed: span(1, MAX_STEPS),
             convert: |v| {
                 let repeat = in_range(v, 1, MAX_STEPS)?;
                 match total + repeat {
                     sum if sum > MAX_STEPS => Err(format!(
-                        "the runs so far add up to {sum} steps (allowed at most {MAX_STEPS})"
+                        "the runs so far add up to {} steps (allowed at most {})",
+                        thousands(sum),
+                        thousands(MAX_STEPS)
                     )),
                     _ => Ok(repeat),
                 }

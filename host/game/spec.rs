@@ -2,14 +2,12 @@
 //! spawn schedule and the enemies' behaviours. With a [`WorldSpec`] they make a [`Scene`].
 
 pub use gpuwars_kernels::game::fsm::Machine;
-use serde::Deserialize;
 
 use crate::sim::WorldSpec;
 use crate::sim::spec::{KindSpec, MAX_SIDE, SpecError, check_range, error};
 
-/// The ship and its gun (read from a scene's `[ship]` table as it is).
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// The ship and its gun (a scene's `[ship]` table).
+#[derive(Clone, Debug, PartialEq)]
 pub struct ShipSpec {
     /// Name of the ship's kind (capacity 1, no behaviour).
     pub kind: String,
@@ -25,10 +23,8 @@ pub struct ShipSpec {
     pub autopilot_sight: f32,
 }
 
-/// The FPS meter: the paper's measure of the ship's health (read from a scene's `[fps]`
-/// table as it is).
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// The FPS meter: the paper's measure of the ship's health (a scene's `[fps]` table).
+#[derive(Clone, Debug, PartialEq)]
 pub struct FpsSpec {
     /// The meter at full energy (> 0).
     pub start: f32,

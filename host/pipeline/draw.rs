@@ -9,6 +9,7 @@ use gpuwars_kernels::{DevSlice, registry};
 use xxhash_rust::xxh3::xxh3_64;
 
 use super::{Pipeline, op};
+use crate::files::FileError;
 use crate::{Buffer, Error};
 
 /// Largest image side, in pixels.
@@ -45,28 +46,23 @@ impl Frame {
         xxh3_64(bytemuck::cast_slice(&self.pixels))
     }
 
-    /// Writes the frame as a PNG, atomically: a temporary file beside `path`, renamed over
-    /// it once complete.
-    pub fn save_png(&self, path: &Path) -> Result<(), std::io::Error> {
-        let dir = match path.parent() {
-            Some(dir) if !dir.as_os_str().is_empty() => dir,
-            _ => Path::new("."),
-        };
-        let file = tempfile::Builder::new()
-            .prefix(".gpuwars-frame")
-            .suffix(".png")
-            .tempfile_in(dir)?;
-        image::save_buffer_with_format(
-            file.path(),
-            bytemuck::cast_slice(&self.pixels),
-            self.width,
-            self.height,
-            image::ExtendedColorType::Rgba8,
-            image::ImageFormat::Png,
-        )
-        .map_err(std::io::Error::other)?;
-        file.persist(path).map_err(|e| e.error)?;
-        Ok(())
+    /// Writes the frame as a PNG, atomically and only where a file may be written (see
+    /// [`crate::files::write_atomically`]).
+    pub fn save_png(&self, path: &Path) -> Result<(), FileError> {
+        use image::ImageEncoder;
+        let mut png = Vec::new();
+        image::codecs::png::PngEncoder::new(&mut png)
+            .write_image(
+                bytemuck::cast_slice(&self.pixels),
+                self.width,
+                self.height,
+                image::ExtendedColorType::Rgba8,
+            )
+            .map_err(|e| {
+                let problem = format!("cannot encode the frame as PNG: {e}");
+                FileError::new(&path.display().to_string(), None, "", problem)
+            })?;
+        crate::files::write_atomically(path, &png)
     }
 }
 

@@ -6,6 +6,8 @@ use std::fmt;
 
 use glam::Vec2;
 
+use crate::files::{excerpt, number, thousands};
+
 /// Most kinds a world may have: collision masks are 32-bit.
 pub const MAX_KINDS: usize = 32;
 /// Most slots a world may have, all kinds together (after aligning each range to 32).
@@ -125,6 +127,7 @@ pub(crate) fn check_range(
         Ok(())
     } else {
         let open = if low_inclusive { '[' } else { '(' };
+        let [value, low, high] = [value, low, high].map(number);
         Err(error(
             field,
             format!("{value} is out of range (allowed {open}{low}, {high}])"),
@@ -154,7 +157,7 @@ impl WorldSpec {
         }
         let mut slots = 0u64;
         for (k, kind) in self.kinds.iter().enumerate() {
-            let at = |field: &str| format!("kinds[{k}] ({}).{field}", kind.name);
+            let at = |field: &str| format!("kinds[{k}] ({}).{field}", excerpt(&kind.name));
             if kind.name.trim().is_empty() {
                 return Err(error(format!("kinds[{k}].name"), "must not be empty"));
             }
@@ -197,7 +200,7 @@ impl WorldSpec {
                 if !self.kinds.iter().any(|k| &k.name == other) {
                     return Err(error(
                         at(&format!("collides_with[{c}]")),
-                        format!("no kind is named `{other}`"),
+                        format!("no kind is named `{}`", excerpt(other)),
                     ));
                 }
             }
@@ -208,7 +211,11 @@ impl WorldSpec {
         if slots > u64::from(MAX_SLOTS) {
             return Err(error(
                 "kinds",
-                format!("{slots} slots in all (allowed at most {MAX_SLOTS})"),
+                format!(
+                    "{} slots in all (allowed at most {}; each kind takes a multiple of 32)",
+                    thousands(slots),
+                    thousands(MAX_SLOTS)
+                ),
             ));
         }
         Ok(())

@@ -232,7 +232,8 @@ fn think_as<const MACHINE: u32>(args: &ThinkArgs, brain: &Brain, slot: u32) {
         && brain.recover_every != 0
         && b.age.get(slot).is_multiple_of(brain.recover_every)
     {
-        b.energy.set(slot, (energy + 1).min(full));
+        // Saturates at the largest birth energy allowed (i32::MAX) rather than wrapping.
+        b.energy.set(slot, energy.saturating_add(1).min(full));
     }
     let want = wanted_velocity(args, brain, slot, state, &sight);
     let force = (want - b.vel.get(slot)) * (b.mass.get(slot) / STEER_TIME);

@@ -114,7 +114,10 @@ pub fn master(t: Thread, args: &MasterArgs) {
     }
     for k in 0..args.births.len() {
         let n = args.births.get(k);
-        args.spawned.set(k, args.spawned.get(k) + n);
+        // Saturates rather than wraps (after 4,294,967,295 spawns of one kind), so that the
+        // dead counted from it never drop to 0.
+        args.spawned.set(k, args.spawned.get(k).saturating_add(n));
+        // At most the world's slots (2^24): no overflow.
         st.events.spawned += n;
     }
     args.status.set(0, st);
@@ -122,7 +125,8 @@ pub fn master(t: Thread, args: &MasterArgs) {
 
 /// The master thread after the physics (thread 0 only), from the rebuilt free lists:
 /// 1. counts and score: an enemy kind's dead are those spawned minus those alive, each
-///    worth its birth energy;
+///    worth its birth energy; the kills and the score saturate at `u32::MAX` instead of
+///    wrapping, and never go back (a saturated spawn count would undercount the dead);
 /// 2. the ship's hits this step;
 /// 3. the FPS meter from the ship's energy; game over below the minimum, or without a ship,
 ///    and then the world is frozen (see [`Bodies::frozen`]).
@@ -144,14 +148,17 @@ pub fn tally(t: Thread, args: &MasterArgs) {
         }
         let now = args.ranges.get(k).capacity - args.free.count.get(k);
         let dead = args.spawned.get(k).saturating_sub(now);
+        // At most the world's slots (2^24): no overflow.
         alive += now;
-        killed += dead;
-        score = score.wrapping_add(dead.wrapping_mul(info.energy as u32));
+        killed = killed.saturating_add(dead);
+        // Birth energies are at least 1.
+        score = score.saturating_add(dead.saturating_mul(info.energy as u32));
     }
-    st.events.kills = killed.saturating_sub(st.enemies_killed);
+    let killed = killed.max(st.enemies_killed);
+    st.events.kills = killed - st.enemies_killed;
     st.enemies_alive = alive;
     st.enemies_killed = killed;
-    st.score = score;
+    st.score = score.max(st.score);
     let shots = args.ranges.get(rules.shot_kind).capacity;
     st.shots_alive = shots - args.free.count.get(rules.shot_kind);
     let ship = rules.ship.start;
@@ -170,7 +177,7 @@ pub fn tally(t: Thread, args: &MasterArgs) {
     } else {
         PLAYING
     };
-    st.step += 1;
+    st.step = st.step.saturating_add(1);
     args.status.set(0, st);
     if st.is_over() {
         b.frozen.set(0, 1);
@@ -185,8 +192,11 @@ fn fly_ship(args: &MasterArgs, input: &Input, step: u32) {
     b.vel.set(ship, input.movement() * rules.ship_speed);
     b.force.set(ship, Vec2::ZERO);
     if rules.recover_every != 0 && step.is_multiple_of(rules.recover_every) {
+        // A ship at the largest energy allowed (i32::MAX) stays there, rather than wrapping
+        // to the most negative and dying.
         let energy = b.energy.get(ship);
-        b.energy.set(ship, (energy + 1).min(rules.ship_energy));
+        b.energy
+            .set(ship, energy.saturating_add(1).min(rules.ship_energy));
     }
 }
 

@@ -1,0 +1,328 @@
+//! The command line: its commands and flags (clap), and the checks of their values, which
+//! name what is allowed in words (`a whole number from 1 to 1,024`). The binary runs what
+//! it parses; tests parse command lines here without starting it.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, bail};
+use clap::{Args, Parser, Subcommand};
+
+use crate::BackendRequest;
+use crate::benchmark::scale;
+use crate::files::thousands;
+use crate::game::Options;
+use crate::game::demo::{Frames, Pilot, RunOptions};
+use crate::game::replay::MAX_STEPS;
+use crate::graphics::Renderer;
+use crate::pipeline::draw::MAX_SIDE;
+use crate::play::Pilot as PlayPilot;
+
+/// GpuWars: a top-down shooter whose whole game loop runs as GPU kernels.
+#[derive(Parser)]
+#[command(version, about)]
+pub struct Cli {
+    /// Where the kernels run: the GPU when present (auto), the GPU or fail (cuda), or the CPU
+    /// emulation of the same kernels (cpu).
+    #[arg(
+        long,
+        global = true,
+        value_enum,
+        env = "GPUWARS_BACKEND",
+        default_value_t
+    )]
+    pub backend: BackendRequest,
+    /// Worker threads of the CPU emulation (default: one per logical CPU).
+    #[arg(long, global = true, env = "GPUWARS_CPU_THREADS", value_parser = whole(1u16, 1024))]
+    pub cpu_threads: Option<u16>,
+    /// What to do; none plays in a window when a display is there, else runs the demo.
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+/// The commands.
+#[derive(Subcommand)]
+pub enum Command {
+    /// Version, backend and why, the GPU, the embedded PTX and its kernels.
+    Info {
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Lists the built-in scenes.
+    Scenes,
+    /// The autopilot plays a scene without a window and prints its figures (the default).
+    Demo(DemoArgs),
+    /// Plays a scene in a window, at the keyboard (the default when a display is present).
+    Play(PlayArgs),
+    /// Measures: the paper's experiment, how the game scales, and the change between runs.
+    Bench {
+        /// Which measurement.
+        #[command(subcommand)]
+        which: BenchCommand,
+    },
+    /// Plays a recorded game again and checks that it ends in the recorded state.
+    Replay {
+        /// The replay file (written by `demo --record`).
+        file: PathBuf,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+        /// How the game runs on its device.
+        #[command(flatten)]
+        run: RunArgs,
+    },
+}
+
+/// The measurements of `gpuwars bench`.
+#[derive(Subcommand)]
+pub enum BenchCommand {
+    /// The paper's experiment: `paper` played by the autopilot, one step and one frame per
+    /// loop, frames per second every second (CSV, PNG plot, JSON summary).
+    Paper {
+        /// Minutes of wall time to play.
+        #[arg(long, default_value_t = 5.0, value_parser = decimal(0.001, 1440.0))]
+        minutes: f64,
+        /// Size of the frames, WIDTHxHEIGHT in pixels.
+        #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
+        size: (u32, u32),
+        /// What draws the frames: the kernel renderer or GL from the interop buffer.
+        #[arg(long, value_enum, default_value_t)]
+        render: Renderer,
+        /// Seed of the game.
+        #[arg(long, default_value_t = 1)]
+        seed: u32,
+        /// Draw the frames in `play`'s window (vsync off) instead of offscreen.
+        #[arg(long)]
+        window: bool,
+        /// Where the files go, and how the summary is printed.
+        #[command(flatten)]
+        out: BenchOut,
+    },
+    /// The paper's mix and density from 1,024 enemies up, doubling, to --max or the largest
+    /// world that fits (CSV, log-log PNG plot, JSON summary).
+    Scale {
+        /// The most enemies (the last size if not a power of two).
+        #[arg(long, default_value_t = scale::MAX_ENEMIES, value_parser = whole(scale::MIN_ENEMIES, scale::MAX_ENEMIES))]
+        max: u64,
+        /// Seconds spent on each measurement of a size.
+        #[arg(long, default_value_t = 2.0, value_parser = decimal(0.01, 3600.0))]
+        seconds: f64,
+        /// Size of the frames, WIDTHxHEIGHT in pixels.
+        #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
+        size: (u32, u32),
+        /// Where the files go, and how the summary is printed.
+        #[command(flatten)]
+        out: BenchOut,
+    },
+    /// The change from run A to run B, figure by figure (two summaries of one benchmark).
+    Compare {
+        /// The first summary (bench-*.json).
+        a: PathBuf,
+        /// The second summary.
+        b: PathBuf,
+    },
+}
+
+/// Where a benchmark's files go, and how it reports.
+#[derive(Args)]
+pub struct BenchOut {
+    /// The folder for bench-NAME.csv, .png and .json (made if missing).
+    #[arg(long, default_value = ".")]
+    pub out: PathBuf,
+    /// Print the JSON summary instead of text (and no progress bar).
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// A value parser for a number from `low` to `high`, whose errors say so.
+pub fn decimal(low: f64, high: f64) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync {
+    move |text| {
+        let allowed = format!("allowed a number from {low} to {high}");
+        match text.trim().parse::<f64>() {
+            Ok(v) if (low..=high).contains(&v) => Ok(v),
+            Ok(_) => Err(format!("out of range ({allowed})")),
+            Err(_) => Err(format!("not a number ({allowed})")),
+        }
+    }
+}
+
+/// How a game runs on its device.
+#[derive(Args)]
+pub struct RunArgs {
+    /// Steps in flight before the host reads a status back (1: wait for every step).
+    #[arg(long, default_value_t = 4, value_parser = whole(1u16, 1024))]
+    pub lag: u16,
+    /// Launch the kernels one by one instead of replaying the step as a CUDA graph.
+    #[arg(long)]
+    pub no_graphs: bool,
+    /// Time every stage of every step and print the table (steps then wait for each stage).
+    #[arg(long)]
+    pub profile: bool,
+}
+
+impl RunArgs {
+    /// The options a game runs with.
+    pub fn options(&self) -> RunOptions {
+        RunOptions {
+            game: Options {
+                lag: usize::from(self.lag),
+                graphs: !self.no_graphs,
+            },
+            profile: self.profile,
+            ..RunOptions::default()
+        }
+    }
+}
+
+/// What `gpuwars demo` plays, and what it writes.
+#[derive(Args)]
+pub struct DemoArgs {
+    /// A built-in scene's name (see `gpuwars scenes`) or a path to a scene TOML file.
+    #[arg(long, env = "GPUWARS_SCENE", default_value = "paper")]
+    pub scene: String,
+    /// Steps to play (the game may end sooner).
+    #[arg(long, env = "GPUWARS_STEPS", default_value_t = 3600, value_parser = whole(1, MAX_STEPS))]
+    pub steps: u64,
+    /// Seed of the random number generators.
+    #[arg(long, default_value_t = 1, value_parser = whole(0, u32::MAX))]
+    pub seed: u32,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Write the game's inputs to this replay file.
+    #[arg(long)]
+    pub record: Option<PathBuf>,
+    /// Who flies the ship: the autopilot, or nobody (it never moves and never fires).
+    #[arg(long, value_enum, default_value_t)]
+    pub pilot: Pilot,
+    /// Draw the final state with the kernel renderer and write it to this PNG file (a bare
+    /// `gpuwars` writes gpuwars-demo.png in the system's temporary folder).
+    #[arg(long, env = "GPUWARS_SCREENSHOT")]
+    pub screenshot: Option<PathBuf>,
+    /// Write a frame every N steps into DIR, as frame-STEP.png (with --size), for a video.
+    #[arg(long, num_args = 2, value_names = ["N", "DIR"])]
+    pub frames_every: Option<Vec<String>>,
+    /// Size of the screenshot and the frames, WIDTHxHEIGHT in pixels.
+    #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// What draws the screenshot and the frames: the kernel renderer, or GL without a
+    /// window from a CUDA–GL interop vertex buffer (an EGL device).
+    #[arg(long, value_enum, default_value_t)]
+    pub render: Renderer,
+    /// How the game runs on its device.
+    #[command(flatten)]
+    pub run: RunArgs,
+}
+
+impl DemoArgs {
+    /// `--frames-every N DIR`, checked: N from 1, DIR an existing folder.
+    pub fn frames(&self, size: (u32, u32)) -> anyhow::Result<Option<Frames>> {
+        let Some([every, dir]) = self.frames_every.as_deref() else {
+            return Ok(None);
+        };
+        let every = every
+            .parse::<u64>()
+            .ok()
+            .filter(|&n| n >= 1)
+            .with_context(|| {
+                format!("--frames-every: `{every}` is not a step count (1 or more)")
+            })?;
+        let dir = PathBuf::from(dir);
+        if !dir.is_dir() {
+            bail!("--frames-every: {} is not a folder", dir.display());
+        }
+        Ok(Some(Frames { every, dir, size }))
+    }
+}
+
+/// What `gpuwars play` plays, and how.
+#[derive(Args)]
+pub struct PlayArgs {
+    /// A built-in scene's name (see `gpuwars scenes`) or a path to a scene TOML file.
+    #[arg(long, env = "GPUWARS_SCENE", default_value = "paper")]
+    pub scene: String,
+    /// Seed of the random number generators.
+    #[arg(long, default_value_t = 1, value_parser = whole(0, u32::MAX))]
+    pub seed: u32,
+    /// Who flies the ship: you (WASD moves, the arrow keys fire), the autopilot, or nobody.
+    #[arg(long, value_enum, default_value_t)]
+    pub pilot: PlayPilot,
+    /// Start with the sound off (M toggles it).
+    #[arg(long)]
+    pub mute: bool,
+    /// Draw frames as fast as possible instead of with the display's refresh.
+    #[arg(long)]
+    pub no_vsync: bool,
+    /// Write the last game's inputs to this replay file when the window closes.
+    #[arg(long)]
+    pub record: Option<PathBuf>,
+    /// Which renderer draws the world: a kernel's image, or GL from a CUDA–GL interop
+    /// vertex buffer.
+    #[arg(long, value_enum, default_value_t)]
+    pub render: Renderer,
+    /// The window's size, WIDTHxHEIGHT in pixels.
+    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Steps in flight before the host reads a status back.
+    #[arg(long, default_value_t = 4, value_parser = whole(1u16, 1024))]
+    pub lag: u16,
+    /// Print JSON instead of text when the window closes.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `WIDTHxHEIGHT`, each side 1 to 16,384 pixels.
+pub fn parse_size(text: &str) -> Result<(u32, u32), String> {
+    let bad = || {
+        let max = thousands(MAX_SIDE);
+        format!("not WIDTHxHEIGHT (allowed each side a whole number of pixels from 1 to {max})")
+    };
+    let (w, h) = text.split_once(['x', 'X']).ok_or_else(bad)?;
+    let side = |s: &str| {
+        s.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|v| (1..=MAX_SIDE).contains(v))
+    };
+    Ok((side(w).ok_or_else(bad)?, side(h).ok_or_else(bad)?))
+}
+
+/// Arguments `T` at their defaults (and the environment's settings).
+pub fn defaults<T: Args + clap::FromArgMatches>() -> T {
+    #[derive(Parser)]
+    struct Defaults<T: Args + clap::FromArgMatches> {
+        #[command(flatten)]
+        args: T,
+    }
+    Defaults::<T>::parse_from(["gpuwars"]).args
+}
+
+/// The default demo: with no window, the last frame goes to a PNG, and the report says
+/// where.
+pub fn default_demo() -> DemoArgs {
+    let mut demo: DemoArgs = defaults();
+    demo.screenshot
+        .get_or_insert_with(|| std::env::temp_dir().join("gpuwars-demo.png"));
+    demo
+}
+
+/// A value parser for a whole number from `low` to `high`, whose errors say so.
+pub fn whole<T>(low: T, high: T) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync
+where
+    T: Copy + Into<i128> + TryFrom<i128> + Send + Sync + 'static,
+{
+    move |text| {
+        let allowed = format!(
+            "allowed a whole number from {} to {}",
+            thousands(low),
+            thousands(high)
+        );
+        match text.trim().parse::<i128>() {
+            Ok(v) if (low.into()..=high.into()).contains(&v) => {
+                T::try_from(v).map_err(|_| format!("out of range ({allowed})"))
+            }
+            Ok(_) => Err(format!("out of range ({allowed})")),
+            Err(_) => Err(format!("not a whole number ({allowed})")),
+        }
+    }
+}
