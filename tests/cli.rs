@@ -536,3 +536,35 @@ fn flag_values_are_checked_in_words() {
         &["is not a folder"],
     );
 }
+
+#[test]
+fn a_large_world_on_the_cpu_says_its_size_before_it_is_allocated() {
+    use std::io::BufRead;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
+        .args([
+            "--backend",
+            "cpu",
+            "demo",
+            "--scene",
+            "scale-16m",
+            "--steps",
+            "1",
+        ])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    let stderr = child.stderr.take().unwrap();
+    std::io::BufReader::new(stderr)
+        .read_line(&mut first)
+        .unwrap();
+    // The world itself (seconds a step here) is not waited for.
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(
+        first.starts_with("gpuwars: scene `scale-16m` has 16,760,160 slots, which take"),
+        "{first}"
+    );
+    assert!(first.contains("GB of host memory"), "{first}");
+}

@@ -77,7 +77,7 @@ fn invalid_worlds_are_refused_with_the_field_and_the_allowed_range() {
         ),
         (
             |w| w.kinds[1].capacity = 1 << 24,
-            "kinds: 16777312 slots in all (allowed at most 16777216)",
+            "kinds: 16,777,312 slots in all (allowed at most 16,777,216",
         ),
     ];
     for (break_it, expected) in cases {
@@ -217,7 +217,8 @@ fn a_world_too_large_for_the_device_is_refused(device: &Device) {
     let err = device.check_fits("a huge world", free + 1).unwrap_err();
     let text = err.to_string();
     assert!(text.starts_with("a huge world needs"), "{text}");
-    assert!(text.contains(&format!("{} bytes", free + 1)), "{text}");
+    let needed = gpuwars::files::thousands(free + 1);
+    assert!(text.contains(&format!("{needed} bytes")), "{text}");
     assert!(text.contains("but only"), "{text}");
     device.check_fits("a small world", 1).unwrap();
 }
