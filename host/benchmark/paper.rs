@@ -10,6 +10,7 @@ use glium::Surface;
 use serde::{Deserialize, Serialize};
 
 use super::{Machine, Outputs, Spread, plot, progress, write_csv, write_json};
+use crate::Device;
 use crate::game::scene::built_in;
 use crate::game::{Game, Options, looks};
 use crate::graphics::Renderer;
@@ -18,7 +19,6 @@ use crate::graphics::headless::{Headless, Target};
 use crate::graphics::unpack;
 use crate::pipeline::Profile;
 use crate::play::{Pilot, PlayOptions};
-use crate::{BackendKind, Device};
 
 /// The paper's Figure 8: frames per second over five minutes, on its two cards.
 pub const PAPER_BANDS: [(&str, f64, f64); 2] = [
@@ -188,12 +188,7 @@ impl Drawer {
         Ok(match renderer {
             Renderer::Kernel => Drawer::Kernel,
             Renderer::Interop => {
-                let device = game.pipeline().device();
-                let gl = Headless::new(device.kind() == BackendKind::Cuda)?;
-                let bodies = BodyRenderer::for_game(gl.facade(), game)?;
-                if let Some(why) = bodies.fallback() {
-                    eprintln!("gpuwars: {why}: the vertices are uploaded");
-                }
+                let (gl, bodies) = Headless::with_renderer(game)?;
                 let target = Target::new(gl.facade(), width, height)?;
                 Drawer::Gl(Box::new((gl, bodies, target)))
             }

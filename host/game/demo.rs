@@ -203,15 +203,7 @@ impl Painter {
     fn new(renderer: Renderer, game: &Game) -> Result<Self, Error> {
         Ok(match renderer {
             Renderer::Kernel => Painter::Kernel,
-            Renderer::Interop => {
-                let device = game.pipeline().device();
-                let gl = Headless::new(device.kind() == BackendKind::Cuda)?;
-                let bodies = BodyRenderer::for_game(gl.facade(), game)?;
-                if let Some(why) = bodies.fallback() {
-                    eprintln!("gpuwars: {why}: the vertices are uploaded");
-                }
-                Painter::Gl(Box::new((gl, bodies)))
-            }
+            Renderer::Interop => Painter::Gl(Box::new(Headless::with_renderer(game)?)),
         })
     }
 

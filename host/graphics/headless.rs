@@ -19,8 +19,9 @@ use gpuwars_kernels::render::View;
 
 use super::bodies::BodyRenderer;
 use super::{gl_error, unpack};
-use crate::Error;
+use crate::game::Game;
 use crate::pipeline::{Frame, Pipeline};
+use crate::{BackendKind, Error};
 
 /// The EGL extension of NVIDIA's devices (those CUDA can share buffers with).
 const NVIDIA_DEVICE: &str = "EGL_NV_device_cuda";
@@ -108,6 +109,19 @@ impl Headless {
     /// The context, for making buffers, textures and programs.
     pub fn facade(&self) -> &Rc<Context> {
         &self.context
+    }
+
+    /// A context for `game`'s device (NVIDIA's EGL device on the CUDA backend, so that
+    /// interop works) and a renderer of its bodies; says once on stderr if the GPU's
+    /// vertices must be uploaded.
+    pub fn with_renderer(game: &Game) -> Result<(Headless, BodyRenderer), Error> {
+        let device = game.pipeline().device();
+        let gl = Headless::new(device.kind() == BackendKind::Cuda)?;
+        let bodies = BodyRenderer::for_game(gl.facade(), game)?;
+        if let Some(why) = bodies.fallback() {
+            eprintln!("gpuwars: {why}: the vertices are uploaded");
+        }
+        Ok((gl, bodies))
     }
 
     /// `pipeline`'s bodies after the steps queued, drawn by `renderer` as `view` shows the

@@ -255,6 +255,8 @@ struct Screen {
     picture: Upload,
     hud: Upload,
     overlay: Upload,
+    /// The text and scale the overlay texture holds.
+    overlay_shown: Option<(Vec<String>, u32)>,
     blit: Blit,
     display: Display<WindowSurface>,
     window: Window,
@@ -411,6 +413,7 @@ impl<'d> App<'d> {
             picture: Upload::default(),
             hud: Upload::default(),
             overlay: Upload::default(),
+            overlay_shown: None,
             blit: Blit::new(&display)?,
             display,
             window,
@@ -627,12 +630,17 @@ impl<'d> App<'d> {
         };
         let screen = self.screen.as_mut().expect("checked above");
         if let Some(lines) = overlay {
-            let image = text_image(&lines, TEXT, scale);
-            screen.overlay.set(&screen.display, &image)?;
+            // Drawn into its texture only when its text or size changes, not every frame.
+            let shown = (lines, scale);
+            if screen.overlay_shown.as_ref() != Some(&shown) {
+                let image = text_image(&shown.0, TEXT, scale);
+                screen.overlay.set(&screen.display, &image)?;
+                screen.overlay_shown = Some(shown);
+            }
             if let Some(texture) = screen.overlay.texture() {
                 let at = (
-                    width.saturating_sub(image.width) / 2,
-                    height.saturating_sub(image.height) / 2,
+                    width.saturating_sub(texture.width()) / 2,
+                    height.saturating_sub(texture.height()) / 2,
                 );
                 screen.blit.draw(frame, texture, true, at, height, true)?;
             }
