@@ -9,7 +9,7 @@ use gpuwars_kernels::game::rules::{Brain, Rules, Wave};
 use xxhash_rust::xxh3::Xxh3;
 
 use super::looks;
-use super::spec::{Machine, Scene};
+use super::spec::{Behaviour, Machine, Scene};
 use crate::backend::Ring;
 use crate::pipeline::{Frame, GameConfig, Pipeline, Profile};
 use crate::sim::layout::{self, Layout, steps};
@@ -51,9 +51,19 @@ pub struct Game<'d> {
 /// grid: its cells must be as large as the farthest sight.
 fn game_world(scene: &Scene) -> WorldSpec {
     let mut world = scene.world.clone();
-    let enemies = scene.game.behaviours.iter().flatten().map(|b| b.vision);
+    let enemies = scene
+        .game
+        .behaviours
+        .iter()
+        .flatten()
+        .map(|b| vision(scene, b));
     world.vision = enemies.fold(world.vision.max(scene.game.ship.autopilot_sight), f32::max);
     world
+}
+
+/// How far an enemy of behaviour `b` sees: its vision scaled by the scene's physics.
+fn vision(scene: &Scene, b: &Behaviour) -> f32 {
+    b.vision * scene.world.physics.vision_scale
 }
 
 /// The slots of a game of `scene` (padding included) and the bytes of device memory its
@@ -127,7 +137,7 @@ fn brains(scene: &Scene) -> Vec<Brain> {
             Some(b) if b.machine != Machine::None => Brain {
                 machine: b.machine as u32,
                 kind: k as u32,
-                vision: b.vision,
+                vision: vision(scene, &b),
                 speed: b.speed,
                 low_energy: b.low_energy,
                 recover_every: steps(1.0 / b.recovery, dt),

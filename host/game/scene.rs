@@ -28,7 +28,8 @@ use crate::files::{MAX_SCENE_BYTES, excerpt, line_of, number, read_text, thousan
 use super::spec::{Behaviour, FpsSpec, GameSpec, Machine, Scene, ShipSpec, SpawnSpec, WaveSpec};
 // Errors of the file's own rules read like the world's: a field and what is allowed.
 use crate::sim::spec::{
-    Boundary, KindSpec, MAX_SIDE, MAX_SLOTS, Shape, SpecError, WorldSpec, error as invalid,
+    Boundary, Field, Integrator, KindSpec, MAX_CELL_SCALE, MAX_SIDE, MAX_SLOTS, MAX_SUBSTEPS,
+    MAX_VISION_SCALE, Physics, Shape, SpecError, WorldSpec, error as invalid,
 };
 
 /// Largest speed, distance or time (seconds) in a scene: as far as f32 world coordinates go.
@@ -508,6 +509,7 @@ fn read_scene(root: &Node<'_>) -> Result<RawScene, SceneError> {
         "fps",
         "spawn",
         "kinds",
+        "physics",
     ])?;
     let name_node = top.need("name")?;
     let name = name_node.text("a name in quotes")?;
@@ -526,6 +528,7 @@ fn read_scene(root: &Node<'_>) -> Result<RawScene, SceneError> {
         &[("clamp", Boundary::Clamp), ("wrap", Boundary::Wrap)],
     )?;
     let vision = world.or("cell", 0.0, |n| n.real(side_or_zero()))?;
+    let physics = top.or("physics", Physics::default(), read_physics)?;
 
     let ship = read_ship(&top.need("ship")?)?;
     let fps = read_fps(&top.need("fps")?)?;
@@ -545,11 +548,43 @@ fn read_scene(root: &Node<'_>) -> Result<RawScene, SceneError> {
             boundary,
             vision,
             kinds,
+            physics,
+            field: Field::default(),
         },
         ship,
         fps,
         spawn,
         behaviours,
+    })
+}
+
+/// The `[physics]` table: every key optional, the default reproducing the paper's game.
+fn read_physics(node: &Node<'_>) -> Result<Physics, SceneError> {
+    let table = node.table(&[
+        "integrator",
+        "substeps",
+        "relaxation",
+        "averaged",
+        "cell_scale",
+        "neighbour_cap",
+        "vision_scale",
+    ])?;
+    let d = Physics::default();
+    let integrators = Integrator::ALL.map(|i| (i.name(), i));
+    Ok(Physics {
+        integrator: table.or("integrator", d.integrator, |n| {
+            n.choice("integrator", &integrators)
+        })?,
+        substeps: table.or("substeps", d.substeps, |n| n.whole(1, MAX_SUBSTEPS))?,
+        relaxation: table.or("relaxation", d.relaxation, |n| n.real(above(0.0, 1.0)))?,
+        averaged: table.or("averaged", d.averaged, Node::flag)?,
+        cell_scale: table.or("cell_scale", d.cell_scale, |n| {
+            n.real(within(1.0, MAX_CELL_SCALE))
+        })?,
+        neighbour_cap: table.or("neighbour_cap", d.neighbour_cap, |n| n.whole(0, MAX_SLOTS))?,
+        vision_scale: table.or("vision_scale", d.vision_scale, |n| {
+            n.real(above(0.0, MAX_VISION_SCALE))
+        })?,
     })
 }
 

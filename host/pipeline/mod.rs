@@ -41,7 +41,7 @@ use gpuwars_kernels::sim::Space;
 use gpuwars_kernels::sim::broad::{CountArgs, OrderArgs, PlaceArgs};
 use gpuwars_kernels::sim::free_list::{GatherArgs, MarkArgs};
 use gpuwars_kernels::sim::integrate::IntegrateArgs;
-use gpuwars_kernels::sim::narrow::CollideArgs;
+use gpuwars_kernels::sim::narrow::{CollideArgs, Relaxation};
 use gpuwars_kernels::sim::scatter::ScatterArgs;
 use gpuwars_kernels::{Kernel, KernelArgs, registry};
 
@@ -56,7 +56,7 @@ pub use world::Simulation;
 mod world;
 
 /// The stages of a step, in order.
-pub const STAGES: [&str; 9] = [
+pub const STAGES: [&str; 10] = [
     "pilot",
     "master",
     "births",
@@ -64,6 +64,7 @@ pub const STAGES: [&str; 9] = [
     "narrow",
     "think",
     "integrate",
+    "substeps",
     "free",
     "tally",
 ];
@@ -259,7 +260,8 @@ impl<'d> Pipeline<'d> {
         let kinds = self.state.kinds.view();
         let ranges = self.state.ranges.view();
         let contacts = self.scratch.contacts();
-        let cells = self.scratch.grid();
+        let physics = &self.spec.physics;
+        let cells = self.scratch.grid(physics.neighbour_cap);
         let space = self.space;
         let master = self.game.as_ref().map(|g| MasterArgs {
             bodies,
@@ -319,21 +321,8 @@ impl<'d> Pipeline<'d> {
                     }
                     _ => Vec::new(),
                 },
-                "broad" if self.config.grid => self.grid_ops(),
-                "narrow" => self
-                    .config
-                    .collide
-                    .map(|kernel| {
-                        let args = CollideArgs {
-                            bodies,
-                            kinds,
-                            space,
-                            grid: cells,
-                            contacts,
-                        };
-                        vec![op(kernel, slots, args, 52)]
-                    })
-                    .unwrap_or_default(),
+                "broad" => self.grid_ops(),
+                "narrow" => self.narrow_ops(0),
                 "think" => game
                     .and_then(|g| g.config.minds().map(|minds| (g, minds)))
                     .map(|(g, (first_kind, end_kind))| {
@@ -356,17 +345,15 @@ impl<'d> Pipeline<'d> {
                         vec![op(registry::THINK, threads, args, 56)]
                     })
                     .unwrap_or_default(),
-                "integrate" => {
-                    let args = IntegrateArgs {
-                        bodies,
-                        kinds,
-                        contacts,
-                        space,
-                        dt: self.spec.dt,
-                        reserved: 0,
-                    };
-                    vec![op(registry::INTEGRATE, slots, args, 88)]
-                }
+                "integrate" => self.integrate_ops(0),
+                "substeps" => (1..physics.substeps)
+                    .flat_map(|k| {
+                        let mut ops = self.grid_ops();
+                        ops.extend(self.narrow_ops(k));
+                        ops.extend(self.integrate_ops(k));
+                        ops
+                    })
+                    .collect(),
                 "free" => self.free_ops(),
                 "tally" => master
                     .map(|m| vec![op(registry::TALLY, 1, m, 128)])
@@ -376,11 +363,62 @@ impl<'d> Pipeline<'d> {
         }
     }
 
-    /// The broad phase: bucket counts, their prefix sum into starts, placement, order.
+    /// The narrow phase of substep `substep`, if anything collides.
+    ///
+    /// # Safety
+    /// As in [`Pipeline::ops`].
+    unsafe fn narrow_ops(&self, substep: u32) -> Vec<Op> {
+        let Some(kernel) = self.config.collide else {
+            return Vec::new();
+        };
+        let physics = &self.spec.physics;
+        let args = CollideArgs {
+            bodies: self.state.bodies(),
+            kinds: self.state.kinds.view(),
+            space: self.space,
+            grid: self.scratch.grid(physics.neighbour_cap),
+            contacts: self.scratch.contacts(),
+            relax: Relaxation {
+                fraction: physics.relaxation,
+                averaged: u32::from(physics.averaged),
+            },
+            substep,
+            reserved: 0,
+        };
+        // SAFETY: as in `ops`.
+        unsafe { vec![op(kernel, self.layout.slots, args, 52)] }
+    }
+
+    /// The integrator of substep `substep`.
+    ///
+    /// # Safety
+    /// As in [`Pipeline::ops`].
+    unsafe fn integrate_ops(&self, substep: u32) -> Vec<Op> {
+        let physics = &self.spec.physics;
+        let args = IntegrateArgs {
+            bodies: self.state.bodies(),
+            kinds: self.state.kinds.view(),
+            contacts: self.scratch.contacts(),
+            space: self.space,
+            field: self.spec.field,
+            dt: self.spec.dt / physics.substeps as f32,
+            integrator: physics.integrator.code(),
+            substep,
+            reserved: 0,
+        };
+        // SAFETY: as in `ops`.
+        unsafe { vec![op(registry::INTEGRATE, self.layout.slots, args, 88)] }
+    }
+
+    /// The broad phase, if the world has a grid: bucket counts, their prefix sum into
+    /// starts, placement, order.
     ///
     /// # Safety
     /// As in [`Pipeline::ops`].
     unsafe fn grid_ops(&self) -> Vec<Op> {
+        if !self.config.grid {
+            return Vec::new();
+        }
         let slots = self.layout.slots;
         let g = &self.scratch.grid;
         let start = g.start.view();

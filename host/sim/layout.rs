@@ -95,7 +95,7 @@ pub fn space(spec: &WorldSpec) -> Space {
         .filter(|(_, mask)| **mask != 0)
         .map(|(kind, _)| 2.0 * kind.shape.reach())
         .fold(0.0f32, f32::max);
-    let cell = touch.max(spec.vision) * CELL_MARGIN;
+    let cell = touch.max(spec.vision) * CELL_MARGIN * spec.physics.cell_scale;
     let fit = |side: f32| {
         if cell > 0.0 {
             ((side / cell) as u32).clamp(1, MAX_CELLS)

@@ -9,4 +9,4 @@ pub mod spec;
 pub mod state;
 
 pub use snapshot::Snapshot;
-pub use spec::{Boundary, KindSpec, Shape, SpecError, WorldSpec};
+pub use spec::{Boundary, Field, Integrator, KindSpec, Physics, Shape, SpecError, WorldSpec};

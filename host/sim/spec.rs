@@ -5,6 +5,7 @@
 use std::fmt;
 
 use glam::Vec2;
+pub use gpuwars_kernels::sim::integrate::Field;
 
 use crate::files::{excerpt, number, thousands};
 
@@ -14,6 +15,174 @@ pub const MAX_KINDS: usize = 32;
 pub const MAX_SLOTS: u32 = 1 << 24;
 /// Largest world side: beyond it, f32 positions are too coarse for small bodies.
 pub const MAX_SIDE: f32 = 1.0e6;
+
+/// Largest magnitude of a field's components and strength.
+pub const MAX_FIELD: f32 = 1.0e12;
+/// Most substeps a step may be split into.
+pub const MAX_SUBSTEPS: u32 = 64;
+/// Largest grid cell scale.
+pub const MAX_CELL_SCALE: f32 = 64.0;
+/// Largest vision scale.
+pub const MAX_VISION_SCALE: f32 = 4.0;
+
+/// The integrator of the equations of motion.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Integrator {
+    /// The paper's order, velocity then position (semi-implicit, symplectic Euler).
+    #[default]
+    #[value(name = "euler")]
+    #[serde(rename = "euler")]
+    SemiImplicitEuler,
+    /// Position from the old velocity, then velocity (explicit, forward Euler).
+    #[value(name = "explicit")]
+    #[serde(rename = "explicit")]
+    ExplicitEuler,
+    /// Velocity Verlet (the field's acceleration at both ends of the step).
+    #[value(name = "verlet")]
+    #[serde(rename = "verlet")]
+    VelocityVerlet,
+}
+
+impl Integrator {
+    /// Every integrator, the default first.
+    pub const ALL: [Integrator; 3] = [
+        Integrator::SemiImplicitEuler,
+        Integrator::ExplicitEuler,
+        Integrator::VelocityVerlet,
+    ];
+
+    /// The name scene files and flags use.
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::SemiImplicitEuler => "euler",
+            Integrator::ExplicitEuler => "explicit",
+            Integrator::VelocityVerlet => "verlet",
+        }
+    }
+
+    /// The kernels' code for it.
+    pub fn code(self) -> u32 {
+        use gpuwars_kernels::sim::integrate as k;
+        match self {
+            Integrator::SemiImplicitEuler => k::SEMI_IMPLICIT_EULER,
+            Integrator::ExplicitEuler => k::EXPLICIT_EULER,
+            Integrator::VelocityVerlet => k::VELOCITY_VERLET,
+        }
+    }
+}
+
+impl fmt::Display for Integrator {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// How a world's physics is computed: the choices that trade speed against accuracy. The
+/// default reproduces the paper's game bit for bit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Physics {
+    /// The integrator.
+    pub integrator: Integrator,
+    /// Substeps per step (1 to [`MAX_SUBSTEPS`]): the grid, the narrow phase and the
+    /// integrator run this many times a step with `dt / substeps`; the machines, the master
+    /// thread and contact damage once a step.
+    pub substeps: u32,
+    /// Fraction of the contacts' push applied per substep, in `(0, 1]`.
+    pub relaxation: f32,
+    /// Whether a body's pushes are averaged over its contacts instead of summed.
+    pub averaged: bool,
+    /// Grid cells this many times the smallest safe size, `[1, MAX_CELL_SCALE]`.
+    pub cell_scale: f32,
+    /// The most grid entries one query (contacts, vision) examines; 0 for no limit.
+    pub neighbour_cap: u32,
+    /// The enemies' vision radii scaled by this, `(0, MAX_VISION_SCALE]` (games only).
+    pub vision_scale: f32,
+}
+
+impl Default for Physics {
+    fn default() -> Self {
+        Physics {
+            integrator: Integrator::SemiImplicitEuler,
+            substeps: 1,
+            relaxation: 1.0,
+            averaged: false,
+            cell_scale: 1.0,
+            neighbour_cap: 0,
+            vision_scale: 1.0,
+        }
+    }
+}
+
+impl Physics {
+    /// Checks every choice; fields are named `physics.<name>`.
+    pub fn validate(&self) -> Result<(), SpecError> {
+        if !(1..=MAX_SUBSTEPS).contains(&self.substeps) {
+            return Err(error(
+                "physics.substeps",
+                format!(
+                    "{} is out of range (allowed 1 to {MAX_SUBSTEPS})",
+                    self.substeps
+                ),
+            ));
+        }
+        check_range("physics.relaxation", self.relaxation, (0.0, false), 1.0)?;
+        check_range(
+            "physics.cell_scale",
+            self.cell_scale,
+            (1.0, true),
+            MAX_CELL_SCALE,
+        )?;
+        if self.neighbour_cap > MAX_SLOTS {
+            return Err(error(
+                "physics.neighbour_cap",
+                format!(
+                    "{} is out of range (allowed 0 for no limit, or up to {})",
+                    thousands(self.neighbour_cap),
+                    thousands(MAX_SLOTS)
+                ),
+            ));
+        }
+        check_range(
+            "physics.vision_scale",
+            self.vision_scale,
+            (0.0, false),
+            MAX_VISION_SCALE,
+        )
+    }
+
+    /// A short label of the choices that differ from the default (`default` if none).
+    pub fn label(&self) -> String {
+        let d = Physics::default();
+        let mut parts = Vec::new();
+        if self.integrator != d.integrator {
+            parts.push(self.integrator.name().to_owned());
+        }
+        if self.substeps != d.substeps {
+            parts.push(format!("{} substeps", self.substeps));
+        }
+        if self.relaxation != d.relaxation {
+            parts.push(format!("relax {}", number(self.relaxation)));
+        }
+        if self.averaged {
+            parts.push("averaged".to_owned());
+        }
+        if self.cell_scale != d.cell_scale {
+            parts.push(format!("cell x{}", number(self.cell_scale)));
+        }
+        if self.neighbour_cap != 0 {
+            parts.push(format!("cap {}", self.neighbour_cap));
+        }
+        if self.vision_scale != d.vision_scale {
+            parts.push(format!("vision x{}", number(self.vision_scale)));
+        }
+        if parts.is_empty() {
+            "default".to_owned()
+        } else {
+            parts.join(", ")
+        }
+    }
+}
 
 /// How the world treats bodies that leave it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -91,6 +260,10 @@ pub struct WorldSpec {
     pub vision: f32,
     /// The kinds of body, in slot order.
     pub kinds: Vec<KindSpec>,
+    /// How the physics is computed.
+    pub physics: Physics,
+    /// The force field every body feels (none in the game's worlds).
+    pub field: Field,
 }
 
 /// A value that breaks a rule, named by its path in the spec.
@@ -149,6 +322,17 @@ impl WorldSpec {
         check_range("size.y", self.size.y, (0.0, false), MAX_SIDE)?;
         check_range("dt", self.dt, (0.0, false), 1.0)?;
         check_range("vision", self.vision, (0.0, true), MAX_SIDE)?;
+        self.physics.validate()?;
+        let field = [
+            ("field.gravity.x", self.field.gravity.x),
+            ("field.gravity.y", self.field.gravity.y),
+            ("field.centre.x", self.field.centre.x),
+            ("field.centre.y", self.field.centre.y),
+            ("field.strength", self.field.strength),
+        ];
+        for (name, value) in field {
+            check_range(name, value, (-MAX_FIELD, true), MAX_FIELD)?;
+        }
         if self.kinds.is_empty() || self.kinds.len() > MAX_KINDS {
             return Err(error(
                 "kinds",

@@ -278,14 +278,16 @@ impl Scratch {
         }
     }
 
-    /// The grid as kernels query it.
-    pub fn grid(&self) -> CellIndex {
+    /// The grid as kernels query it, each query examining at most `cap` entries (0: all).
+    pub fn grid(&self, cap: u32) -> CellIndex {
         CellIndex {
             slots: self.grid.slots.view(),
             pos: self.grid.pos.view(),
             start: self.grid.start.view(),
             kinds: self.grid.kinds,
             cells: self.grid.cells,
+            cap,
+            reserved: 0,
         }
     }
 }

@@ -46,6 +46,8 @@ pub fn world(size: Vec2, boundary: Boundary, kinds: Vec<KindSpec>) -> WorldSpec 
         boundary,
         vision: 0.0,
         kinds,
+        physics: Default::default(),
+        field: Default::default(),
     }
 }
 

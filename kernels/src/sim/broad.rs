@@ -152,6 +152,12 @@ pub struct CellIndex {
     pub kinds: u32,
     /// Number of cells (buckets per kind).
     pub cells: u32,
+    /// The most entries one query examines (its own body included), in its visiting order;
+    /// 0 for no limit. A cap bounds the cost of a crowded cell at the price of contacts and
+    /// sightings missed past it.
+    pub cap: u32,
+    /// Keeps the struct free of implicit padding.
+    pub reserved: u32,
 }
 
 impl CellIndex {
@@ -160,7 +166,8 @@ impl CellIndex {
     /// body once, in a fixed order: kind by kind in increasing order, then row by row of the
     /// block, each row's cells from left to right (as the block wraps), by increasing slot
     /// inside a cell. Since buckets are kind-major, the cells of a row that are neighbours
-    /// in the grid too are one run of entries: three runs per kind, not nine.
+    /// in the grid too are one run of entries: three runs per kind, not nine. With a
+    /// [`CellIndex::cap`], the query stops after that many entries.
     #[inline(always)]
     pub fn for_each_near(
         &self,
@@ -182,16 +189,25 @@ impl CellIndex {
             }
         }
         let mut rest = mask & kinds_mask(self.kinds);
+        // Entries the cap still allows.
+        let mut left = if self.cap == 0 { u32::MAX } else { self.cap };
         while rest != 0 {
             let kind = rest.trailing_zeros();
             rest &= rest - 1;
             for &r in &rows[..row_count] {
                 let row = kind * self.cells + r * space.cols;
                 for &(first, last) in &runs[..run_count] {
-                    let (start, end) =
-                        (self.start.get(row + first), self.start.get(row + last + 1));
+                    let start = self.start.get(row + first);
+                    let end = self
+                        .start
+                        .get(row + last + 1)
+                        .min(start.saturating_add(left));
                     for entry in start..end {
                         visit(self.slots.get(entry), kind, self.pos.get(entry));
+                    }
+                    left -= end.saturating_sub(start);
+                    if left == 0 {
+                        return;
                     }
                 }
             }

@@ -30,6 +30,45 @@ pub struct CollideArgs {
     pub grid: CellIndex,
     /// Output: each slot's response (zero for free slots).
     pub contacts: Contacts,
+    /// How much of the summed push is applied.
+    pub relax: Relaxation,
+    /// Which substep of the step this is: energy is lost, and contacts and damage are
+    /// counted, in substep 0 only (contact damage is per step).
+    pub substep: u32,
+    /// Keeps the struct free of implicit padding.
+    pub reserved: u32,
+}
+
+/// How a body's pushes are combined: today's full sum by default. Every pair of a crowd is
+/// resolved from the same pre-step state, so a body on a spot shared with `n` others gets
+/// `n` pushes; averaging them (Jacobi relaxation) and resolving only a `fraction` of the
+/// depth per step keep a crowd from exploding.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Relaxation {
+    /// Fraction of the (summed or averaged) push applied per step, in `(0, 1]`.
+    pub fraction: f32,
+    /// Non-zero: the pushes are averaged over the body's contacts instead of summed.
+    pub averaged: u32,
+}
+
+impl Relaxation {
+    /// Every contact resolved fully and the pushes summed (the paper's game).
+    pub const FULL: Relaxation = Relaxation {
+        fraction: 1.0,
+        averaged: 0,
+    };
+
+    /// The push applied for `sum`, the sum of `count` contacts' pushes.
+    #[inline(always)]
+    pub fn apply(&self, sum: Vec2, count: u32) -> Vec2 {
+        let push = if self.averaged != 0 && count > 1 {
+            sum / count as f32
+        } else {
+            sum
+        };
+        push * self.fraction
+    }
 }
 // SAFETY: repr(C) plain data.
 unsafe impl KernelArgs for CollideArgs {}
@@ -147,13 +186,15 @@ fn collide_bounds<const RECTS: bool>(t: Thread, args: &CollideArgs) {
                 }
             },
         );
-        if damage != 0 {
+        if damage != 0 && args.substep == 0 {
             let energy = bodies.energy.get(slot);
             bodies.energy.set(slot, energy.saturating_sub(damage));
         }
     }
-    out.push.set(slot, push);
+    out.push.set(slot, args.relax.apply(push, count));
     out.kick.set(slot, kick);
-    out.count.set(slot, count);
-    out.damage.set(slot, damage);
+    if args.substep == 0 {
+        out.count.set(slot, count);
+        out.damage.set(slot, damage);
+    }
 }
