@@ -60,6 +60,22 @@ pub enum Command {
         #[command(subcommand)]
         which: BenchCommand,
     },
+    /// Speed against accuracy: every physics choice measured side by side (CSV, Markdown,
+    /// a Pareto plot as PNG, JSON summary).
+    Tradeoff {
+        /// The game scene of the game and feature tables: a built-in name or a TOML file.
+        #[arg(long, default_value = "paper")]
+        scene: String,
+        /// Small sizes and short runs (seconds, for CI).
+        #[arg(long)]
+        quick: bool,
+        /// Seed of every world.
+        #[arg(long, default_value_t = 1, value_parser = whole(0, u32::MAX))]
+        seed: u32,
+        /// Where the files go, and how the summary is printed.
+        #[command(flatten)]
+        out: BenchOut,
+    },
     /// Plays a recorded game again and checks that it ends in the recorded state.
     Replay {
         /// The replay file (written by `demo --record`).

@@ -9,6 +9,7 @@ use clap::Parser;
 use gpuwars::benchmark::compare;
 use gpuwars::benchmark::paper::{self, PaperOptions, PaperSummary};
 use gpuwars::benchmark::scale::{self, ScaleOptions, ScaleSummary};
+use gpuwars::benchmark::tradeoff::{self, TradeoffOptions, TradeoffSummary};
 use gpuwars::cli::{BenchCommand, Cli, Command, default_demo, defaults};
 use gpuwars::files::{check_output, excerpt, thousands};
 use gpuwars::game::Scene;
@@ -107,6 +108,22 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             };
             let summary = scale::run(&device, &options)?;
             print_summary(&summary, out.json, ScaleSummary::to_text)?;
+        }
+        Command::Tradeoff {
+            scene,
+            quick,
+            seed,
+            out,
+        } => {
+            let options = TradeoffOptions {
+                scene: Scene::load(&scene)?,
+                quick,
+                seed,
+                out: out.out,
+                progress: !out.json,
+            };
+            let summary = tradeoff::run(&device, &options)?;
+            print_summary(&summary, out.json, TradeoffSummary::to_text)?;
         }
         Command::Info { json } => {
             let info = Info::gather(&device);

@@ -926,7 +926,9 @@ fn flag_value() -> impl Strategy<Value = String> {
 
 /// A command line: a command (or none), flags with and without values, stray words.
 fn command_line() -> impl Strategy<Value = Vec<String>> {
-    let command = prop::sample::select(vec!["demo", "play", "replay", "info", "scenes", "", "x"]);
+    let command = prop::sample::select(vec![
+        "demo", "play", "replay", "info", "scenes", "tradeoff", "", "x",
+    ]);
     let flag = prop::sample::select(vec![
         "--backend",
         "--cpu-threads",
@@ -945,6 +947,8 @@ fn command_line() -> impl Strategy<Value = Vec<String>> {
         "--profile",
         "--mute",
         "--no-vsync",
+        "--quick",
+        "--out",
         "--help",
         "--version",
         "-x",
@@ -996,6 +1000,7 @@ fn checks_before_a_game(command: &Command) -> Result<(), TestCaseError> {
             outputs(&[&args.record])?;
             scene(&args.scene)?;
         }
+        Command::Tradeoff { scene: name, .. } => scene(name)?,
         Command::Replay { file, .. } => {
             if let Err(e) = timed("a replay", || Replay::load(file))? {
                 check_words(&e, &file.display().to_string())?;

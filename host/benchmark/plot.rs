@@ -13,6 +13,7 @@ use plotters::style::{FontStyle, register_font};
 
 use super::paper::{PAPER_BANDS, PaperSummary, Second};
 use super::scale::{ScaleRow, ScaleSummary};
+use super::tradeoff::{PhysicsRow as TradeoffRow, TradeoffSummary};
 use crate::files::write_atomically;
 
 /// Width and height of every plot.
@@ -196,6 +197,72 @@ pub fn scaling(path: &Path, summary: &ScaleSummary) -> anyhow::Result<()> {
                         .into_iter()
                         .map(|p| Circle::new(p, 4, colour.filled())),
                 )
+                .map_err(|e| anyhow!("{e}"))?;
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 16))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+        Ok(())
+    })
+}
+
+/// The crowd's Pareto plot: position error against simulated seconds per wall second, both
+/// log, each choice labelled; the frontier joined by a line.
+pub fn pareto(path: &Path, summary: &TradeoffSummary) -> anyhow::Result<()> {
+    png(path, |area| {
+        let rows = &summary.physics;
+        let x = log_range(rows.iter().map(|r| r.sim_seconds_per_s), &[]);
+        // A run that matches the reference exactly still plots, at the smallest error.
+        let floor = rows
+            .iter()
+            .map(|r| r.position_rms)
+            .filter(|e| *e > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        let floor = if floor.is_finite() { floor } else { 1e-6 };
+        let error = |r: &TradeoffRow| r.position_rms.max(floor);
+        let y = log_range(rows.iter().map(error), &[]);
+        let title = format!(
+            "speed against accuracy: {} balls ({}, {})",
+            summary.sizes.error_bodies, summary.machine.device, summary.machine.backend
+        );
+        let mut chart = ChartBuilder::on(area)
+            .caption(title, ("sans-serif", 22))
+            .margin(16)
+            .x_label_area_size(48)
+            .y_label_area_size(80)
+            .build_cartesian_2d(x.log_scale(), y.log_scale())
+            .map_err(|e| anyhow!("{e}"))?;
+        chart
+            .configure_mesh()
+            .x_desc("simulated seconds per wall second (log)")
+            .y_desc("position RMS against the f64 reference (log)")
+            .label_style(("sans-serif", 16))
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+        let mut frontier: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(|r| r.pareto)
+            .map(|r| (r.sim_seconds_per_s, error(r)))
+            .collect();
+        frontier.sort_by(|a, b| a.0.total_cmp(&b.0));
+        chart
+            .draw_series(LineSeries::new(frontier, RED.stroke_width(2)))
+            .map_err(|e| anyhow!("{e}"))?
+            .label("Pareto frontier")
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], RED.stroke_width(2)));
+        for r in rows {
+            let colour = if r.pareto { RED } else { BLUE };
+            let p = (r.sim_seconds_per_s, error(r));
+            chart
+                .draw_series([
+                    Circle::new(p, 5, colour.filled()).into_dyn(),
+                    Text::new(r.choice.clone(), p, ("sans-serif", 13)).into_dyn(),
+                ])
                 .map_err(|e| anyhow!("{e}"))?;
         }
         chart

@@ -184,7 +184,7 @@ pub fn run(device: &Device, options: &ScaleOptions) -> anyhow::Result<ScaleSumma
 
 /// Runs `work` on `game` for at least `time` and 3 times, then waits for everything queued;
 /// returns runs per second.
-fn rate(
+pub(super) fn rate(
     game: &mut Game,
     time: Duration,
     mut work: impl FnMut(&mut Game) -> Result<(), Error>,

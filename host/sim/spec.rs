@@ -26,8 +26,18 @@ pub const MAX_CELL_SCALE: f32 = 64.0;
 pub const MAX_VISION_SCALE: f32 = 4.0;
 
 /// The integrator of the equations of motion.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    Hash,
+    clap::ValueEnum,
+    serde::Serialize,
+    serde::Deserialize,
+)]
 pub enum Integrator {
     /// The paper's order, velocity then position (semi-implicit, symplectic Euler).
     #[default]

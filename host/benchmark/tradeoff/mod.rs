@@ -1,0 +1,604 @@
+//! `gpuwars tradeoff`: how much accuracy each physics choice buys and what it costs, measured
+//! side by side in one run.
+//!
+//! - **Physics** ([`PhysicsRow`]): a crowd of balls falling around a central attractor and
+//!   bouncing off each other, under each choice (integrator, substeps, time step, contact
+//!   relaxation, grid cell size, neighbour cap). Error: the position RMS after a fixed time
+//!   against the [`reference`] (f64, every pair, 32 substeps per step, same start), and the
+//!   contacts the grid's queries missed against a brute-force count. Speed: simulated
+//!   seconds per wall second on a larger crowd of the same density.
+//! - **Analytic** ([`analytic`]): constant force, head-on collision, circular orbit, per
+//!   integrator and time step.
+//! - **Game** ([`GameRow`]): a scene (`paper` by default) under the choices that apply to a
+//!   game, steps per second and the stage times.
+//! - **Features** ([`GameRow`] again): the same scene with a feature off (tricky enemies,
+//!   rectangles, shots, vision), to show that a scene costs only what it uses.
+
+pub mod analytic;
+pub mod reference;
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use anyhow::Context as _;
+use glam::Vec2;
+use serde::{Deserialize, Serialize};
+
+use super::{Machine, Outputs, plot, progress, write_csv, write_json};
+use crate::files::write_atomically;
+use crate::game::spec::Machine as Brain;
+use crate::game::{Game, Options, Scene};
+use crate::pipeline::{Pipeline, Profile, Simulation};
+use crate::sim::{Boundary, Field, Integrator, KindSpec, Physics, Shape, WorldSpec};
+use crate::{Device, Error};
+use analytic::AnalyticRow;
+use reference::Reference;
+
+/// The crowd's time step (s).
+const DT: f32 = 1.0 / 60.0;
+/// The reference's substeps per step of [`DT`].
+const REFERENCE_SUBSTEPS: u32 = 32;
+/// The balls' radius.
+const RADIUS: f32 = 4.0;
+/// Fraction of the crowd's field that balls cover.
+const COVER: f64 = 0.08;
+/// Speed of a circular orbit at a quarter of the field's side, and the balls' initial
+/// speed deviation (units/s).
+const ORBIT_SPEED: f32 = 60.0;
+
+/// How `gpuwars tradeoff` runs.
+#[derive(Clone, Debug)]
+pub struct TradeoffOptions {
+    /// The game scene of the game and feature tables (built-in name or file).
+    pub scene: Scene,
+    /// Small sizes and short runs (CI).
+    pub quick: bool,
+    /// Seed of every world.
+    pub seed: u32,
+    /// Where the files go.
+    pub out: PathBuf,
+    /// Show a progress bar (on a terminal).
+    pub progress: bool,
+}
+
+/// The sizes of a run.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Sizes {
+    /// Balls of the crowd whose error is measured.
+    pub error_bodies: u32,
+    /// Simulated seconds after which the error is measured.
+    pub error_seconds: f64,
+    /// Balls of the crowd whose speed is measured.
+    pub speed_bodies: u32,
+    /// Wall seconds of each speed measurement.
+    pub speed_seconds: f64,
+    /// Steps the game plays before it is measured.
+    pub game_warmup: u32,
+    /// The analytic cases' time steps.
+    pub analytic_dts: [f64; 2],
+}
+
+impl Sizes {
+    /// The sizes of a full run on `device`, or of a quick one.
+    fn new(device: &Device, quick: bool) -> Self {
+        let gpu = device.kind() == crate::BackendKind::Cuda;
+        match (quick, gpu) {
+            (true, _) => Sizes {
+                error_bodies: 96,
+                error_seconds: 0.25,
+                speed_bodies: 1024,
+                speed_seconds: 0.05,
+                game_warmup: 20,
+                analytic_dts: [1.0 / 30.0, 1.0 / 60.0],
+            },
+            (false, false) => Sizes {
+                error_bodies: 768,
+                error_seconds: 1.0,
+                speed_bodies: 16_384,
+                speed_seconds: 1.0,
+                game_warmup: 600,
+                analytic_dts: [1.0 / 60.0, 1.0 / 240.0],
+            },
+            (false, true) => Sizes {
+                error_bodies: 768,
+                error_seconds: 1.0,
+                speed_bodies: 262_144,
+                speed_seconds: 1.0,
+                game_warmup: 600,
+                analytic_dts: [1.0 / 60.0, 1.0 / 240.0],
+            },
+        }
+    }
+}
+
+/// One choice of the crowd table: its physics and its time step.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PhysicsRow {
+    /// What differs from the default.
+    pub choice: String,
+    /// The integrator.
+    pub integrator: Integrator,
+    /// Substeps per step.
+    pub substeps: u32,
+    /// Time step (s).
+    pub dt: f64,
+    /// Fraction of the push applied.
+    pub relaxation: f32,
+    /// Pushes averaged over contacts.
+    pub averaged: bool,
+    /// Grid cell scale.
+    pub cell_scale: f32,
+    /// Entries examined per query (0: all).
+    pub neighbour_cap: u32,
+    /// Position RMS against the reference (world units).
+    pub position_rms: f64,
+    /// Fraction of the brute-force contacts the grid's queries did not count.
+    pub contacts_missed: f64,
+    /// Steps per wall second on the larger crowd.
+    pub steps_per_s: f64,
+    /// Simulated seconds per wall second (steps/s × dt).
+    pub sim_seconds_per_s: f64,
+    /// Whether no other choice is both faster and more accurate.
+    pub pareto: bool,
+}
+
+/// One configuration of the game scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GameRow {
+    /// The choice or the feature turned off.
+    pub choice: String,
+    /// Steps per second, the step replayed as a graph.
+    pub steps_per_s: f64,
+    /// Time per step over profiled steps (µs).
+    pub step_us: f64,
+    /// Each stage's µs, `stage=µs` joined by spaces.
+    pub stages: String,
+    /// Enemies alive when measured.
+    pub alive: u32,
+}
+
+/// The summary of a run, written as JSON.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TradeoffSummary {
+    /// Always "tradeoff".
+    pub benchmark: String,
+    /// Where and when.
+    pub machine: Machine,
+    /// Whether it was a quick run.
+    pub quick: bool,
+    /// The sizes it ran.
+    pub sizes: Sizes,
+    /// The crowd table.
+    pub physics: Vec<PhysicsRow>,
+    /// The analytic cases.
+    pub analytic: Vec<AnalyticRow>,
+    /// The game scene's name.
+    pub scene: String,
+    /// The game table.
+    pub game: Vec<GameRow>,
+    /// The feature table.
+    pub features: Vec<GameRow>,
+}
+
+/// The crowd's choices: `(dt, physics)`, the default first.
+fn crowd_choices() -> Vec<(f32, Physics)> {
+    let d = Physics::default();
+    let with = |f: &dyn Fn(&mut Physics)| {
+        let mut p = d;
+        f(&mut p);
+        (DT, p)
+    };
+    let mut choices = vec![
+        (DT, d),
+        with(&|p| p.integrator = Integrator::ExplicitEuler),
+        with(&|p| p.integrator = Integrator::VelocityVerlet),
+        (DT * 2.0, d),
+        (DT / 2.0, d),
+    ];
+    for substeps in [2, 4, 8] {
+        choices.push(with(&|p| p.substeps = substeps));
+    }
+    choices.push(with(&|p| p.relaxation = 0.5));
+    choices.push(with(&|p| p.averaged = true));
+    choices.push(with(&|p| {
+        p.averaged = true;
+        p.relaxation = 0.5;
+    }));
+    for scale in [2.0, 4.0] {
+        choices.push(with(&|p| p.cell_scale = scale));
+    }
+    for cap in [4, 8, 16, 32] {
+        choices.push(with(&|p| p.neighbour_cap = cap));
+    }
+    choices
+}
+
+/// The crowd of `bodies` balls: a clamped square field covered at [`COVER`], a central
+/// attractor whose circular orbit at a quarter of the side has speed [`ORBIT_SPEED`].
+pub fn crowd(bodies: u32, dt: f32, physics: Physics) -> WorldSpec {
+    let area = f64::from(bodies) * std::f64::consts::PI * f64::from(RADIUS).powi(2) / COVER;
+    let side = area.sqrt() as f32;
+    WorldSpec {
+        size: Vec2::splat(side),
+        dt,
+        boundary: Boundary::Clamp,
+        vision: 0.0,
+        kinds: vec![KindSpec {
+            name: "ball".into(),
+            shape: Shape::Circle { radius: RADIUS },
+            mass: 1.0,
+            capacity: bodies,
+            energy: 1,
+            damage: 0,
+            restitution: 0.5,
+            max_speed: f32::INFINITY,
+            collides_with: vec!["ball".into()],
+            lifetime: f32::INFINITY,
+            controlled: false,
+        }],
+        physics,
+        field: Field {
+            centre: Vec2::splat(side / 2.0),
+            strength: ORBIT_SPEED * ORBIT_SPEED * side / 4.0,
+            ..Field::default()
+        },
+    }
+}
+
+/// A crowd of `spec` scattered with seed `seed`.
+fn scattered<'d>(device: &'d Device, spec: &WorldSpec, seed: u32) -> Result<Simulation<'d>, Error> {
+    let mut sim = Simulation::new(device, spec, seed)?;
+    sim.scatter(0, spec.kinds[0].capacity, ORBIT_SPEED)?;
+    Ok(sim)
+}
+
+/// Position RMS against `truth` (same bodies, by slot) and the fraction of brute-force
+/// contacts missed, for the crowd of `spec` run for `seconds`.
+fn crowd_error(
+    device: &Device,
+    spec: &WorldSpec,
+    seed: u32,
+    seconds: f64,
+    truth: &Reference,
+) -> anyhow::Result<(f64, f64)> {
+    let mut sim = scattered(device, spec, seed)?;
+    let steps = (seconds / f64::from(spec.dt)).round() as u32;
+    let (mut missed, mut contacts) = (0u64, 0u64);
+    for _ in 0..steps {
+        let before = sim.snapshot()?;
+        let mut brute = vec![0u32; before.slots()];
+        let world = Reference::new(spec, &before)?;
+        for (i, j, _) in world.overlapping() {
+            brute[world.slots[i]] += 1;
+            brute[world.slots[j]] += 1;
+        }
+        sim.step()?;
+        let after = sim.snapshot()?;
+        for slot in before.live() {
+            contacts += u64::from(brute[slot]);
+            missed += u64::from(brute[slot].saturating_sub(after.contacts[slot]));
+        }
+    }
+    let end = sim.snapshot()?;
+    let sum: f64 = truth
+        .slots
+        .iter()
+        .zip(&truth.pos)
+        .map(|(&slot, &p)| (end.pos[slot].as_dvec2() - p).length_squared())
+        .sum();
+    let rms = (sum / truth.slots.len().max(1) as f64).sqrt();
+    Ok((rms, missed as f64 / contacts.max(1) as f64))
+}
+
+/// Steps per second of the crowd of `spec`, queued without waiting, for `time`.
+fn crowd_speed(
+    device: &Device,
+    spec: &WorldSpec,
+    seed: u32,
+    time: Duration,
+) -> anyhow::Result<f64> {
+    let mut sim = scattered(device, spec, seed)?;
+    sim.step()?;
+    let start = Instant::now();
+    let mut steps = 0u64;
+    while steps < 3 || start.elapsed() < time {
+        for _ in 0..8 {
+            Pipeline::step(&mut sim)?;
+        }
+        steps += 8;
+        device.synchronize()?;
+    }
+    Ok(steps as f64 / start.elapsed().as_secs_f64())
+}
+
+/// Marks the rows no other row beats on both error and speed.
+fn mark_pareto(rows: &mut [PhysicsRow]) {
+    let points: Vec<(f64, f64)> = rows
+        .iter()
+        .map(|r| (r.position_rms, r.sim_seconds_per_s))
+        .collect();
+    for (i, row) in rows.iter_mut().enumerate() {
+        let (e, s) = points[i];
+        row.pareto = !points
+            .iter()
+            .any(|&(e2, s2)| e2 <= e && s2 >= s && (e2 < e || s2 > s));
+    }
+}
+
+/// `scene` with its physics replaced by `physics`.
+fn with_physics(scene: &Scene, physics: Physics) -> Scene {
+    let mut scene = scene.clone();
+    scene.world.physics = physics;
+    scene
+}
+
+/// The game's choices: those that apply to a game.
+fn game_choices(base: Physics) -> Vec<Physics> {
+    let with = |f: &dyn Fn(&mut Physics)| {
+        let mut p = base;
+        f(&mut p);
+        p
+    };
+    vec![
+        base,
+        with(&|p| p.integrator = Integrator::ExplicitEuler),
+        with(&|p| p.integrator = Integrator::VelocityVerlet),
+        with(&|p| p.substeps = 2),
+        with(&|p| p.substeps = 4),
+        with(&|p| p.averaged = true),
+        with(&|p| p.cell_scale = 2.0),
+        with(&|p| p.neighbour_cap = 32),
+        with(&|p| p.neighbour_cap = 8),
+        with(&|p| p.vision_scale = 0.5),
+    ]
+}
+
+/// The scene with one feature off, for each feature the scene has: `(name, scene)`.
+fn feature_choices(scene: &Scene) -> Vec<(String, Scene)> {
+    let mut out = vec![("every feature".to_owned(), scene.clone())];
+    let tricky: Vec<String> = scene
+        .world
+        .kinds
+        .iter()
+        .zip(&scene.game.behaviours)
+        .filter(|(_, b)| b.is_some_and(|b| b.machine == Brain::Tricky))
+        .map(|(k, _)| k.name.clone())
+        .collect();
+    if !tricky.is_empty() {
+        let mut s = scene.clone();
+        s.game.spawn.waves.retain(|w| !tricky.contains(&w.kind));
+        out.push(("no tricky enemies".into(), s));
+    }
+    if scene.world.has_rects() {
+        let mut s = scene.clone();
+        for kind in &mut s.world.kinds {
+            kind.shape = Shape::Circle {
+                radius: kind.shape.reach(),
+            };
+        }
+        out.push(("no rectangles (circles of the same reach)".into(), s));
+    }
+    out.push(("no shots (the ship idle)".into(), scene.clone()));
+    let mut s = scene.clone();
+    s.world.physics.vision_scale = 1.0e-3;
+    out.push(("no vision (radius ×0.001)".into(), s));
+    out
+}
+
+/// Steps per second, stage times and enemies alive of `scene` after `warmup` steps.
+fn game_row(
+    device: &Device,
+    choice: String,
+    scene: &Scene,
+    seed: u32,
+    sizes: &Sizes,
+    idle: bool,
+) -> anyhow::Result<GameRow> {
+    let mut game = Game::with_options(device, scene, seed, Options::default())?;
+    // An idle player neither moves nor fires; otherwise the autopilot flies.
+    let input = idle.then(bytemuck::Zeroable::zeroed);
+    for _ in 0..sizes.game_warmup {
+        game.submit(input)?;
+    }
+    while game.next_status()?.is_some() {}
+    let alive = game.snapshot()?.live().count() as u32;
+    let time = Duration::from_secs_f64(sizes.speed_seconds);
+    let steps_per_s = super::scale::rate(&mut game, time, |g| g.submit(input))?;
+    let mut profile = Profile::default();
+    for _ in 0..3 {
+        game.submit_profiled(input, &mut profile)?;
+    }
+    let stages = profile
+        .stages
+        .iter()
+        .map(|s| format!("{}={:.1}", s.stage, s.seconds * 1e6 / profile.steps as f64))
+        .collect::<Vec<_>>()
+        .join(" ");
+    Ok(GameRow {
+        choice,
+        steps_per_s,
+        step_us: profile.step_seconds() * 1e6,
+        stages,
+        alive,
+    })
+}
+
+/// Runs the whole matrix and writes `bench-tradeoff.{csv,md,png,json}`.
+pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<TradeoffSummary> {
+    let outputs = Outputs::in_dir(&options.out, "tradeoff")?;
+    let machine = Machine::now(device);
+    let sizes = Sizes::new(device, options.quick);
+    let choices = crowd_choices();
+    let games = game_choices(options.scene.world.physics);
+    let features = feature_choices(&options.scene);
+    let bar = progress(
+        (choices.len() + games.len() + features.len() + 1) as u64,
+        options.progress,
+        "tradeoff",
+    );
+    let seed = options.seed;
+
+    // The truth: the default crowd's start, in f64 with many substeps.
+    let base = crowd(sizes.error_bodies, DT, Physics::default());
+    let start = scattered(device, &base, seed)?.snapshot()?;
+    let mut truth = Reference::new(&base, &start)?;
+    let truth_steps = (sizes.error_seconds / f64::from(DT)).round() as u32;
+    for _ in 0..truth_steps {
+        truth.advance(f64::from(DT), REFERENCE_SUBSTEPS);
+    }
+
+    let mut physics = Vec::new();
+    for (dt, p) in choices {
+        let label = match dt {
+            dt if dt == DT => p.label(),
+            dt => format!("dt 1/{:.0}", 1.0 / dt),
+        };
+        bar.set_message(label.clone());
+        let (position_rms, contacts_missed) = crowd_error(
+            device,
+            &crowd(sizes.error_bodies, dt, p),
+            seed,
+            sizes.error_seconds,
+            &truth,
+        )
+        .with_context(|| format!("the crowd's error under {label}"))?;
+        let steps_per_s = crowd_speed(
+            device,
+            &crowd(sizes.speed_bodies, dt, p),
+            seed,
+            Duration::from_secs_f64(sizes.speed_seconds),
+        )
+        .with_context(|| format!("the crowd's speed under {label}"))?;
+        physics.push(PhysicsRow {
+            choice: label,
+            integrator: p.integrator,
+            substeps: p.substeps,
+            dt: f64::from(dt),
+            relaxation: p.relaxation,
+            averaged: p.averaged,
+            cell_scale: p.cell_scale,
+            neighbour_cap: p.neighbour_cap,
+            position_rms,
+            contacts_missed,
+            steps_per_s,
+            sim_seconds_per_s: steps_per_s * f64::from(dt),
+            pareto: false,
+        });
+        bar.inc(1);
+    }
+    mark_pareto(&mut physics);
+
+    bar.set_message("analytic cases");
+    let dts = sizes.analytic_dts.map(|dt| dt as f32);
+    let analytic = analytic::run(device, &dts)?;
+    bar.inc(1);
+
+    let mut game = Vec::new();
+    for p in games {
+        let label = p.label();
+        bar.set_message(format!("{}: {label}", options.scene.name));
+        let scene = with_physics(&options.scene, p);
+        game.push(game_row(device, label, &scene, seed, &sizes, false)?);
+        bar.inc(1);
+    }
+    let mut feature_rows = Vec::new();
+    for (name, scene) in features {
+        bar.set_message(format!("{}: {name}", options.scene.name));
+        let idle = name.starts_with("no shots");
+        feature_rows.push(game_row(device, name, &scene, seed, &sizes, idle)?);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+
+    let summary = TradeoffSummary {
+        benchmark: "tradeoff".into(),
+        machine,
+        quick: options.quick,
+        sizes,
+        physics,
+        analytic,
+        scene: options.scene.name.clone(),
+        game,
+        features: feature_rows,
+    };
+    write_csv(&outputs.csv, &summary.physics)?;
+    write_json(&outputs.json, &summary)?;
+    let markdown = outputs.png.with_extension("md");
+    write_atomically(&markdown, summary.to_markdown().as_bytes())
+        .with_context(|| format!("writing {}", markdown.display()))?;
+    plot::pareto(&outputs.png, &summary)
+        .with_context(|| format!("plotting {}", outputs.png.display()))?;
+    Ok(summary)
+}
+
+impl TradeoffSummary {
+    /// Every table in Markdown.
+    pub fn to_markdown(&self) -> String {
+        let m = &self.machine;
+        let s = &self.sizes;
+        let mut out = format!(
+            "Machine: {} ({}), commit {}, {}{}.\n\n",
+            m.device,
+            m.backend,
+            m.commit,
+            m.date,
+            if self.quick { ", quick run" } else { "" }
+        );
+        out += &format!(
+            "### Physics: a crowd around an attractor\n\nError on {} balls after {} s against \
+             f64 with every pair tested and {REFERENCE_SUBSTEPS} substeps per step; speed on \
+             {} balls. ✓: on the Pareto frontier.\n\n",
+            s.error_bodies, s.error_seconds, s.speed_bodies
+        );
+        out += "| choice | position RMS | contacts missed | steps/s | simulated s/s | frontier |\n";
+        out += "|---|---:|---:|---:|---:|:---:|\n";
+        for r in &self.physics {
+            out += &format!(
+                "| {} | {:.3} | {:.2}% | {:.0} | {:.2} | {} |\n",
+                r.choice,
+                r.position_rms,
+                100.0 * r.contacts_missed,
+                r.steps_per_s,
+                r.sim_seconds_per_s,
+                if r.pareto { "✓" } else { "" }
+            );
+        }
+        out += "\n### Analytic cases\n\n| case | measure | integrator | dt | error |\n";
+        out += "|---|---|---|---:|---:|\n";
+        for r in &self.analytic {
+            out += &format!(
+                "| {} | {} | {} | {:.5} | {:.3e} |\n",
+                r.case, r.measure, r.integrator, r.dt, r.error
+            );
+        }
+        for (title, rows) in [
+            (
+                format!("Game: `{}` under each choice", self.scene),
+                &self.game,
+            ),
+            (
+                format!("Features: `{}` with one feature off", self.scene),
+                &self.features,
+            ),
+        ] {
+            out += &format!(
+                "\n### {title}\n\nAfter {} steps of play; stage times of one profiled step \
+                 (µs).\n\n| choice | enemies alive | steps/s | step µs | stages |\n\
+                 |---|---:|---:|---:|---|\n",
+                s.game_warmup
+            );
+            for r in rows {
+                out += &format!(
+                    "| {} | {} | {:.0} | {:.1} | {} |\n",
+                    r.choice, r.alive, r.steps_per_s, r.step_us, r.stages
+                );
+            }
+        }
+        out
+    }
+
+    /// The summary as text: the Markdown tables.
+    pub fn to_text(&self) -> String {
+        self.to_markdown()
+    }
+}
