@@ -751,3 +751,69 @@ proptest! {
         let _ = Scene::from_toml(&text, "changed.toml");
     }
 }
+
+/// `paper.toml` with a `[physics]` table of `body` appended.
+fn with_physics(body: &str) -> String {
+    format!("{}\n[physics]\n{body}\n", paper())
+}
+
+#[test]
+fn the_physics_table_reads_every_choice() {
+    use gpuwars::sim::{Integrator, Physics};
+    let text = with_physics(
+        "integrator = \"verlet\"\nsubsteps = 4\nrelaxation = 0.5\naveraged = true\n\
+         cell_scale = 2\nneighbour_cap = 16\nvision_scale = 0.75",
+    );
+    let scene = Scene::from_toml(&text, "paper.toml").unwrap();
+    assert_eq!(
+        scene.world.physics,
+        Physics {
+            integrator: Integrator::VelocityVerlet,
+            substeps: 4,
+            relaxation: 0.5,
+            averaged: true,
+            cell_scale: 2.0,
+            neighbour_cap: 16,
+            vision_scale: 0.75,
+        }
+    );
+    // Without the table, and with an empty one, the paper's defaults.
+    let plain = Scene::from_toml(paper(), "paper.toml").unwrap();
+    assert_eq!(plain.world.physics, Physics::default());
+    let empty = Scene::from_toml(&with_physics(""), "paper.toml").unwrap();
+    assert_eq!(empty.world.physics, Physics::default());
+}
+
+#[test]
+fn bad_physics_choices_name_the_key_and_the_allowed_values() {
+    let cases: [(&str, &str, &[&str]); 8] = [
+        ("substeps = 0", "physics.substeps", &["from 1 to 64"]),
+        ("substeps = 65", "physics.substeps", &["from 1 to 64"]),
+        ("substeps = 2.0", "physics.substeps", &["whole number"]),
+        ("relaxation = 0", "physics.relaxation", &["(0, 1]"]),
+        ("cell_scale = 0.5", "physics.cell_scale", &["[1, 64]"]),
+        (
+            "neighbour_cap = -1",
+            "physics.neighbour_cap",
+            &["from 0 to"],
+        ),
+        (
+            "integrator = \"rk4\"",
+            "physics.integrator",
+            &["euler", "explicit", "verlet"],
+        ),
+        ("averaged = 1", "physics.averaged", &["true or false"]),
+    ];
+    for (body, field, says) in cases {
+        let text = with_physics(body);
+        let key = body.split(' ').next().unwrap();
+        assert_error(&text, line_of(&text, &format!("{key} =")), field, says);
+    }
+    let text = with_physics("gravity = 9.81");
+    assert_error(
+        &text,
+        line_of(&text, "gravity ="),
+        "physics.gravity",
+        &["unknown key", "substeps"],
+    );
+}

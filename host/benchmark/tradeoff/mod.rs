@@ -75,7 +75,7 @@ pub struct Sizes {
     /// Steps the game plays before it is measured.
     pub game_warmup: u32,
     /// The analytic cases' time steps.
-    pub analytic_dts: [f64; 2],
+    pub analytic_dts: [f32; 2],
 }
 
 impl Sizes {
@@ -489,8 +489,7 @@ pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<Tradeof
     mark_pareto(&mut physics);
 
     bar.set_message("analytic cases");
-    let dts = sizes.analytic_dts.map(|dt| dt as f32);
-    let analytic = analytic::run(device, &dts)?;
+    let analytic = analytic::run(device, &sizes.analytic_dts)?;
     bar.inc(1);
 
     let mut game = Vec::new();

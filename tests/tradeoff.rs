@@ -1,0 +1,215 @@
+//! `gpuwars tradeoff --quick`: its files parse and agree, and its figures obey what the
+//! physics says they must (closed forms of each method's error, more substeps being more
+//! accurate, caps missing contacts and no cap missing none); and the f64 reference itself
+//! against closed forms.
+
+mod common;
+
+use std::collections::HashMap;
+use std::process::Command;
+
+use glam::{DVec2, Vec2};
+use gpuwars::benchmark::tradeoff::reference::Reference;
+use gpuwars::benchmark::tradeoff::{PhysicsRow, TradeoffSummary, crowd};
+use gpuwars::sim::{Physics, Snapshot};
+
+/// Runs the quick matrix on `backend`; the summary it printed, checked against its files.
+fn quick(backend: &str) -> TradeoffSummary {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
+        .args([
+            "--backend",
+            backend,
+            "tradeoff",
+            "--quick",
+            "--json",
+            "--out",
+        ])
+        .arg(dir.path())
+        .output()
+        .expect("the binary runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let printed: TradeoffSummary = serde_json::from_slice(&out.stdout).unwrap();
+    let file = |ext: &str| dir.path().join(format!("bench-tradeoff.{ext}"));
+    let written: TradeoffSummary =
+        serde_json::from_slice(&std::fs::read(file("json")).unwrap()).unwrap();
+    assert_eq!(printed, written);
+    let csv: Vec<PhysicsRow> = csv::Reader::from_path(file("csv"))
+        .unwrap()
+        .deserialize()
+        .collect::<Result<_, _>>()
+        .unwrap();
+    assert_eq!(csv, printed.physics);
+    let markdown = std::fs::read_to_string(file("md")).unwrap();
+    for row in &printed.physics {
+        assert!(
+            markdown.contains(&format!("| {} |", row.choice)),
+            "{}",
+            row.choice
+        );
+    }
+    let plot = image::open(file("png")).unwrap();
+    assert_eq!((plot.width(), plot.height()), (1280, 720));
+    printed
+}
+
+/// What every run's figures must satisfy, whatever the machine.
+fn check(summary: &TradeoffSummary) {
+    let rows: HashMap<&str, &PhysicsRow> = summary
+        .physics
+        .iter()
+        .map(|r| (r.choice.as_str(), r))
+        .collect();
+    let rms = |choice: &str| rows[choice].position_rms;
+    for row in &summary.physics {
+        assert!(
+            row.position_rms.is_finite() && row.steps_per_s > 0.0,
+            "{row:?}"
+        );
+        // Without a cap, the grid finds every contact brute force finds.
+        if row.neighbour_cap == 0 {
+            assert_eq!(row.contacts_missed, 0.0, "{}", row.choice);
+        }
+    }
+    // A cap of 4 in a crowd where bodies have more than 3 neighbours misses contacts, and
+    // a larger cap misses no more.
+    assert!(rows["cap 4"].contacts_missed > 0.0);
+    assert!(rows["cap 8"].contacts_missed <= rows["cap 4"].contacts_missed);
+    // Substeps converge on the reference.
+    assert!(rms("8 substeps") < rms("2 substeps"));
+    assert!(rms("2 substeps") < rms("default"));
+    // Two substeps are two steps of half the time step, bit for bit.
+    assert_eq!(rms("2 substeps"), rms("dt 1/120"));
+    // The Pareto flags: a row is on the frontier exactly when nothing dominates it.
+    for a in &summary.physics {
+        let dominated = summary.physics.iter().any(|b| {
+            b.position_rms <= a.position_rms
+                && b.sim_seconds_per_s >= a.sim_seconds_per_s
+                && (b.position_rms < a.position_rms || b.sim_seconds_per_s > a.sim_seconds_per_s)
+        });
+        assert_eq!(a.pareto, !dominated, "{}", a.choice);
+    }
+
+    let analytic = |case: &str, integrator: &str, dt: f32| {
+        let dt = f64::from(dt);
+        summary
+            .analytic
+            .iter()
+            .find(|r| r.case == case && r.integrator == integrator && r.dt == dt)
+            .unwrap_or_else(|| panic!("{case} {integrator} {dt}"))
+            .error
+    };
+    for &dt in &summary.sizes.analytic_dts {
+        // Euler's position error under a constant g is exactly g t dt / 2, either order.
+        let expected = 98.1 * 2.0 * f64::from(dt) / 2.0;
+        for integrator in ["euler", "explicit"] {
+            let error = analytic("constant force", integrator, dt);
+            assert!(
+                (error - expected).abs() < 0.01 * expected,
+                "{integrator}: {error}"
+            );
+        }
+        assert!(analytic("constant force", "verlet", dt) < 0.01 * expected);
+        for integrator in ["euler", "explicit", "verlet"] {
+            assert!(analytic("head-on collision", integrator, dt) < 1e-3);
+        }
+        // Energy: explicit Euler gains, the symplectic methods stay close; Verlet closest.
+        let orbit = |integrator| analytic("circular orbit", integrator, dt);
+        assert!(orbit("explicit") > 10.0 * orbit("euler"), "dt {dt}");
+        assert!(orbit("verlet") < orbit("euler"), "dt {dt}");
+    }
+    assert!(!summary.game.is_empty() && !summary.features.is_empty());
+    assert!(summary.features.iter().all(|r| r.steps_per_s > 0.0));
+}
+
+#[test]
+fn the_quick_tradeoff_runs_on_the_cpu() {
+    check(&quick("cpu"));
+}
+
+#[test]
+fn the_quick_tradeoff_runs_on_the_gpu() {
+    if common::gpu().is_none() {
+        return;
+    }
+    check(&quick("cuda"));
+}
+
+/// A snapshot of `bodies` (pos, vel) of the crowd's only kind, every other slot free.
+fn snapshot(spec_bodies: u32, bodies: &[(Vec2, Vec2)]) -> Snapshot {
+    let n = spec_bodies as usize;
+    let mut alive = vec![0; n];
+    let (mut pos, mut vel) = (vec![Vec2::ZERO; n], vec![Vec2::ZERO; n]);
+    for (i, &(p, v)) in bodies.iter().enumerate() {
+        (alive[i], pos[i], vel[i]) = (1, p, v);
+    }
+    Snapshot {
+        steps: 0,
+        pos,
+        vel,
+        force: vec![Vec2::ZERO; n],
+        dir: vec![Vec2::X; n],
+        kind: vec![0; n],
+        energy: vec![1; n],
+        mass: vec![1.0; n],
+        alive,
+        state: vec![0; n],
+        age: vec![0; n],
+        rng_words: Vec::new(),
+        rng_index: Vec::new(),
+        contacts: vec![0; n],
+        free_counts: Vec::new(),
+        free_list: Vec::new(),
+    }
+}
+
+#[test]
+fn the_reference_orbits_and_collides_as_the_closed_forms_say() {
+    // A circular orbit in the crowd's field: after one period, back where it started.
+    let spec = crowd(4096, 1.0 / 60.0, Physics::default());
+    let (centre, gm) = (spec.field.centre.as_dvec2(), f64::from(spec.field.strength));
+    let r = f64::from(spec.size.x) / 4.0;
+    let speed = (gm / r).sqrt();
+    let start = centre + DVec2::new(r, 0.0);
+    let mut world = Reference::new(
+        &spec,
+        &snapshot(4096, &[(start.as_vec2(), Vec2::new(0.0, speed as f32))]),
+    )
+    .unwrap();
+    let period = std::f64::consts::TAU * r / speed;
+    let steps = 1000;
+    for _ in 0..steps {
+        world.advance(period / f64::from(steps), 64);
+    }
+    let error = (world.pos[0] - start).length();
+    assert!(error < 1e-3 * r, "{error} after one period of radius {r}");
+
+    // Two equal balls head-on with restitution 0.5: they swap half their velocities.
+    let spec = crowd(4096, 1.0 / 60.0, Physics::default());
+    let mut spec = spec;
+    spec.field.strength = 0.0;
+    let bodies = [
+        (Vec2::new(100.0, 200.0), Vec2::new(30.0, 0.0)),
+        (Vec2::new(120.0, 200.0), Vec2::new(-30.0, 0.0)),
+    ];
+    let mut world = Reference::new(&spec, &snapshot(4096, &bodies)).unwrap();
+    for _ in 0..60 {
+        world.advance(1.0 / 60.0, 32);
+    }
+    // v1' = (v1 + v2 − e (v1 − v2)) / 2 for equal masses.
+    let (after1, after2) = ((0.0 - 0.5 * 60.0) / 2.0, (0.0 + 0.5 * 60.0) / 2.0);
+    assert!(
+        (world.vel[0] - DVec2::new(after1, 0.0)).length() < 1e-9,
+        "{}",
+        world.vel[0]
+    );
+    assert!(
+        (world.vel[1] - DVec2::new(after2, 0.0)).length() < 1e-9,
+        "{}",
+        world.vel[1]
+    );
+}
