@@ -1,7 +1,7 @@
 //! `gpuwars tradeoff`: how much accuracy each physics choice buys and what it costs, measured
 //! side by side in one run.
 //!
-//! - **Physics** ([`PhysicsRow`]): a crowd of balls falling around a central attractor and
+//! - **Physics** ([`PhysicsRow`]): a ring of balls orbiting a central attractor and
 //!   bouncing off each other, under each choice (integrator, substeps, time step, contact
 //!   relaxation, grid cell size, neighbour cap). Error: the position RMS after a fixed time
 //!   against the [`reference`] (f64, every pair, 32 substeps per step, same start), and the
@@ -41,7 +41,7 @@ const REFERENCE_SUBSTEPS: u32 = 32;
 /// The balls' radius.
 const RADIUS: f32 = 4.0;
 /// Fraction of the crowd's field that balls cover.
-const COVER: f64 = 0.08;
+const COVER: f64 = 0.04;
 /// Speed of a circular orbit at a quarter of the field's side, and the balls' initial
 /// speed deviation (units/s).
 const ORBIT_SPEED: f32 = 60.0;
@@ -76,6 +76,8 @@ pub struct Sizes {
     pub game_warmup: u32,
     /// The analytic cases' time steps.
     pub analytic_dts: [f32; 2],
+    /// Bodies of the crowded-cell worlds.
+    pub crowded: [u32; 2],
 }
 
 impl Sizes {
@@ -90,22 +92,25 @@ impl Sizes {
                 speed_seconds: 0.05,
                 game_warmup: 20,
                 analytic_dts: [1.0 / 30.0, 1.0 / 60.0],
+                crowded: [256, 1024],
             },
             (false, false) => Sizes {
                 error_bodies: 768,
-                error_seconds: 1.0,
+                error_seconds: 0.25,
                 speed_bodies: 16_384,
                 speed_seconds: 1.0,
                 game_warmup: 600,
                 analytic_dts: [1.0 / 60.0, 1.0 / 240.0],
+                crowded: [4096, 32_768],
             },
             (false, true) => Sizes {
                 error_bodies: 768,
-                error_seconds: 1.0,
+                error_seconds: 0.25,
                 speed_bodies: 262_144,
                 speed_seconds: 1.0,
                 game_warmup: 600,
                 analytic_dts: [1.0 / 60.0, 1.0 / 240.0],
+                crowded: [4096, 32_768],
             },
         }
     }
@@ -157,6 +162,19 @@ pub struct GameRow {
     pub alive: u32,
 }
 
+/// A step of a world whose bodies all start on one spot.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CrowdedRow {
+    /// Bodies, all in one cell.
+    pub bodies: u32,
+    /// Entries examined per query (0: all).
+    pub neighbour_cap: u32,
+    /// The first step's time, the median of three worlds (ms).
+    pub step_ms: f64,
+    /// Its stages' ms, `stage=ms` joined by spaces.
+    pub stages: String,
+}
+
 /// The summary of a run, written as JSON.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TradeoffSummary {
@@ -178,6 +196,8 @@ pub struct TradeoffSummary {
     pub game: Vec<GameRow>,
     /// The feature table.
     pub features: Vec<GameRow>,
+    /// Every body in one cell, with and without a cap.
+    pub crowded: Vec<CrowdedRow>,
 }
 
 /// The crowd's choices: `(dt, physics)`, the default first.
@@ -213,8 +233,9 @@ fn crowd_choices() -> Vec<(f32, Physics)> {
     choices
 }
 
-/// The crowd of `bodies` balls: a clamped square field covered at [`COVER`], a central
-/// attractor whose circular orbit at a quarter of the side has speed [`ORBIT_SPEED`].
+/// The crowd of `bodies` balls: a clamped square field whose area is [`COVER`] balls, a
+/// central attractor whose circular orbit at a quarter of the side has speed
+/// [`ORBIT_SPEED`].
 pub fn crowd(bodies: u32, dt: f32, physics: Physics) -> WorldSpec {
     let area = f64::from(bodies) * std::f64::consts::PI * f64::from(RADIUS).powi(2) / COVER;
     let side = area.sqrt() as f32;
@@ -245,10 +266,25 @@ pub fn crowd(bodies: u32, dt: f32, physics: Physics) -> WorldSpec {
     }
 }
 
-/// A crowd of `spec` scattered with seed `seed`.
+/// A crowd of `spec` set out by seed `seed`: a ring around the attractor from 0.2 to 0.45
+/// of the side from its centre (none near the centre, where the field is singular), each
+/// ball on its circular orbit give or take a tenth of [`ORBIT_SPEED`] per axis. Neighbouring
+/// orbits shear past each other, so the balls collide.
 fn scattered<'d>(device: &'d Device, spec: &WorldSpec, seed: u32) -> Result<Simulation<'d>, Error> {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand::rngs::StdRng::seed_from_u64(u64::from(seed));
+    let (centre, gm, side) = (spec.field.centre, spec.field.strength, spec.size.x);
+    let balls: Vec<_> = (0..spec.kinds[0].capacity)
+        .map(|slot| {
+            let r = side * rng.random_range(0.2..0.45);
+            let (sin, cos) = rng.random_range(0.0..std::f32::consts::TAU).sin_cos();
+            let noise = Vec2::new(rng.random_range(-0.1..0.1), rng.random_range(-0.1..0.1));
+            let vel = Vec2::new(-sin, cos) * (gm / r).sqrt() + noise * ORBIT_SPEED;
+            (slot, centre + Vec2::new(cos, sin) * r, vel)
+        })
+        .collect();
     let mut sim = Simulation::new(device, spec, seed)?;
-    sim.scatter(0, spec.kinds[0].capacity, ORBIT_SPEED)?;
+    sim.place(&balls)?;
     Ok(sim)
 }
 
@@ -309,6 +345,40 @@ fn crowd_speed(
         device.synchronize()?;
     }
     Ok(steps as f64 / start.elapsed().as_secs_f64())
+}
+
+/// The cap of the crowded-cell rows that have one.
+const CROWDED_CAP: u32 = 32;
+
+/// The first step of `bodies` balls on one spot, with `cap`: the median of three worlds.
+fn crowded(device: &Device, bodies: u32, cap: u32) -> anyhow::Result<CrowdedRow> {
+    let mut spec = crowd(bodies, DT, Physics::default());
+    spec.physics.neighbour_cap = cap;
+    spec.field = Field::default();
+    let spot = spec.size / 2.0;
+    let mut runs = Vec::new();
+    for _ in 0..3 {
+        let mut sim = Simulation::new(device, &spec, 1)?;
+        let all: Vec<_> = (0..bodies).map(|s| (s, spot, Vec2::ZERO)).collect();
+        sim.place(&all)?;
+        let mut profile = Profile::default();
+        sim.step_profiled(&mut profile)?;
+        runs.push(profile);
+    }
+    runs.sort_by(|a, b| a.step_seconds().total_cmp(&b.step_seconds()));
+    let median = &runs[1];
+    let stages = median
+        .stages
+        .iter()
+        .map(|s| format!("{}={:.2}", s.stage, s.seconds * 1e3))
+        .collect::<Vec<_>>()
+        .join(" ");
+    Ok(CrowdedRow {
+        bodies,
+        neighbour_cap: cap,
+        step_ms: median.step_seconds() * 1e3,
+        stages,
+    })
 }
 
 /// Marks the rows no other row beats on both error and speed.
@@ -507,6 +577,13 @@ pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<Tradeof
         feature_rows.push(game_row(device, name, &scene, seed, &sizes, idle)?);
         bar.inc(1);
     }
+    let mut crowded_rows = Vec::new();
+    for bodies in sizes.crowded {
+        for cap in [0, CROWDED_CAP] {
+            bar.set_message(format!("{bodies} bodies in one cell, cap {cap}"));
+            crowded_rows.push(crowded(device, bodies, cap)?);
+        }
+    }
     bar.finish_and_clear();
 
     let summary = TradeoffSummary {
@@ -519,6 +596,7 @@ pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<Tradeof
         scene: options.scene.name.clone(),
         game,
         features: feature_rows,
+        crowded: crowded_rows,
     };
     write_csv(&outputs.csv, &summary.physics)?;
     write_json(&outputs.json, &summary)?;
@@ -592,6 +670,19 @@ impl TradeoffSummary {
                     r.choice, r.alive, r.steps_per_s, r.step_us, r.stages
                 );
             }
+        }
+        out += "\n### Every body in one cell\n\nThe first step of a world whose bodies all \
+                 start on one spot (median of three).\n\n| bodies | cap | step ms | stages (ms) |\n\
+                 |---:|---:|---:|---|\n";
+        for r in &self.crowded {
+            let cap = match r.neighbour_cap {
+                0 => "none".to_owned(),
+                cap => cap.to_string(),
+            };
+            out += &format!(
+                "| {} | {cap} | {:.2} | {} |\n",
+                r.bodies, r.step_ms, r.stages
+            );
         }
         out
     }
