@@ -622,7 +622,7 @@ impl TradeoffSummary {
             if self.quick { ", quick run" } else { "" }
         );
         out += &format!(
-            "### Physics: a crowd around an attractor\n\nError on {} balls after {} s against \
+            "### Physics: a ring of balls around an attractor\n\nError on {} balls after {} s against \
              f64 with every pair tested and {REFERENCE_SUBSTEPS} substeps per step; speed on \
              {} balls. ✓: on the Pareto frontier.\n\n",
             s.error_bodies, s.error_seconds, s.speed_bodies
