@@ -448,35 +448,45 @@ fn feature_choices(scene: &Scene) -> Vec<(String, Scene)> {
         }
         out.push(("no rectangles (circles of the same reach)".into(), s));
     }
-    out.push(("no shots (the ship idle)".into(), scene.clone()));
+    let mut s = scene.clone();
+    // One shot in a thousand seconds: none in the run.
+    s.game.ship.fire_rate = 1.0e-3;
+    out.push(("no shots".into(), s));
     let mut s = scene.clone();
     s.world.physics.vision_scale = 1.0e-3;
     out.push(("no vision (radius ×0.001)".into(), s));
     out
 }
 
-/// Steps per second, stage times and enemies alive of `scene` after `warmup` steps.
+/// Steps per second, stage times and enemies alive of `scene`, the autopilot playing,
+/// after `warmup` steps; an error if the game is over by then.
 fn game_row(
     device: &Device,
     choice: String,
     scene: &Scene,
     seed: u32,
     sizes: &Sizes,
-    idle: bool,
 ) -> anyhow::Result<GameRow> {
     let mut game = Game::with_options(device, scene, seed, Options::default())?;
-    // An idle player neither moves nor fires; otherwise the autopilot flies.
-    let input = idle.then(bytemuck::Zeroable::zeroed);
+    // The autopilot flies.
+    let input = None;
     for _ in 0..sizes.game_warmup {
         game.submit(input)?;
     }
     while game.next_status()?.is_some() {}
+    if game.status().game_over != 0 {
+        // A frozen world would measure nothing.
+        anyhow::bail!("the game was over before it was measured");
+    }
     let alive = game.snapshot()?.live().count() as u32;
     let time = Duration::from_secs_f64(sizes.speed_seconds);
     let steps_per_s = super::scale::rate(&mut game, time, |g| g.submit(input))?;
     let mut profile = Profile::default();
     for _ in 0..3 {
         game.submit_profiled(input, &mut profile)?;
+    }
+    if game.status().game_over != 0 {
+        anyhow::bail!("the game ended while it was measured (a frozen world is cheap)");
     }
     let stages = profile
         .stages
@@ -567,14 +577,19 @@ pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<Tradeof
         let label = p.label();
         bar.set_message(format!("{}: {label}", options.scene.name));
         let scene = with_physics(&options.scene, p);
-        game.push(game_row(device, label, &scene, seed, &sizes, false)?);
+        game.push(
+            game_row(device, label.clone(), &scene, seed, &sizes)
+                .with_context(|| format!("{} under {label}", options.scene.name))?,
+        );
         bar.inc(1);
     }
     let mut feature_rows = Vec::new();
     for (name, scene) in features {
         bar.set_message(format!("{}: {name}", options.scene.name));
-        let idle = name.starts_with("no shots");
-        feature_rows.push(game_row(device, name, &scene, seed, &sizes, idle)?);
+        feature_rows.push(
+            game_row(device, name.clone(), &scene, seed, &sizes)
+                .with_context(|| format!("{} with {name}", options.scene.name))?,
+        );
         bar.inc(1);
     }
     let mut crowded_rows = Vec::new();
