@@ -38,7 +38,7 @@ use gpuwars_kernels::game::control::{Command, Input, Status};
 use gpuwars_kernels::game::master::{BirthArgs, MasterArgs};
 use gpuwars_kernels::game::rules::{Brain, Rules, Wave};
 use gpuwars_kernels::sim::Space;
-use gpuwars_kernels::sim::broad::{CountArgs, OrderArgs, PlaceArgs};
+use gpuwars_kernels::sim::broad::{self, CountArgs, MergeArgs, OrderArgs, PlaceArgs};
 use gpuwars_kernels::sim::free_list::{GatherArgs, MarkArgs};
 use gpuwars_kernels::sim::integrate::IntegrateArgs;
 use gpuwars_kernels::sim::narrow::{CollideArgs, Relaxation};
@@ -435,6 +435,9 @@ impl<'d> Pipeline<'d> {
             start,
             unordered: g.unordered.view(),
         };
+        // With a cap, crowded buckets are ordered in runs and merged, so that their cost
+        // stays O(n log n): the passes a bucket of the largest kind's capacity needs.
+        let bounded = self.spec.physics.neighbour_cap != 0;
         let order = OrderArgs {
             pos: self.state.bodies.pos.view(),
             keys: g.keys.view(),
@@ -442,6 +445,24 @@ impl<'d> Pipeline<'d> {
             unordered: g.unordered.view(),
             slots: g.slots.view(),
             entry_pos: g.pos.view(),
+            runs: g.ranks.view(),
+            bounded: u32::from(bounded),
+            reserved: 0,
+        };
+        let largest = self
+            .layout
+            .ranges
+            .iter()
+            .map(|r| r.capacity)
+            .max()
+            .unwrap_or(0);
+        let merges = if bounded {
+            largest
+                .div_ceil(broad::RUN)
+                .next_power_of_two()
+                .trailing_zeros()
+        } else {
+            0
         };
         // SAFETY: as in `ops`; the scan runs in place over the starts.
         unsafe {
@@ -456,6 +477,23 @@ impl<'d> Pipeline<'d> {
             );
             ops.push(op(registry::PLACE_IN_CELLS, slots, place, 16));
             ops.push(op(registry::ORDER_CELLS, slots, order, 36));
+            // The runs go back and forth between the ranks (free after placement) and the
+            // arrival-ordered slots (free after ordering).
+            let (mut src, mut dst) = (g.ranks.view(), g.unordered.view());
+            for pass in 0..merges {
+                let merge = MergeArgs {
+                    pos: self.state.bodies.pos.view(),
+                    start,
+                    src,
+                    dst,
+                    slots: g.slots.view(),
+                    entry_pos: g.pos.view(),
+                    run: broad::RUN << pass,
+                    reserved: 0,
+                };
+                ops.push(op(registry::MERGE_RUNS, slots, merge, 24));
+                (src, dst) = (dst, src);
+            }
             ops
         }
     }

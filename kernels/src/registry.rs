@@ -60,6 +60,8 @@ kernels! {
     PLACE_IN_CELLS = place_in_cells(broad::PlaceArgs) => broad::place_in_cells;
     /// Puts every bucket in increasing slot order.
     ORDER_CELLS = order_cells(broad::OrderArgs) => broad::order_cells;
+    /// Merges the sorted runs of large buckets in pairs (a bounded grid's ordering).
+    MERGE_RUNS = merge_runs(broad::MergeArgs) => broad::merge_runs;
     /// Narrow phase: each body's collision response to its neighbours, and energy losses.
     COLLIDE = collide(narrow::CollideArgs) => narrow::collide;
     /// The narrow phase for worlds of circles only (no rectangle tests).

@@ -112,9 +112,21 @@ pub struct OrderArgs {
     /// Output: each entry's position, so that a query reads its neighbours' places in a
     /// row instead of one scattered load per neighbour.
     pub entry_pos: DevSlice<Vec2>,
+    /// Output when `bounded`: the entries of buckets larger than [`RUN`], each run of
+    /// [`RUN`] entries in slot order, for [`merge_runs`] to merge.
+    pub runs: DevSlice<u32>,
+    /// Non-zero: buckets larger than [`RUN`] are ordered run by run (then merged), so that
+    /// a crowded cell costs `O(n log n)`, not `O(n²)`.
+    pub bounded: u32,
+    /// Keeps the struct free of implicit padding.
+    pub reserved: u32,
 }
 // SAFETY: repr(C) plain data.
 unsafe impl KernelArgs for OrderArgs {}
+
+/// Entries of a bucket [`order_cells`] orders by counting when the order is bounded; larger
+/// buckets are ordered in runs of this many and merged by [`merge_runs`].
+pub const RUN: u32 = 64;
 
 /// Thread `j` takes entry `j`: its slot's rank among its bucket's slots is the number of
 /// smaller slots there, and it moves there. The ranks of a bucket are a permutation (slots
@@ -129,12 +141,105 @@ pub fn order_cells(t: Thread, args: &OrderArgs) {
     let slot = args.unordered.get(j);
     let key = args.keys.get(slot);
     let (first, end) = (args.start.get(key), args.start.get(key + 1));
+    if args.bounded != 0 && end - first > RUN {
+        // A large bucket: order this entry's run only.
+        let run = first + (j - first) / RUN * RUN;
+        let mut rank = 0;
+        args.unordered
+            .for_each_in::<4>(run, end.min(run + RUN), |_, other| {
+                rank += u32::from(other < slot);
+            });
+        args.runs.set(run + rank, slot);
+        return;
+    }
     let mut rank = 0;
     args.unordered.for_each_in::<4>(first, end, |_, other| {
         rank += u32::from(other < slot);
     });
     args.slots.set(first + rank, slot);
     args.entry_pos.set(first + rank, args.pos.get(slot));
+}
+
+/// Arguments of [`merge_runs`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
+pub struct MergeArgs {
+    /// The bodies' positions.
+    pub pos: DevSlice<Vec2>,
+    /// Each bucket's first entry; the last element is the number of live bodies.
+    pub start: DevSlice<u32>,
+    /// The large buckets' entries, in sorted runs of `run`.
+    pub src: DevSlice<u32>,
+    /// Output: the same, in sorted runs of `2 · run` (buckets not finished by this pass).
+    pub dst: DevSlice<u32>,
+    /// Output: the grid's slots, for the buckets this pass finishes.
+    pub slots: DevSlice<u32>,
+    /// Output: the grid's entry positions, likewise.
+    pub entry_pos: DevSlice<Vec2>,
+    /// Length of the sorted runs in `src`.
+    pub run: u32,
+    /// Keeps the struct free of implicit padding.
+    pub reserved: u32,
+}
+// SAFETY: repr(C) plain data.
+unsafe impl KernelArgs for MergeArgs {}
+
+/// The bucket holding entry `j`: the last bucket whose first entry is at most `j` (empty
+/// buckets share their first entry with the next).
+#[inline(always)]
+fn bucket_of(start: &DevSlice<u32>, j: u32) -> u32 {
+    let (mut low, mut high) = (0, start.len() - 1);
+    // Invariant: start[low] <= j < start[high].
+    while high - low > 1 {
+        let mid = low + (high - low) / 2;
+        if start.get(mid) <= j {
+            low = mid;
+        } else {
+            high = mid;
+        }
+    }
+    low
+}
+
+/// Thread `j` takes entry `j` of a bucket larger than `run`: it finds its value's rank in
+/// the partner run by binary search, and so its place in the merged run of `2 · run`. A
+/// bucket this pass finishes goes to the grid's slots, with positions. Slots are distinct,
+/// so each output has one writer; buckets of at most `run` entries were finished before.
+#[inline(always)]
+pub fn merge_runs(t: Thread, args: &MergeArgs) {
+    let j = t.global();
+    let live = args.start.get(args.start.len() - 1);
+    if j >= live {
+        return;
+    }
+    let bucket = bucket_of(&args.start, j);
+    let (first, end) = (args.start.get(bucket), args.start.get(bucket + 1));
+    let run = args.run;
+    if end - first <= run {
+        return;
+    }
+    let i = j - first;
+    let r = i / run;
+    let x = args.src.get(j);
+    // The partner run (possibly short or empty at the bucket's end).
+    let other = first + (r ^ 1) * run;
+    let (mut low, mut high) = (other.min(end), (other + run).min(end));
+    while low < high {
+        let mid = low + (high - low) / 2;
+        if args.src.get(mid) < x {
+            low = mid + 1;
+        } else {
+            high = mid;
+        }
+    }
+    let rank = low - other.min(end);
+    let at = first + (r & !1) * run + (i - r * run) + rank;
+    if end - first <= 2 * run {
+        args.slots.set(at, x);
+        args.entry_pos.set(at, args.pos.get(x));
+    } else {
+        args.dst.set(at, x);
+    }
 }
 
 /// The grid: the live slots bucketed by (kind, cell), each bucket in increasing slot order.
