@@ -128,6 +128,10 @@ unsafe impl KernelArgs for OrderArgs {}
 /// buckets are ordered in runs of this many and merged by [`merge_runs`].
 pub const RUN: u32 = 64;
 
+/// In the merge buffers: an entry whose bucket is already in the grid's slots, so that
+/// later passes skip it at the cost of one load (slots are below 2²⁴).
+pub const DONE: u32 = u32::MAX;
+
 /// Thread `j` takes entry `j`: its slot's rank among its bucket's slots is the number of
 /// smaller slots there, and it moves there. The ranks of a bucket are a permutation (slots
 /// are distinct), so each output entry has one writer, whatever order the entries arrived in.
@@ -141,16 +145,19 @@ pub fn order_cells(t: Thread, args: &OrderArgs) {
     let slot = args.unordered.get(j);
     let key = args.keys.get(slot);
     let (first, end) = (args.start.get(key), args.start.get(key + 1));
-    if args.bounded != 0 && end - first > RUN {
-        // A large bucket: order this entry's run only.
-        let run = first + (j - first) / RUN * RUN;
-        let mut rank = 0;
-        args.unordered
-            .for_each_in::<4>(run, end.min(run + RUN), |_, other| {
-                rank += u32::from(other < slot);
-            });
-        args.runs.set(run + rank, slot);
-        return;
+    if args.bounded != 0 {
+        if end - first > RUN {
+            // A large bucket: order this entry's run only.
+            let run = first + (j - first) / RUN * RUN;
+            let mut rank = 0;
+            args.unordered
+                .for_each_in::<4>(run, end.min(run + RUN), |_, other| {
+                    rank += u32::from(other < slot);
+                });
+            args.runs.set(run + rank, slot);
+            return;
+        }
+        args.runs.set(j, DONE);
     }
     let mut rank = 0;
     args.unordered.for_each_in::<4>(first, end, |_, other| {
@@ -170,7 +177,8 @@ pub struct MergeArgs {
     pub start: DevSlice<u32>,
     /// The large buckets' entries, in sorted runs of `run`.
     pub src: DevSlice<u32>,
-    /// Output: the same, in sorted runs of `2 · run` (buckets not finished by this pass).
+    /// Output: the same, in sorted runs of `2 · run`, and [`DONE`] for the entries of
+    /// buckets that are finished.
     pub dst: DevSlice<u32>,
     /// Output: the grid's slots, for the buckets this pass finishes.
     pub slots: DevSlice<u32>,
@@ -203,8 +211,9 @@ fn bucket_of(start: &DevSlice<u32>, j: u32) -> u32 {
 
 /// Thread `j` takes entry `j` of a bucket larger than `run`: it finds its value's rank in
 /// the partner run by binary search, and so its place in the merged run of `2 · run`. A
-/// bucket this pass finishes goes to the grid's slots, with positions. Slots are distinct,
-/// so each output has one writer; buckets of at most `run` entries were finished before.
+/// bucket this pass finishes goes to the grid's slots, with positions, and is marked
+/// [`DONE`] for the next pass; finished entries pass their mark on. Slots are distinct, so
+/// each output has one writer.
 #[inline(always)]
 pub fn merge_runs(t: Thread, args: &MergeArgs) {
     let j = t.global();
@@ -212,15 +221,16 @@ pub fn merge_runs(t: Thread, args: &MergeArgs) {
     if j >= live {
         return;
     }
+    let x = args.src.get(j);
+    if x == DONE {
+        args.dst.set(j, DONE);
+        return;
+    }
     let bucket = bucket_of(&args.start, j);
     let (first, end) = (args.start.get(bucket), args.start.get(bucket + 1));
     let run = args.run;
-    if end - first <= run {
-        return;
-    }
     let i = j - first;
     let r = i / run;
-    let x = args.src.get(j);
     // The partner run (possibly short or empty at the bucket's end).
     let other = first + (r ^ 1) * run;
     let (mut low, mut high) = (other.min(end), (other + run).min(end));
@@ -237,6 +247,7 @@ pub fn merge_runs(t: Thread, args: &MergeArgs) {
     if end - first <= 2 * run {
         args.slots.set(at, x);
         args.entry_pos.set(at, args.pos.get(x));
+        args.dst.set(at, DONE);
     } else {
         args.dst.set(at, x);
     }
