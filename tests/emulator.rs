@@ -53,8 +53,9 @@ on_both_backends!(
     every_thread_of_the_grid_runs_once,
 );
 
-/// An out-of-bounds index is an error, not a crash of the host. (CPU only: on the GPU the same
-/// fault traps and leaves the CUDA context unusable for the rest of the process.)
+/// An out-of-bounds index is an error, not a crash of the host. (CPU only here: on the GPU the
+/// same fault traps, and the driver fails every later CUDA call of the process, so
+/// `tests/gpu_fault.rs` checks it in child processes.)
 #[test]
 fn an_out_of_bounds_kernel_is_an_error() {
     let device = common::cpu();

@@ -106,7 +106,7 @@ impl Emulator {
             }
         }))
         .map_err(|payload| Error::KernelFault {
-            kernel: kernel.name,
+            kernel: kernel.name.into(),
             message: payload
                 .downcast_ref::<String>()
                 .map(String::as_str)

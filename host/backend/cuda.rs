@@ -2,7 +2,17 @@
 //!
 //! `cudarc` loads libcuda at run time, so the binary starts without the NVIDIA driver; opening
 //! this backend then fails with [`Error::CudaUnavailable`] and a reason, never a panic.
+//!
+//! A kernel that traps (a failed bounds check) or faults does not make its launch fail: the
+//! GPU reports it to a later call, the next one that waits for the stream or any call after,
+//! and from then on every CUDA call of the process fails the same way (the error is
+//! "sticky"; checked on an H200 with driver 580: neither releasing nor resetting the primary
+//! context, nor a new context, clears it). [`InFlight`] remembers which kernels were queued
+//! since the host last saw the stream finish, so that [`InFlight::error`], the one place
+//! driver errors are turned into [`Error`]s, can report such a failure as the
+//! [`Error::KernelFault`] it is.
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 use std::thread::ThreadId;
@@ -37,6 +47,8 @@ pub struct GpuProperties {
 pub(super) struct Gpu {
     ctx: Arc<CudaContext>,
     stream: Arc<CudaStream>,
+    /// The kernels queued on `stream` that may not have finished.
+    in_flight: Arc<InFlight>,
     /// The capture in progress, if any: the thread recording and its private stream.
     capture: Mutex<Option<(ThreadId, Arc<CudaStream>)>>,
     functions: HashMap<&'static str, CudaFunction>,
@@ -49,11 +61,144 @@ struct Param<A>(A);
 // SAFETY: `KernelArgs` are repr(C) plain data, laid out as the PTX parameter expects.
 unsafe impl<A: KernelArgs> DeviceRepr for Param<A> {}
 
-fn driver(during: &str) -> impl FnOnce(DriverError) -> Error + '_ {
-    move |source| Error::Driver {
-        during: during.to_string(),
-        source,
+/// The kernels queued on the device's stream that the host has not yet seen finish: those a
+/// fault reported now can come from. Launches are numbered in queue order; waiting for a
+/// fence or the stream tells which numbers are done.
+#[derive(Default)]
+pub(super) struct InFlight(Mutex<Launches>);
+
+#[derive(Default)]
+struct Launches {
+    /// Launches queued so far (a graph replay counts as one).
+    queued: u64,
+    /// Every launch up to this number has finished without fault.
+    finished: u64,
+    /// Each kernel ever queued, with the number of its latest launch, in that order.
+    latest: Vec<(&'static str, u64)>,
+}
+
+impl InFlight {
+    fn lock(&self) -> std::sync::MutexGuard<'_, Launches> {
+        self.0.lock().unwrap_or_else(|e| e.into_inner())
     }
+
+    /// Notes one launch, of these kernels (several for a graph), just queued.
+    fn queue(&self, kernels: impl IntoIterator<Item = &'static str>) {
+        let mut launches = self.lock();
+        launches.queued += 1;
+        let number = launches.queued;
+        for name in kernels {
+            launches.latest.retain(|&(queued, _)| queued != name);
+            launches.latest.push((name, number));
+        }
+    }
+
+    /// The number of the latest launch queued: a fence recorded after this call follows it.
+    fn ticket(&self) -> u64 {
+        self.lock().queued
+    }
+
+    /// Notes that every launch up to `ticket` has finished without fault.
+    fn finished(&self, ticket: u64) {
+        let mut launches = self.lock();
+        launches.finished = launches.finished.max(ticket);
+    }
+
+    /// The kernels queued but not seen finished, in the order of their latest launch.
+    fn suspects(&self) -> Vec<&'static str> {
+        let launches = self.lock();
+        launches
+            .latest
+            .iter()
+            .filter(|&&(_, number)| number > launches.finished)
+            .map(|&(name, _)| name)
+            .collect()
+    }
+
+    /// Turns a failed driver call into an error: one that means the process lost the GPU to
+    /// a kernel fault becomes [`Error::KernelFault`], naming the kernels it can come from and
+    /// how to carry on; any other is [`Error::Driver`], saying what the host was `during`.
+    pub(super) fn error(&self, during: &str, source: DriverError) -> Error {
+        if !is_kernel_fault(source) {
+            return Error::Driver {
+                during: during.to_string(),
+                source,
+            };
+        }
+        let suspects = self.suspects();
+        Error::KernelFault {
+            kernel: kernel_names(&suspects),
+            message: fault_message(source, during, suspects.len()),
+        }
+    }
+
+    /// [`InFlight::error`] as a closure for `map_err`.
+    pub(super) fn failed<'a>(&'a self, during: &'a str) -> impl FnOnce(DriverError) -> Error + 'a {
+        move |source| self.error(during, source)
+    }
+}
+
+/// Whether a driver error says that a kernel faulted, after which every later CUDA call of
+/// the process fails with the same error (cuda.h: "This leaves the process in an
+/// inconsistent state and any further CUDA work will return the same error").
+fn is_kernel_fault(error: DriverError) -> bool {
+    use sys::CUresult::*;
+    matches!(
+        error.0,
+        CUDA_ERROR_ILLEGAL_ADDRESS
+            | CUDA_ERROR_LAUNCH_TIMEOUT
+            | CUDA_ERROR_ASSERT
+            | CUDA_ERROR_HARDWARE_STACK_ERROR
+            | CUDA_ERROR_ILLEGAL_INSTRUCTION
+            | CUDA_ERROR_MISALIGNED_ADDRESS
+            | CUDA_ERROR_INVALID_ADDRESS_SPACE
+            | CUDA_ERROR_INVALID_PC
+            | CUDA_ERROR_LAUNCH_FAILED
+            | CUDA_ERROR_TENSOR_MEMORY_LEAK
+    )
+}
+
+/// The kernels a fault can come from, as [`Error::KernelFault`] names them: `a`, `a or b`,
+/// `a, b or c`; `unknown` when none of this device's kernels is in flight.
+fn kernel_names(suspects: &[&'static str]) -> Cow<'static, str> {
+    match suspects {
+        [] => Cow::Borrowed("unknown"),
+        [one] => Cow::Borrowed(one),
+        [first @ .., last] => Cow::Owned(format!("{} or {last}", first.join(", "))),
+    }
+}
+
+/// What a kernel fault means for the user, and how to carry on.
+fn fault_message(error: DriverError, during: &str, suspects: usize) -> String {
+    let code = format!("{:?}", error.0);
+    let text = error
+        .error_string()
+        .map_or_else(|_| "no description".into(), |s| s.to_string_lossy());
+    // Checked on an H200 (driver 580): a trap is reported as a launch failure.
+    let trap = if error.0 == sys::CUresult::CUDA_ERROR_LAUNCH_FAILED {
+        ": how the GPU reports a trap, which a kernel that goes out of bounds makes"
+    } else {
+        ""
+    };
+    let what = match suspects {
+        0 => format!(
+            "the GPU reported {code} ({text}) while {during}, but no kernel of this device was \
+             running: a kernel fault earlier in this process caused it"
+        ),
+        1 => format!("the GPU stopped it with {code} ({text}{trap}), reported while {during}"),
+        _ => format!(
+            "the GPU stopped one of these kernels, queued since the host last saw the device \
+             finish its work, with {code} ({text}{trap}), reported while {during}; it does not \
+             say which"
+        ),
+    };
+    format!(
+        "{what}. The GPU is lost to this process: the driver fails every later CUDA call in \
+         it the same way, on this device or on one opened afresh. To carry on, use the CPU \
+         emulation (`Device::select` with `auto` falls back to it; `--backend cpu` on the \
+         command line), where the same fault names the index out of bounds, or run the \
+         program again to use the GPU."
+    )
 }
 
 fn unavailable(what: &str) -> impl FnOnce(DriverError) -> Error + '_ {
@@ -75,28 +220,37 @@ impl Gpu {
             ));
         }
         // From here on a GPU is present: a failure is an error to report, not an absence.
-        let ctx = CudaContext::new(0).map_err(driver("opening CUDA device 0"))?;
+        let in_flight = Arc::new(InFlight::default());
+        let ctx = CudaContext::new(0).map_err(in_flight.failed("opening CUDA device 0"))?;
         // One stream orders every launch and copy; the per-buffer events cudarc keeps for
         // multi-stream use would only cost time.
         // SAFETY: this backend never uses a second stream.
         unsafe { ctx.disable_event_tracking() };
         // Our own stream rather than the legacy default one, which synchronises with every
         // other stream of the context and cannot be captured into a graph.
-        let stream = ctx.new_stream().map_err(driver("creating a stream"))?;
+        let stream = ctx
+            .new_stream()
+            .map_err(in_flight.failed("creating a stream"))?;
+        // A context that an earlier fault lost (another device of this process holds it)
+        // would fail only at the first wait: find out now.
+        stream
+            .synchronize()
+            .map_err(in_flight.failed("checking the device's context"))?;
         let module = ctx
             .load_module(Ptx::from_src(ptx::PTX))
-            .map_err(driver("loading the kernels' PTX"))?;
+            .map_err(in_flight.failed("loading the kernels' PTX"))?;
         let mut functions = HashMap::new();
         for info in registry::ALL {
             let function = module
                 .load_function(info.name)
-                .map_err(driver("finding a kernel in the PTX"))?;
+                .map_err(in_flight.failed("finding a kernel in the PTX"))?;
             functions.insert(info.name, function);
         }
-        let properties = properties(&ctx).map_err(driver("querying device 0"))?;
+        let properties = properties(&ctx).map_err(in_flight.failed("querying device 0"))?;
         Ok(Gpu {
             ctx,
             stream,
+            in_flight,
             capture: Mutex::new(None),
             functions,
             properties,
@@ -108,9 +262,19 @@ impl Gpu {
     }
 
     /// The context and the stream every launch and copy goes to, for raw driver calls that
-    /// must be ordered with them.
-    pub(super) fn context_and_stream(&self) -> (Arc<CudaContext>, Arc<CudaStream>) {
-        (self.ctx.clone(), self.stream.clone())
+    /// must be ordered with them, and the record of kernels in flight that their errors are
+    /// classified by.
+    pub(super) fn context_and_stream(&self) -> (Arc<CudaContext>, Arc<CudaStream>, Arc<InFlight>) {
+        (
+            self.ctx.clone(),
+            self.stream.clone(),
+            self.in_flight.clone(),
+        )
+    }
+
+    /// [`InFlight::failed`] for this device.
+    fn failed<'a>(&'a self, during: &'a str) -> impl FnOnce(DriverError) -> Error + 'a {
+        self.in_flight.failed(during)
     }
 
     // Buffers are untyped bytes here, so that any plain-data element type (including the
@@ -119,13 +283,13 @@ impl Gpu {
     pub(super) fn alloc_zeroed(&self, bytes: usize) -> Result<CudaSlice<u8>, Error> {
         self.stream
             .alloc_zeros(bytes)
-            .map_err(driver("allocating device memory"))
+            .map_err(self.failed("allocating device memory"))
     }
 
     pub(super) fn upload<T: Element>(&self, data: &[T]) -> Result<CudaSlice<u8>, Error> {
         self.stream
             .clone_htod(bytemuck::cast_slice::<T, u8>(data))
-            .map_err(driver("copying to the device"))
+            .map_err(self.failed("copying to the device"))
     }
 
     pub(super) fn write<T: Element>(
@@ -137,28 +301,32 @@ impl Gpu {
         let mut prefix = dst.slice_mut(..bytes.len());
         self.stream
             .memcpy_htod(bytes, &mut prefix)
-            .map_err(driver("copying to the device"))
+            .map_err(self.failed("copying to the device"))
     }
 
     pub(super) fn download<T: Element>(&self, src: &CudaSlice<u8>) -> Result<Vec<T>, Error> {
         let mut out = vec![T::zeroed(); src.len() / size_of::<T>()];
+        let ticket = self.in_flight.ticket();
+        // A copy into pageable memory returns when it is done, so the launches queued before
+        // it are done too.
         self.stream
             .memcpy_dtoh(src, bytemuck::cast_slice_mut::<T, u8>(&mut out))
-            .map_err(driver("copying from the device"))?;
+            .map_err(self.failed("copying from the device"))?;
+        self.in_flight.finished(ticket);
         Ok(out)
     }
 
     pub(super) fn zero(&self, dst: &mut CudaSlice<u8>) -> Result<(), Error> {
         self.stream
             .memset_zeros(dst)
-            .map_err(driver("clearing device memory"))
+            .map_err(self.failed("clearing device memory"))
     }
 
     pub(super) fn copy(&self, src: &CudaSlice<u8>, dst: &mut CudaSlice<u8>) -> Result<(), Error> {
         let mut prefix = dst.slice_mut(..src.len());
         self.stream
             .memcpy_dtod(src, &mut prefix)
-            .map_err(driver("copying on the device"))
+            .map_err(self.failed("copying on the device"))
     }
 
     /// # Safety
@@ -184,12 +352,15 @@ impl Gpu {
         launch.arg(&param);
         // SAFETY: the parameter is the kernel's argument struct; the caller vouches for the
         // buffers it views.
-        unsafe { launch.launch(config) }
-            .map(drop)
-            .map_err(|e| Error::KernelFault {
-                kernel: kernel.name,
-                message: e.to_string(),
-            })
+        unsafe { launch.launch(config) }.map_err(|e| {
+            let during = format!("launching kernel `{}`", kernel.name);
+            self.in_flight.error(&during, e)
+        })?;
+        // A launch into a capture runs only when the graph is replayed.
+        if Arc::ptr_eq(&stream, &self.stream) {
+            self.in_flight.queue([kernel.name]);
+        }
+        Ok(())
     }
 
     /// Queues a clear of `bytes` bytes at device address `addr`.
@@ -200,7 +371,7 @@ impl Gpu {
         self.bind()?;
         // SAFETY: forwarded from the caller.
         unsafe { result::memset_d8_async(addr, 0, bytes, self.launch_stream().cu_stream()) }
-            .map_err(driver("clearing device memory"))
+            .map_err(self.failed("clearing device memory"))
     }
 
     /// The stream this thread's launches and clears go to: the device's stream, or the
@@ -226,52 +397,72 @@ impl Gpu {
             std::thread::yield_now();
             capture = self.capture.lock().unwrap_or_else(|e| e.into_inner());
         }
-        let stream = self.ctx.new_stream().map_err(driver("creating a stream"))?;
+        let stream = self
+            .ctx
+            .new_stream()
+            .map_err(self.failed("creating a stream"))?;
         stream
             .begin_capture(sys::CUstreamCaptureMode::CU_STREAM_CAPTURE_MODE_THREAD_LOCAL)
-            .map_err(driver("starting a graph capture"))?;
+            .map_err(self.failed("starting a graph capture"))?;
         *capture = Some((std::thread::current().id(), stream.clone()));
         drop(capture);
         let issued = issue();
         // End the capture whatever happened, so that the stream is usable again.
         let graph = stream
             .end_capture(sys::CUgraphInstantiate_flags(0))
-            .map_err(driver("capturing a graph"));
+            .map_err(self.failed("capturing a graph"));
         *self.capture.lock().unwrap_or_else(|e| e.into_inner()) = None;
         issued?;
         let graph = graph?.ok_or_else(|| Error::Invalid("an empty graph was captured".into()))?;
         self.bind()?;
         // SAFETY: the executable graph is alive (owned by `graph`); the stream is ours.
         unsafe { result::graph::upload(graph.cu_graph_exec(), self.stream.cu_stream()) }
-            .map_err(driver("uploading a graph"))?;
+            .map_err(self.failed("uploading a graph"))?;
         Ok(graph)
     }
 
-    /// Queues one replay of `graph` on the device's stream (not the one it was recorded on).
-    pub(super) fn replay(&self, graph: &CudaGraph) -> Result<(), Error> {
+    /// Queues one replay of `graph`, whose launches are of `kernels`, on the device's stream
+    /// (not the one it was recorded on).
+    pub(super) fn replay(
+        &self,
+        graph: &CudaGraph,
+        kernels: impl IntoIterator<Item = &'static str>,
+    ) -> Result<(), Error> {
         self.bind()?;
         // SAFETY: as in `capture`.
         unsafe { result::graph::launch(graph.cu_graph_exec(), self.stream.cu_stream()) }
-            .map_err(driver("launching a graph"))
+            .map_err(self.failed("launching a graph"))?;
+        self.in_flight.queue(kernels);
+        Ok(())
     }
 
-    /// A new event, with timing when `timed`.
-    pub(super) fn event(&self, timed: bool) -> Result<CudaEvent, Error> {
+    /// A new fence, with timing when `timed`, recorded after nothing yet.
+    pub(super) fn fence(&self, timed: bool) -> Result<Fence, Error> {
         let flags = if timed {
             sys::CUevent_flags::CU_EVENT_DEFAULT
         } else {
             sys::CUevent_flags::CU_EVENT_DISABLE_TIMING
         };
-        self.ctx
+        let event = self
+            .ctx
             .new_event(Some(flags))
-            .map_err(driver("creating an event"))
+            .map_err(self.failed("creating an event"))?;
+        Ok(Fence {
+            event,
+            after: 0,
+            in_flight: self.in_flight.clone(),
+        })
     }
 
-    /// Records `event` after the work queued so far.
-    pub(super) fn record(&self, event: &CudaEvent) -> Result<(), Error> {
-        event
+    /// Records `fence` after the work queued so far.
+    pub(super) fn record(&self, fence: &mut Fence) -> Result<(), Error> {
+        let ticket = self.in_flight.ticket();
+        fence
+            .event
             .record(&self.stream)
-            .map_err(driver("recording an event"))
+            .map_err(self.failed("recording an event"))?;
+        fence.after = ticket;
+        Ok(())
     }
 
     /// Page-locked host memory of `bytes` bytes, for asynchronous copies.
@@ -279,7 +470,7 @@ impl Gpu {
         self.bind()?;
         // SAFETY: a plain allocation; freed in `Pinned::drop`.
         let ptr = unsafe { result::malloc_host(bytes.max(1), 0) }
-            .map_err(driver("allocating pinned host memory"))?;
+            .map_err(self.failed("allocating pinned host memory"))?;
         // cuMemHostAlloc does not promise zeroed memory.
         // SAFETY: `bytes` bytes were just allocated.
         unsafe { std::ptr::write_bytes(ptr.cast::<u8>(), 0, bytes) };
@@ -308,7 +499,7 @@ impl Gpu {
                 self.stream.cu_stream(),
             )
         }
-        .map_err(driver("copying to the device"))
+        .map_err(self.failed("copying to the device"))
     }
 
     /// Queues a copy of `bytes` bytes from device address `src` to host address `dst`.
@@ -330,27 +521,62 @@ impl Gpu {
                 self.stream.cu_stream(),
             )
         }
-        .map_err(driver("copying from the device"))
+        .map_err(self.failed("copying from the device"))
     }
 
     /// Makes the context current on the calling thread, as raw driver calls need.
     fn bind(&self) -> Result<(), Error> {
         self.ctx
             .bind_to_thread()
-            .map_err(driver("binding the context"))
+            .map_err(self.failed("binding the context"))
     }
 
     /// Free and total device memory in bytes.
     pub(super) fn memory(&self) -> Result<(u64, u64), Error> {
         self.bind()?;
-        let (free, total) = result::mem_get_info().map_err(driver("querying device memory"))?;
+        let (free, total) =
+            result::mem_get_info().map_err(self.failed("querying device memory"))?;
         Ok((free as u64, total as u64))
     }
 
     pub(super) fn synchronize(&self) -> Result<(), Error> {
+        let ticket = self.in_flight.ticket();
         self.stream
             .synchronize()
-            .map_err(driver("waiting for the GPU (a kernel may have faulted)"))
+            .map_err(self.failed("waiting for the GPU"))?;
+        self.in_flight.finished(ticket);
+        Ok(())
+    }
+}
+
+/// An event on the device's stream that knows which launches it follows: waiting for it
+/// tells the record of kernels in flight that they are done, and the fault it may report
+/// names them.
+pub(super) struct Fence {
+    event: CudaEvent,
+    /// The latest launch queued before the event was recorded.
+    after: u64,
+    in_flight: Arc<InFlight>,
+}
+
+impl Fence {
+    /// Waits until the GPU has passed the fence.
+    pub(super) fn wait(&self) -> Result<(), Error> {
+        self.event
+            .synchronize()
+            .map_err(self.in_flight.failed("waiting for the GPU"))?;
+        self.in_flight.finished(self.after);
+        Ok(())
+    }
+
+    /// Seconds from `earlier` to this fence, both timed (waits for the GPU to pass both).
+    pub(super) fn seconds_since(&self, earlier: &Fence) -> Result<f64, Error> {
+        let ms = earlier
+            .event
+            .elapsed_ms(&self.event)
+            .map_err(self.in_flight.failed("timing events"))?;
+        self.in_flight.finished(self.after.max(earlier.after));
+        Ok(f64::from(ms) / 1e3)
     }
 }
 

@@ -11,6 +11,7 @@ use std::sync::{Arc, OnceLock};
 use cudarc::driver::{CudaContext, CudaStream, sys};
 use gpuwars_kernels::DevSlice;
 
+use super::cuda::InFlight;
 use super::{Device, Element, Error, Imp};
 
 /// `CU_GRAPHICS_REGISTER_FLAGS_WRITE_DISCARD`: CUDA overwrites the whole buffer each time.
@@ -43,14 +44,8 @@ fn register_buffer() -> Result<RegisterBuffer, Error> {
 }
 
 /// Turns a driver status into a result.
-fn check(status: sys::CUresult, during: &str) -> Result<(), Error> {
-    match status {
-        sys::CUresult::CUDA_SUCCESS => Ok(()),
-        status => Err(Error::Driver {
-            during: during.to_string(),
-            source: cudarc::driver::DriverError(status),
-        }),
-    }
+fn check(in_flight: &InFlight, status: sys::CUresult, during: &str) -> Result<(), Error> {
+    status.result().map_err(in_flight.failed(during))
 }
 
 /// A GL buffer object registered with the GPU's context. Kernels write it between a map
@@ -59,6 +54,7 @@ pub struct GlBuffer {
     resource: sys::CUgraphicsResource,
     ctx: Arc<CudaContext>,
     stream: Arc<CudaStream>,
+    in_flight: Arc<InFlight>,
 }
 
 impl Device {
@@ -71,15 +67,14 @@ impl Device {
                 "GL buffers are registered only with the CUDA backend".into(),
             ));
         };
-        let (ctx, stream) = gpu.context_and_stream();
-        ctx.bind_to_thread().map_err(|source| Error::Driver {
-            during: "binding the context".into(),
-            source,
-        })?;
+        let (ctx, stream, in_flight) = gpu.context_and_stream();
+        ctx.bind_to_thread()
+            .map_err(in_flight.failed("binding the context"))?;
         let register = register_buffer()?;
         let mut resource = std::ptr::null_mut();
         // SAFETY: `resource` is a valid out-pointer; GL reports a bad id as an error.
         check(
+            &in_flight,
             unsafe { register(&mut resource, id, WRITE_DISCARD) },
             "registering the GL vertex buffer with CUDA",
         )?;
@@ -87,6 +82,7 @@ impl Device {
             resource,
             ctx,
             stream,
+            in_flight,
         })
     }
 }
@@ -103,18 +99,21 @@ impl GlBuffer {
         // pointer is used only by launches queued before the unmap.
         unsafe {
             check(
+                &self.in_flight,
                 sys::cuGraphicsMapResources(1, &mut self.resource, stream),
                 "mapping the GL vertex buffer",
             )?;
             let mut addr = 0;
             let mut bytes = 0usize;
             let mapped = check(
+                &self.in_flight,
                 sys::cuGraphicsResourceGetMappedPointer_v2(&mut addr, &mut bytes, self.resource),
                 "taking the mapped GL vertex buffer's address",
             );
             let len = u32::try_from(bytes / size_of::<T>()).unwrap_or(u32::MAX);
             let written = mapped.and_then(|()| write(DevSlice::from_raw_parts(addr, len)));
             let unmapped = check(
+                &self.in_flight,
                 sys::cuGraphicsUnmapResources(1, &mut self.resource, stream),
                 "unmapping the GL vertex buffer",
             );

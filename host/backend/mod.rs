@@ -11,6 +11,7 @@ mod interop;
 mod plan;
 mod ring;
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::fmt;
 use std::marker::PhantomData;
@@ -44,12 +45,20 @@ pub enum Error {
         /// The driver's error.
         source: cudarc::driver::DriverError,
     },
-    /// A kernel faulted (an out-of-bounds index under the emulator, a trap on the GPU).
+    /// A kernel faulted: an out-of-bounds index under the emulator, a trap (or another fault)
+    /// on the GPU. The emulator reports it from the launch, and the same device carries on.
+    /// The GPU reports it from the next call that waits for it, and the driver then fails
+    /// every later CUDA call of the process, on any device opened before or after, with the
+    /// same fault: the process carries on on the CPU emulation (`Device::select` with `auto`
+    /// falls back to it), and a new process has the whole GPU again.
     #[error("kernel `{kernel}` failed: {message}")]
     KernelFault {
-        /// The kernel's entry-point name.
-        kernel: &'static str,
-        /// What the backend reported.
+        /// The kernel's entry-point name. On the GPU, which reports a fault only later and
+        /// does not say which kernel it stopped, the names of the kernels queued since the
+        /// host last saw the device finish its work (`a, b or c`), or `unknown` when none of
+        /// this device's kernels was (the fault came earlier, from another device).
+        kernel: Cow<'static, str>,
+        /// What the backend reported, and on the GPU how to carry on.
         message: String,
     },
     /// A launch, buffer or size outside what the backends accept.

@@ -5,9 +5,10 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use cudarc::driver::{CudaEvent, CudaGraph};
+use cudarc::driver::CudaGraph;
 use gpuwars_kernels::{DevSlice, Kernel, KernelArgs};
 
+use super::cuda::Fence;
 use super::{Device, Element, Error, Imp};
 
 /// What an [`Op`] does.
@@ -110,7 +111,12 @@ impl Plan {
 
     /// Kernel launches per run.
     pub fn launches(&self) -> usize {
-        self.ops.iter().filter(|op| op.is_launch()).count()
+        self.launched().count()
+    }
+
+    /// The kernel of each launch of a run, in order.
+    fn launched(&self) -> impl Iterator<Item = &'static str> + '_ {
+        self.ops.iter().filter(|op| op.is_launch()).map(Op::name)
     }
 
     /// Bytes moved per run, by the ops' counts.
@@ -127,7 +133,7 @@ pub struct Mark {
 
 enum MarkImp {
     Clock(Instant),
-    Event(CudaEvent),
+    Event(Fence),
 }
 
 impl Mark {
@@ -135,13 +141,7 @@ impl Mark {
     pub fn seconds_since(&self, earlier: &Mark) -> Result<f64, Error> {
         match (&earlier.imp, &self.imp) {
             (MarkImp::Clock(a), MarkImp::Clock(b)) => Ok(b.duration_since(*a).as_secs_f64()),
-            (MarkImp::Event(a), MarkImp::Event(b)) => a
-                .elapsed_ms(b)
-                .map(|ms| f64::from(ms) / 1e3)
-                .map_err(|source| Error::Driver {
-                    during: "timing events".into(),
-                    source,
-                }),
+            (MarkImp::Event(a), MarkImp::Event(b)) => b.seconds_since(a),
             _ => Err(Error::Invalid("marks of two different backends".into())),
         }
     }
@@ -163,9 +163,9 @@ impl Device {
 
     /// Queues one run of `plan`.
     pub fn run(&self, plan: &Plan) -> Result<(), Error> {
-        self.count(plan.ops.iter().filter(|op| op.is_launch()).map(Op::name));
+        self.count(plan.launched());
         match (&self.imp, &plan.graph) {
-            (Imp::Cuda(gpu), Some(graph)) => gpu.replay(graph),
+            (Imp::Cuda(gpu), Some(graph)) => gpu.replay(graph, plan.launched()),
             (Imp::Cuda(_), None) => plan.ops.iter().try_for_each(|op| (op.issue)(self)),
             // From inside the pool, each launch starts its blocks at once.
             (Imp::Cpu(emu), _) => {
@@ -180,9 +180,9 @@ impl Device {
         let imp = match &self.imp {
             Imp::Cpu(_) => MarkImp::Clock(Instant::now()),
             Imp::Cuda(gpu) => {
-                let event = gpu.event(true)?;
-                gpu.record(&event)?;
-                MarkImp::Event(event)
+                let mut fence = gpu.fence(true)?;
+                gpu.record(&mut fence)?;
+                MarkImp::Event(fence)
             }
         };
         Ok(Mark { imp })

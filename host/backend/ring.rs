@@ -6,9 +6,7 @@
 use std::collections::VecDeque;
 use std::marker::PhantomData;
 
-use cudarc::driver::CudaEvent;
-
-use super::cuda::Pinned;
+use super::cuda::{Fence, Pinned};
 use super::{Buffer, Device, Element, Error, Imp};
 
 /// A ring of `depth` steps in flight, each with one input `I` and one output `O`.
@@ -27,11 +25,11 @@ pub struct Ring<I: Element, O: Element> {
 enum Staging {
     /// The emulation runs each step before it returns: plain memory, nothing to wait for.
     Host,
-    /// Pinned copies of `inputs` and `outputs`, and one event per slot.
+    /// Pinned copies of `inputs` and `outputs`, and one fence per slot.
     Pinned {
         inputs: Pinned,
         outputs: Pinned,
-        fences: Vec<CudaEvent>,
+        fences: Vec<Fence>,
     },
 }
 
@@ -49,7 +47,7 @@ impl Device {
                 inputs: gpu.pinned(depth * size_of::<I>())?,
                 outputs: gpu.pinned(depth * size_of::<O>())?,
                 fences: (0..depth)
-                    .map(|_| gpu.event(false))
+                    .map(|_| gpu.fence(false))
                     .collect::<Result<_, _>>()?,
             },
         };
@@ -117,7 +115,7 @@ impl<I: Element, O: Element> Ring<I, O> {
         if view.is_empty() {
             return Err(Error::Invalid("receiving from an empty buffer".into()));
         }
-        match (&self.staging, &device.imp) {
+        match (&mut self.staging, &device.imp) {
             (Staging::Host, Imp::Cpu(_)) => {
                 // SAFETY: element 0 of a live host buffer; the step has run.
                 self.outputs[slot] = unsafe { (view.addr() as *const O).read() };
@@ -132,7 +130,7 @@ impl<I: Element, O: Element> Ring<I, O> {
                 // SAFETY: nothing reads the slot until its fence, recorded after the copy,
                 // has been waited for.
                 unsafe { gpu.download_async(view.addr(), at.cast(), size_of::<O>())? };
-                gpu.record(&fences[slot])?;
+                gpu.record(&mut fences[slot])?;
             }
             _ => return Err(Error::Invalid("a ring of another backend".into())),
         }
@@ -150,10 +148,7 @@ impl<I: Element, O: Element> Ring<I, O> {
             outputs, fences, ..
         } = &self.staging
         {
-            fences[slot].synchronize().map_err(|source| Error::Driver {
-                during: "waiting for a step (a kernel may have faulted)".into(),
-                source,
-            })?;
+            fences[slot].wait()?;
             // SAFETY: the copy into the slot is done (its fence has passed).
             self.outputs[slot] = unsafe { outputs.ptr.cast::<O>().add(slot).read_unaligned() };
         }
@@ -177,7 +172,7 @@ impl<I: Element, O: Element> Drop for Ring<I, O> {
         // The pinned memory must outlive the copies still queued into it.
         if let Staging::Pinned { fences, .. } = &self.staging {
             for &slot in &self.in_flight {
-                let _ = fences[slot].synchronize();
+                let _ = fences[slot].wait();
             }
         }
     }
