@@ -2,7 +2,8 @@
 //! enough to cross a thin wall or several cells in a step, every body in one cell, bodies on
 //! cell borders and world edges, worlds where f32 spacing matters, bodies on one spot,
 //! extreme masses, kinds at capacity, random worlds under random physics choices, and an
-//! opt-in hour of `paper` (`GPUWARS_SOAK=1`). `docs/stability.md` says what each test checks.
+//! opt-in hour of `paper` (`GPUWARS_SOAK=1`). `docs/stability-extremes.md` says what each
+//! test checks.
 //!
 //! Every scenario ends in the same invariants ([`assert_invariants`]): every live body finite
 //! and inside the world, every kind's live bodies and free slots adding up to its capacity,
@@ -243,7 +244,7 @@ fn gas(n: u32, boundary: Boundary, dt: f32) -> WorldSpec {
 /// Time steps from 10⁻⁵ s to the largest allowed.
 const TIME_STEPS: [f32; 7] = [1.0e-5, 1.0e-4, 1.0e-3, 1.0 / 60.0, 0.1, 0.5, 1.0];
 
-/// A gas of 256 bodies at 100 units/s per axis (up to 100 units, a quarter of the box, in
+/// A gas of 256 bodies at 100 units/s per axis (about 100 units, a quarter of the box, in
 /// a step of 1 s) is stepped 20 times at every time step, wrapped and clamped. Every step:
 /// the invariants; contacts happen; the kinetic energy never exceeds its start (collisions
 /// of restitution 0.5 lose energy, pushes move bodies without changing their velocity, and
@@ -436,7 +437,8 @@ fn bodies_crossing_many_cells_a_step_lose_no_contact(device: &Device) {
 // 3. Every body in one cell
 // ---------------------------------------------------------------------------------------
 
-/// 4,096 bodies of radius 4 on one spot of a clamped 20,000 × 20,000 world, stepped once.
+/// 4,096 bodies of radius 4 on one spot of a clamped 20,000 × 20,000 world, stepped `steps`
+/// times (the invariants and the cap checked after each step).
 fn crowd(device: &Device, cap: u32, averaged: bool, relaxation: f32, steps: u32) -> Snapshot {
     let n = 4096;
     let mut spec = world(
@@ -1132,7 +1134,7 @@ on_both_backends!(
 /// game seeded with the next number. Every minute of game time: the invariants, and the
 /// status's counts against the snapshot's. At the end it prints the steps per second and the
 /// final hash; with `GPUWARS_SOAK_HASH=0x…` it checks that hash (the one recorded in
-/// `docs/stability.md`).
+/// `docs/stability-extremes.md`).
 #[test]
 #[ignore = "an hour of game time: GPUWARS_SOAK=1 cargo test --release --test stability -- --ignored soak --nocapture"]
 fn soak_an_hour_of_paper() {
