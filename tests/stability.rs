@@ -2,7 +2,7 @@
 //! enough to cross a thin wall or several cells in a step, every body in one cell, bodies on
 //! cell borders and world edges, worlds where f32 spacing matters, bodies on one spot,
 //! extreme masses, kinds at capacity, random worlds under random physics choices, and an
-//! opt-in hour of `paper` (`GPUWARS_SOAK=1`). `docs/stability-extremes.md` says what each
+//! opt-in hour of `paper` (`GPUWARS_SOAK=1`). `docs/stability.md` says what each
 //! test checks.
 //!
 //! Every scenario ends in the same invariants ([`assert_invariants`]): every live body finite
@@ -1112,7 +1112,44 @@ fn waves_larger_than_capacity_spawn_only_into_free_slots(device: &Device) {
     });
 }
 
+/// With a cap the grid orders large buckets in runs and merges them: the grid it builds is
+/// the counting order's, bit for bit. A cap too large to bind changes nothing else, so the
+/// two worlds (piles of 1 to 700 bodies on a few spots, and bodies scattered between) step
+/// to the same state.
+fn the_bounded_grid_order_is_the_counting_order(device: &Device) {
+    let run = |cap: u32| {
+        let mut spec = world(
+            Vec2::splat(600.0),
+            Boundary::Wrap,
+            vec![
+                kind("a", circle(3.0), 1500, &["a", "b"]),
+                kind("b", circle(5.0), 300, &["a"]),
+            ],
+        );
+        spec.physics.neighbour_cap = cap;
+        let mut sim = Simulation::new(device, &spec, 8).unwrap();
+        sim.scatter(1, 300, 20.0).unwrap();
+        // Piles of 700, 300, 129, 65, 64, 1 and 241 bodies of kind a, in one cell each.
+        let mut slot = 0u32;
+        let mut piles = Vec::new();
+        for (k, size) in [700u32, 300, 129, 65, 64, 1, 241].into_iter().enumerate() {
+            let spot = Vec2::new(40.0 + 80.0 * k as f32, 300.0);
+            piles.extend((0..size).map(|i| (slot + i, spot, Vec2::ZERO)));
+            slot += size;
+        }
+        sim.place(&piles).unwrap();
+        for _ in 0..3 {
+            sim.step().unwrap();
+        }
+        sim.snapshot().unwrap()
+    };
+    let (counted, merged) = (run(0), run(gpuwars::sim::spec::MAX_SLOTS));
+    assert_eq!(counted.state_hash(), merged.state_hash());
+    assert_eq!(counted.contacts, merged.contacts);
+}
+
 on_both_backends!(
+    the_bounded_grid_order_is_the_counting_order,
     every_time_step_keeps_a_colliding_world_finite_inside_and_bounded,
     tunnelling_through_a_thin_wall_stops_at_the_predicted_substeps,
     bodies_crossing_many_cells_a_step_lose_no_contact,
@@ -1134,7 +1171,7 @@ on_both_backends!(
 /// game seeded with the next number. Every minute of game time: the invariants, and the
 /// status's counts against the snapshot's. At the end it prints the steps per second and the
 /// final hash; with `GPUWARS_SOAK_HASH=0x…` it checks that hash (the one recorded in
-/// `docs/stability-extremes.md`).
+/// `docs/stability.md`).
 #[test]
 #[ignore = "an hour of game time: GPUWARS_SOAK=1 cargo test --release --test stability -- --ignored soak --nocapture"]
 fn soak_an_hour_of_paper() {
