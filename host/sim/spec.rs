@@ -16,6 +16,11 @@ pub const MAX_SLOTS: u32 = 1 << 24;
 /// Largest world side: beyond it, f32 positions are too coarse for small bodies.
 pub const MAX_SIDE: f32 = 1.0e6;
 
+/// Lightest mass a body may have: lighter, `1 / mass` overflows in the kernels' arithmetic.
+pub const MIN_MASS: f32 = 1.0e-30;
+/// Heaviest finite mass: heavier, a contact's impulse overflows (infinity stands for an
+/// immovable body).
+pub const MAX_MASS: f32 = 1.0e30;
 /// Largest magnitude of a field's components and strength.
 pub const MAX_FIELD: f32 = 1.0e12;
 /// Most substeps a step may be split into.
@@ -235,7 +240,8 @@ pub struct KindSpec {
     pub name: String,
     /// Bound used by the narrow phase.
     pub shape: Shape,
-    /// Mass of each body (> 0; `f32::INFINITY` for immovable bodies).
+    /// Mass of each body ([`MIN_MASS`] to [`MAX_MASS`]; `f32::INFINITY` for immovable
+    /// bodies).
     pub mass: f32,
     /// Slots reserved for this kind: the most bodies of it alive at once.
     pub capacity: u32,
@@ -367,8 +373,19 @@ impl WorldSpec {
                     check_range(at("half.y"), half.y, (0.0, false), MAX_SIDE)?;
                 }
             }
-            // inf: an immovable body.
-            check_range(at("mass"), kind.mass, (0.0, false), f32::INFINITY)?;
+            // inf: an immovable body. Finite masses outside [MIN_MASS, MAX_MASS] would
+            // overflow the kernels' arithmetic (1 / mass, or a contact's impulse).
+            if kind.mass != f32::INFINITY && !(MIN_MASS..=MAX_MASS).contains(&kind.mass) {
+                return Err(error(
+                    at("mass"),
+                    format!(
+                        "{} is out of range (allowed {} to {}, or inf for an immovable body)",
+                        number(kind.mass),
+                        number(MIN_MASS),
+                        number(MAX_MASS)
+                    ),
+                ));
+            }
             if kind.capacity == 0 {
                 return Err(error(
                     at("capacity"),
