@@ -226,12 +226,7 @@ fn measure(
     let step_s = profile.step_seconds();
     let bytes: u64 = profile.stages.iter().map(|s| s.bytes).sum();
     let achieved = bytes as f64 / step_s.max(f64::MIN_POSITIVE);
-    let stages = profile
-        .stages
-        .iter()
-        .map(|s| format!("{}={:.1}", s.stage, s.seconds * 1e6 / profile.steps as f64))
-        .collect::<Vec<_>>()
-        .join(" ");
+    let stages = profile.stage_line(1e-6, 1);
     Ok(ScaleRow {
         enemies,
         setup_s,

@@ -50,6 +50,17 @@ impl Profile {
         self.stages.iter().map(|s| s.seconds).sum::<f64>() / self.steps.max(1) as f64
     }
 
+    /// Each stage's mean time per step on one line, `stage=time` joined by spaces, in units
+    /// of `unit` seconds (`1e-6`: µs) with `digits` decimals.
+    pub fn stage_line(&self, unit: f64, digits: usize) -> String {
+        let steps = self.steps.max(1) as f64;
+        self.stages
+            .iter()
+            .map(|s| format!("{}={:.digits$}", s.stage, s.seconds / steps / unit))
+            .collect::<Vec<_>>()
+            .join(" ")
+    }
+
     /// The profile as an aligned table: per stage, microseconds per step, share of the step,
     /// launches, bytes and the bandwidth they make; with `copy_bandwidth` (bytes per second,
     /// measured in the same run), the fraction of it each stage achieves.

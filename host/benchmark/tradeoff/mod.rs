@@ -373,12 +373,7 @@ fn crowded(device: &Device, bodies: u32, cap: u32) -> anyhow::Result<CrowdedRow>
     }
     runs.sort_by(|a, b| a.step_seconds().total_cmp(&b.step_seconds()));
     let median = &runs[1];
-    let stages = median
-        .stages
-        .iter()
-        .map(|s| format!("{}={:.2}", s.stage, s.seconds * 1e3))
-        .collect::<Vec<_>>()
-        .join(" ");
+    let stages = median.stage_line(1e-3, 2);
     Ok(CrowdedRow {
         bodies,
         neighbour_cap: cap,
@@ -494,12 +489,7 @@ fn game_row(
     if game.status().game_over != 0 {
         anyhow::bail!("the game ended while it was measured (a frozen world is cheap)");
     }
-    let stages = profile
-        .stages
-        .iter()
-        .map(|s| format!("{}={:.1}", s.stage, s.seconds * 1e6 / profile.steps as f64))
-        .collect::<Vec<_>>()
-        .join(" ");
+    let stages = profile.stage_line(1e-6, 1);
     Ok(GameRow {
         choice,
         steps_per_s,
