@@ -20,6 +20,7 @@ use gpuwars::game::scene::BUILT_IN;
 use gpuwars::game::{Game, Scene};
 use gpuwars::kernels::game::control::Input;
 use gpuwars::sim::Shape;
+use gpuwars::sim::spec::{MAX_MASS, MIN_MASS};
 use proptest::prelude::*;
 use proptest::test_runner::TestCaseError;
 
@@ -115,6 +116,8 @@ enum Rule {
     Real { low: f32, closed: bool, high: f32 },
     /// A whole number in `low..=high`.
     Whole { low: i128, high: i128 },
+    /// A mass: `[MIN_MASS, MAX_MASS]`, or infinity.
+    Mass,
 }
 
 const SIDE: f32 = 1.0e6;
@@ -186,7 +189,8 @@ impl Site {
             }
             ("waves", "count" | "times") => whole(1, u32::MAX),
             ("kinds", "circle") => above(0.0, SIDE),
-            ("kinds", "mass" | "max_speed" | "lifetime") => above(0.0, f32::INFINITY),
+            ("kinds", "mass") => Rule::Mass,
+            ("kinds", "max_speed" | "lifetime") => above(0.0, f32::INFINITY),
             ("kinds", "restitution") => within(0.0, 1.0),
             ("kinds", "capacity") => whole(1, 1u32 << 24),
             ("kinds", "energy") => whole(1, i32::MAX),
@@ -437,6 +441,10 @@ fn follows(rule: Rule, value: &str) -> bool {
                 && (x == 0.0 || stored.abs() >= f32::MIN_POSITIVE);
             inside && storable
         }
+        Rule::Mass => {
+            let (low, high) = (f64::from(MIN_MASS), f64::from(MAX_MASS));
+            (x >= low && x <= high) || x == f64::INFINITY
+        }
     }
 }
 
@@ -491,7 +499,7 @@ proptest! {
                 let stored = site.stored(&scene).expect("a stored value");
                 let (x, _) = written(&value).unwrap();
                 let expected = match rule {
-                    Rule::Real { .. } => f64::from(x as f32),
+                    Rule::Real { .. } | Rule::Mass => f64::from(x as f32),
                     Rule::Whole { .. } => written_int(&value).unwrap() as f64,
                 };
                 prop_assert!(

@@ -28,8 +28,9 @@ use crate::files::{MAX_SCENE_BYTES, excerpt, line_of, number, read_text, thousan
 use super::spec::{Behaviour, FpsSpec, GameSpec, Machine, Scene, ShipSpec, SpawnSpec, WaveSpec};
 // Errors of the file's own rules read like the world's: a field and what is allowed.
 use crate::sim::spec::{
-    Boundary, Field, Integrator, KindSpec, MAX_CELL_SCALE, MAX_SIDE, MAX_SLOTS, MAX_SUBSTEPS,
-    MAX_VISION_SCALE, Physics, Shape, SpecError, WorldSpec, error as invalid,
+    Boundary, Field, Integrator, KindSpec, MAX_CELL_SCALE, MAX_MASS, MAX_SIDE, MAX_SLOTS,
+    MAX_SUBSTEPS, MAX_VISION_SCALE, MIN_MASS, Physics, Shape, SpecError, WorldSpec,
+    error as invalid,
 };
 
 /// Largest speed, distance or time (seconds) in a scene: as far as f32 world coordinates go.
@@ -558,6 +559,20 @@ fn read_scene(root: &Node<'_>) -> Result<RawScene, SceneError> {
     })
 }
 
+/// A kind's mass: from [`MIN_MASS`] to [`MAX_MASS`] as written, or `inf` (immovable).
+fn read_mass(node: &Node<'_>) -> Result<f32, SceneError> {
+    let mass = node.real(above(0.0, f32::INFINITY))?;
+    if mass.is_finite() && !(MIN_MASS..=MAX_MASS).contains(&mass) {
+        return Err(node.fail(format!(
+            "{} is out of range (allowed {} to {}, or inf for an immovable body)",
+            node.written(),
+            number(MIN_MASS),
+            number(MAX_MASS)
+        )));
+    }
+    Ok(mass)
+}
+
 /// The `[physics]` table: every key optional, the default reproducing the paper's game.
 fn read_physics(node: &Node<'_>) -> Result<Physics, SceneError> {
     let table = node.table(&[
@@ -712,7 +727,7 @@ fn read_kind(node: &Node<'_>) -> Result<(KindSpec, Option<Behaviour>), SceneErro
         name,
         shape,
         // inf: an immovable body.
-        mass: kind.need("mass")?.real(above(0.0, f32::INFINITY))?,
+        mass: read_mass(&kind.need("mass")?)?,
         capacity: kind.need("capacity")?.whole(1, MAX_SLOTS)?,
         energy: kind.need("energy")?.whole(1, i32::MAX)?,
         damage: kind.or("damage", 0, |n| n.whole(0, i32::MAX))?,
