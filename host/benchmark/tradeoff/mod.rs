@@ -306,8 +306,8 @@ fn crowd_error(
     let mut sim = scattered(device, spec, seed)?;
     let steps = (seconds / f64::from(spec.dt)).round() as u32;
     let (mut missed, mut contacts) = (0u64, 0u64);
+    let mut before = sim.snapshot()?;
     for _ in 0..steps {
-        let before = sim.snapshot()?;
         let mut brute = vec![0u32; before.slots()];
         let world = Reference::new(spec, &before)?;
         for (i, j, _) in world.overlapping() {
@@ -320,8 +320,10 @@ fn crowd_error(
             contacts += u64::from(brute[slot]);
             missed += u64::from(brute[slot].saturating_sub(after.contacts[slot]));
         }
+        // This step's end is the next one's start.
+        before = after;
     }
-    let end = sim.snapshot()?;
+    let end = before;
     let sum: f64 = truth
         .slots
         .iter()

@@ -160,24 +160,22 @@ pub fn integrate(t: Thread, args: &IntegrateArgs) {
     let vel = bodies.vel.get(slot) + args.contacts.kick.get(slot);
     let pushed = bodies.force.get(slot) * inverse_mass(bodies.mass.get(slot));
     let field = &args.field;
+    // The game's worlds have no field: no field term at all then, so that no bit (not even a
+    // zero's sign) differs from the paper's.
+    let none = field.is_none();
+    let accel_at = |p: Vec2| {
+        if none {
+            pushed
+        } else {
+            pushed + field.accel(p)
+        }
+    };
     let (dt, max_speed) = (args.dt, info.max_speed);
-    let (pos, vel) = if field.is_none() {
-        // The game's worlds: no field term at all, so that no bit differs from the paper's.
-        match args.integrator {
-            EXPLICIT_EULER => explicit_euler(pos, vel, pushed, dt, max_speed),
-            VELOCITY_VERLET => velocity_verlet(pos, vel, pushed, |_| pushed, dt, max_speed),
-            _ => euler(pos, vel, pushed, dt, max_speed),
-        }
-    } else {
-        let accel = pushed + field.accel(pos);
-        match args.integrator {
-            EXPLICIT_EULER => explicit_euler(pos, vel, accel, dt, max_speed),
-            VELOCITY_VERLET => {
-                let at = |p: Vec2| pushed + field.accel(p);
-                velocity_verlet(pos, vel, accel, at, dt, max_speed)
-            }
-            _ => euler(pos, vel, accel, dt, max_speed),
-        }
+    let accel = accel_at(pos);
+    let (pos, vel) = match args.integrator {
+        EXPLICIT_EULER => explicit_euler(pos, vel, accel, dt, max_speed),
+        VELOCITY_VERLET => velocity_verlet(pos, vel, accel, accel_at, dt, max_speed),
+        _ => euler(pos, vel, accel, dt, max_speed),
     };
     let (pos, vel) = args.space.confine(pos + args.contacts.push.get(slot), vel);
     bodies.pos.set(slot, pos);
