@@ -817,3 +817,82 @@ fn bad_physics_choices_name_the_key_and_the_allowed_values() {
         &["unknown key", "substeps"],
     );
 }
+
+#[test]
+fn the_effects_table_reads_every_key_and_defaults_the_rest() {
+    use gpuwars::game::spec::EffectsSpec;
+    let scene = Scene::from_toml(paper(), "paper.toml").unwrap();
+    let written = EffectsSpec {
+        particles: 12,
+        lifetime: 0.7,
+        speed: 260.0,
+        speed_kept: 0.1,
+    };
+    assert_eq!(scene.game.effects, Some(written));
+    let text = mutate("particles = 12\n", "");
+    let scene = Scene::from_toml(&text, "paper.toml").unwrap();
+    assert_eq!(
+        scene.game.effects.unwrap().particles,
+        EffectsSpec::default().particles
+    );
+    let start = paper().find("[effects]").unwrap();
+    let end = start + paper()[start..].find("\n\n").unwrap();
+    let text = format!("{}{}", &paper()[..start], &paper()[end..]);
+    assert_eq!(
+        Scene::from_toml(&text, "paper.toml").unwrap().game.effects,
+        None
+    );
+}
+
+#[test]
+fn bad_effects_name_the_key_and_the_allowed_range() {
+    let cases: [(&str, &str, &str, &[&str]); 6] = [
+        (
+            "particles = 12",
+            "particles = 0",
+            "effects.particles",
+            &["from 1 to 64"],
+        ),
+        (
+            "particles = 12",
+            "particles = 65",
+            "effects.particles",
+            &["from 1 to 64"],
+        ),
+        (
+            "lifetime = 0.7",
+            "lifetime = 0",
+            "effects.lifetime",
+            &["(0, 10]"],
+        ),
+        ("speed = 260.0", "speed = -1", "effects.speed", &["[0, "]),
+        (
+            "speed_kept = 0.1",
+            "speed_kept = 1.5",
+            "effects.speed_kept",
+            &["(0, 1]"],
+        ),
+        (
+            "speed_kept = 0.1",
+            "drag = 0.1",
+            "effects.drag",
+            &["unknown key", "speed_kept"],
+        ),
+    ];
+    for (from, to, field, says) in cases {
+        let text = mutate(&format!("\n{from}\n"), &format!("\n{to}\n"));
+        assert_error(&text, line_of(&text, &format!("\n{to}\n")) + 1, field, says);
+    }
+    // Every enemy slot owns a kill's particles: 64 a kill for 300,000 enemies is too many.
+    let text = mutate("capacity = 2048", "capacity = 300000").replacen(
+        "particles = 12",
+        "particles = 64",
+        1,
+    );
+    assert_error(
+        &text,
+        line_of(&text, "particles = 64"),
+        "effects.particles",
+        &["64 a kill makes", "at most 16,777,216"],
+    );
+}

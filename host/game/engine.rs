@@ -5,13 +5,14 @@ use std::collections::VecDeque;
 
 use bytemuck::Zeroable;
 use gpuwars_kernels::game::control::{Command, Input, Status};
+use gpuwars_kernels::game::effects::Burst;
 use gpuwars_kernels::game::rules::{Brain, Rules, Wave};
 use xxhash_rust::xxh3::Xxh3;
 
 use super::looks;
-use super::spec::{Behaviour, Machine, Scene};
+use super::spec::{Behaviour, EffectsSpec, GameSpec, Machine, Scene};
 use crate::backend::Ring;
-use crate::pipeline::{Frame, GameConfig, Pipeline, Profile};
+use crate::pipeline::{Frame, GameConfig, PARTICLE_BYTES, Pipeline, Profile, mind_slots};
 use crate::sim::layout::{self, Layout, steps};
 use crate::sim::{Snapshot, WorldSpec, state};
 use crate::{Device, Error};
@@ -74,7 +75,21 @@ pub fn footprint(scene: &Scene) -> (u32, u64) {
     let layout = Layout::new(&world);
     let space = layout::space(&world);
     let bytes = state::bytes_needed(&layout, &space, world.kinds.len());
-    (layout.slots, bytes)
+    let particles = particles(&world, &scene.game) * PARTICLE_BYTES;
+    (layout.slots, bytes + particles)
+}
+
+/// How many explosion particles a game of `world` and `game` has: every enemy slot (from
+/// the first kind with a machine to the last, padding included) owns a kill's worth.
+pub(crate) fn particles(world: &WorldSpec, game: &GameSpec) -> u64 {
+    let Some(effects) = &game.effects else {
+        return 0;
+    };
+    let machines: Vec<bool> = (game.behaviours.iter())
+        .map(|b| b.is_some_and(|b| b.machine != Machine::None))
+        .collect();
+    let owners = mind_slots(&Layout::new(world), &machines).map_or(0, |(first, end)| end - first);
+    u64::from(owners) * u64::from(effects.particles)
 }
 
 /// The rules of `scene` in the kernels' terms (steps instead of seconds, kind indices).
@@ -125,6 +140,21 @@ fn waves(scene: &Scene) -> Vec<Wave> {
         .collect()
 }
 
+/// How kills burst, in the kernels' terms; the slots owning particles are the pipeline's.
+fn burst(effects: &EffectsSpec, dt: f32) -> Burst {
+    Burst {
+        per_kill: effects.particles,
+        lifetime: steps(effects.lifetime, dt),
+        speed: effects.speed,
+        // The fraction kept after a second, spread over its steps.
+        keep: effects.speed_kept.powf(dt),
+        dt,
+        first_slot: 0,
+        end_slot: 0,
+        reserved: 0,
+    }
+}
+
 /// Each kind's brain; kinds without a behaviour get machine 0 (none).
 fn brains(scene: &Scene) -> Vec<Brain> {
     let dt = scene.world.dt;
@@ -172,6 +202,11 @@ impl<'d> Game<'d> {
             rules: rules(scene, &layout),
             brains: brains(scene),
             waves: waves(scene),
+            effects: scene
+                .game
+                .effects
+                .as_ref()
+                .map(|e| burst(e, scene.world.dt)),
         };
         let pipeline = Pipeline::new(device, &world, seed, Some(game), options.graphs)?;
         Ok(Game {

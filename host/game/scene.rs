@@ -20,12 +20,15 @@ use std::ops::Range;
 use std::path::Path;
 
 use glam::Vec2;
+use gpuwars_kernels::game::effects::{MAX_PARTICLES, MAX_PER_KILL};
 use toml::Spanned;
 use toml::de::{DeTable, DeValue};
 
 use crate::files::{MAX_SCENE_BYTES, excerpt, line_of, number, read_text, thousands};
 
-use super::spec::{Behaviour, FpsSpec, GameSpec, Machine, Scene, ShipSpec, SpawnSpec, WaveSpec};
+use super::spec::{
+    Behaviour, EffectsSpec, FpsSpec, GameSpec, Machine, Scene, ShipSpec, SpawnSpec, WaveSpec,
+};
 // Errors of the file's own rules read like the world's: a field and what is allowed.
 use crate::sim::spec::{
     Boundary, Field, Integrator, KindSpec, MAX_CELL_SCALE, MAX_MASS, MAX_SIDE, MAX_SLOTS,
@@ -39,6 +42,8 @@ const MAX: f32 = MAX_SIDE;
 const MAX_FIRE_RATE: f32 = 1000.0;
 /// Largest FPS meter and FPS recovery per second.
 const MAX_FPS: f32 = 10000.0;
+/// Longest life of an explosion's particle, in seconds.
+const MAX_LIFETIME: f32 = 10.0;
 
 /// What is wrong with a scene, and where (see [`crate::files::FileError`]).
 pub type SceneError = crate::files::FileError;
@@ -175,6 +180,7 @@ struct RawScene {
     fps: FpsSpec,
     spawn: SpawnSpec,
     behaviours: Vec<Option<Behaviour>>,
+    effects: Option<EffectsSpec>,
 }
 
 /// The text being read and what it is called, for errors.
@@ -511,6 +517,7 @@ fn read_scene(root: &Node<'_>) -> Result<RawScene, SceneError> {
         "spawn",
         "kinds",
         "physics",
+        "effects",
     ])?;
     let name_node = top.need("name")?;
     let name = name_node.text("a name in quotes")?;
@@ -534,6 +541,7 @@ fn read_scene(root: &Node<'_>) -> Result<RawScene, SceneError> {
     let ship = read_ship(&top.need("ship")?)?;
     let fps = read_fps(&top.need("fps")?)?;
     let spawn = read_spawn(&top.need("spawn")?)?;
+    let effects = top.or("effects", None, |n| read_effects(n).map(Some))?;
     let (kinds, behaviours) = top
         .need("kinds")?
         .array("an array of tables ([[kinds]])")?
@@ -556,6 +564,7 @@ fn read_scene(root: &Node<'_>) -> Result<RawScene, SceneError> {
         fps,
         spawn,
         behaviours,
+        effects,
     })
 }
 
@@ -635,6 +644,18 @@ fn read_fps(node: &Node<'_>) -> Result<FpsSpec, SceneError> {
         start,
         min: fps.need("min")?.real(within(0.0, start))?,
         recovery: fps.need("recovery")?.real(within(0.0, MAX_FPS))?,
+    })
+}
+
+/// The `[effects]` table: every key optional (see [`EffectsSpec::default`]).
+fn read_effects(node: &Node<'_>) -> Result<EffectsSpec, SceneError> {
+    let table = node.table(&["particles", "lifetime", "speed", "speed_kept"])?;
+    let d = EffectsSpec::default();
+    Ok(EffectsSpec {
+        particles: table.or("particles", d.particles, |n| n.whole(1, MAX_PER_KILL))?,
+        lifetime: table.or("lifetime", d.lifetime, |n| n.real(above(0.0, MAX_LIFETIME)))?,
+        speed: table.or("speed", d.speed, |n| n.real(side_or_zero()))?,
+        speed_kept: table.or("speed_kept", d.speed_kept, |n| n.real(above(0.0, 1.0)))?,
     })
 }
 
@@ -810,6 +831,7 @@ impl RawScene {
             fps: self.fps,
             spawn: self.spawn,
             behaviours: self.behaviours,
+            effects: self.effects,
         };
         check_game(&world, &game)?;
         Ok(Scene {
@@ -899,6 +921,20 @@ fn check_game(world: &WorldSpec, game: &GameSpec) -> Result<(), SpecError> {
             "ship.shot",
             format!("kind `{shot_name}` has a behaviour (the shots' kind must have none)"),
         ));
+    }
+    if let Some(effects) = &game.effects {
+        let particles = super::engine::particles(world, game);
+        if particles > u64::from(MAX_PARTICLES) {
+            return Err(invalid(
+                "effects.particles",
+                format!(
+                    "{} a kill makes {} particles in all (allowed at most {})",
+                    effects.particles,
+                    thousands(particles),
+                    thousands(u64::from(MAX_PARTICLES))
+                ),
+            ));
+        }
     }
     for (w, wave) in game.spawn.waves.iter().enumerate() {
         let at = |field: &str| format!("spawn.waves[{w}].{field}");

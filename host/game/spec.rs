@@ -51,6 +51,30 @@ pub struct WaveSpec {
     pub speed: f32,
 }
 
+/// Explosions: what a kill bursts into (a scene's `[effects]` table).
+#[derive(Clone, Debug, PartialEq)]
+pub struct EffectsSpec {
+    /// Particles per kill (1 to 64).
+    pub particles: u32,
+    /// Seconds a particle lives at most (above 0 to 10; at least one step).
+    pub lifetime: f32,
+    /// Fastest speed a particle leaves the kill with (≥ 0).
+    pub speed: f32,
+    /// Fraction of its speed a particle still has after a second (above 0 to 1; 1: no drag).
+    pub speed_kept: f32,
+}
+
+impl Default for EffectsSpec {
+    fn default() -> Self {
+        EffectsSpec {
+            particles: 12,
+            lifetime: 0.7,
+            speed: 260.0,
+            speed_kept: 0.1,
+        }
+    }
+}
+
 /// When and how enemies appear.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SpawnSpec {
@@ -127,6 +151,8 @@ pub struct GameSpec {
     /// Each kind's behaviour, indexed like the world's kinds: exactly the kinds the world
     /// marks `controlled` have one.
     pub behaviours: Vec<Option<Behaviour>>,
+    /// Explosions, if the scene has any (without, the step launches nothing for them).
+    pub effects: Option<EffectsSpec>,
 }
 
 /// A playable scene: the world, its rules, and where it came from.

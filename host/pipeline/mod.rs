@@ -12,6 +12,8 @@
 //! | `narrow` | contacts and their response (`collide_circles` without rectangles) | worlds where something collides |
 //! | `think` | every enemy's machine, in one launch over the enemy kinds' slots | games with enemies |
 //! | `integrate` | Euler, the boundary rule, deaths | always |
+//! | `substeps` | broad, narrow and integrate again for each further substep | worlds with substeps |
+//! | `effects` | kills burst into particles, the others move and fade (before `free` rebuilds the flags it reads) | games with explosions |
 //! | `free` | the free lists: flags, their prefix sum, gather | always |
 //! | `tally` | the master thread after the physics (one thread) | games |
 //!
@@ -32,9 +34,11 @@ mod profile;
 pub use draw::Frame;
 pub use profile::{Profile, StageTimes};
 
+use glam::Vec2;
 use gpuwars_kernels::game::ai::ThinkArgs;
 use gpuwars_kernels::game::autopilot::AutopilotArgs;
 use gpuwars_kernels::game::control::{Command, Input, Status};
+use gpuwars_kernels::game::effects::{Burst, EffectsArgs, Particles};
 use gpuwars_kernels::game::master::{BirthArgs, MasterArgs};
 use gpuwars_kernels::game::rules::{Brain, Rules, Wave};
 use gpuwars_kernels::sim::Space;
@@ -56,7 +60,7 @@ pub use world::Simulation;
 mod world;
 
 /// The stages of a step, in order.
-pub const STAGES: [&str; 10] = [
+pub const STAGES: [&str; 11] = [
     "pilot",
     "master",
     "births",
@@ -65,6 +69,7 @@ pub const STAGES: [&str; 10] = [
     "think",
     "integrate",
     "substeps",
+    "effects",
     "free",
     "tally",
 ];
@@ -78,18 +83,31 @@ pub struct GameConfig {
     pub brains: Vec<Brain>,
     /// The spawn schedule.
     pub waves: Vec<Wave>,
+    /// How kills burst into particles, if the scene has explosions (the slots owning
+    /// particles are filled in by the pipeline).
+    pub effects: Option<Burst>,
 }
 
 impl GameConfig {
-    /// The kinds `first .. end` that hold every kind with a machine, if any has one.
-    fn minds(&self) -> Option<(u32, u32)> {
-        let mut kinds =
-            (0..self.brains.len() as u32).filter(|&k| self.brains[k as usize].machine != 0);
-        let first = kinds.next()?;
-        let last = kinds.next_back().unwrap_or(first);
-        Some((first, last + 1))
+    /// The slots of the kinds with a machine (see [`mind_slots`]).
+    fn mind_slots(&self, layout: &Layout) -> Option<(u32, u32)> {
+        let machines: Vec<bool> = self.brains.iter().map(|b| b.machine != 0).collect();
+        mind_slots(layout, &machines)
     }
 }
+
+/// The slots `first .. end` from the first kind with a machine (`machines`, per kind) to the
+/// last, padding included: the enemies whose machines think, and whose kills own explosion
+/// particles. `None` if no kind has a machine.
+pub fn mind_slots(layout: &Layout, machines: &[bool]) -> Option<(u32, u32)> {
+    let mut kinds = (0..machines.len()).filter(|&k| machines[k]);
+    let first = kinds.next()?;
+    let last = kinds.next_back().unwrap_or(first);
+    Some((layout.ranges[first].start, layout.ranges[last].end()))
+}
+
+/// Device bytes of one explosion particle (position, velocity, life, kind).
+pub const PARTICLE_BYTES: u64 = 24;
 
 /// The game's buffers on the device.
 struct GameState {
@@ -102,6 +120,39 @@ struct GameState {
     spawned: Buffer<u32>,
     births: Buffer<u32>,
     birth_speed: Buffer<f32>,
+    /// The explosions' particles and how kills burst, if the scene has explosions.
+    effects: Option<(ParticleBuffers, Burst)>,
+}
+
+/// The explosions' particles on the device.
+struct ParticleBuffers {
+    pos: Buffer<Vec2>,
+    vel: Buffer<Vec2>,
+    life: Buffer<u32>,
+    kind: Buffer<u32>,
+}
+
+impl ParticleBuffers {
+    /// `count` particles, none shown.
+    fn new(device: &Device, count: u32) -> Result<Self, Error> {
+        let n = count as usize;
+        Ok(ParticleBuffers {
+            pos: device.alloc_zeroed(n)?,
+            vel: device.alloc_zeroed(n)?,
+            life: device.alloc_zeroed(n)?,
+            kind: device.alloc_zeroed(n)?,
+        })
+    }
+
+    /// The kernels' view of them.
+    fn view(&self) -> Particles {
+        Particles {
+            pos: self.pos.view(),
+            vel: self.vel.view(),
+            life: self.life.view(),
+            kind: self.kind.view(),
+        }
+    }
 }
 
 /// How a world is stepped: what its scene makes it launch, and how.
@@ -188,12 +239,23 @@ impl<'d> Pipeline<'d> {
         let layout = layout::Layout::new(spec);
         let space = layout::space(spec);
         let kinds = spec.kinds.len();
+        let mut game = game;
+        if let Some(g) = game.as_mut() {
+            let slots = g.mind_slots(&layout).unwrap_or((0, 0));
+            if let Some(burst) = g.effects.as_mut() {
+                (burst.first_slot, burst.end_slot) = slots;
+            }
+        }
+        let particles = game
+            .as_ref()
+            .and_then(|g| g.effects)
+            .map_or(0, |burst| burst.particles());
         device.check_fits(
             &format!(
                 "a world of {} slots on a {}x{} grid",
                 layout.slots, space.cols, space.rows
             ),
-            state::bytes_needed(&layout, &space, kinds),
+            state::bytes_needed(&layout, &space, kinds) + u64::from(particles) * PARTICLE_BYTES,
         )?;
         let collides = spec.collision_masks().iter().any(|&m| m != 0);
         let config = Config {
@@ -210,6 +272,10 @@ impl<'d> Pipeline<'d> {
         let scratch = Scratch::new(device, &layout, &space, kinds)?;
         let game = match game {
             Some(config) => Some(GameState {
+                effects: match config.effects {
+                    Some(burst) => Some((ParticleBuffers::new(device, particles)?, burst)),
+                    None => None,
+                },
                 brains: device.upload(&config.brains)?,
                 waves: device.upload(&config.waves)?,
                 status: device.alloc_zeroed(1)?,
@@ -324,11 +390,8 @@ impl<'d> Pipeline<'d> {
                 "broad" => self.grid_ops(),
                 "narrow" => self.narrow_ops(0),
                 "think" => game
-                    .and_then(|g| g.config.minds().map(|minds| (g, minds)))
-                    .map(|(g, (first_kind, end_kind))| {
-                        let ranges = &self.layout.ranges;
-                        let first_slot = ranges[first_kind as usize].start;
-                        let end_slot = ranges[end_kind as usize - 1].end();
+                    .and_then(|g| g.config.mind_slots(&self.layout).map(|slots| (g, slots)))
+                    .map(|(g, (first_slot, end_slot))| {
                         let args = ThinkArgs {
                             bodies,
                             kinds,
@@ -354,6 +417,21 @@ impl<'d> Pipeline<'d> {
                         ops
                     })
                     .collect(),
+                "effects" => game
+                    .and_then(|g| g.effects.as_ref().map(|e| (g, e)))
+                    .filter(|(_, (_, burst))| burst.particles() > 0)
+                    .map(|(g, (particles, burst))| {
+                        let args = EffectsArgs {
+                            bodies,
+                            ranges,
+                            brains: g.brains.view(),
+                            was_free: self.scratch.free.flags.view(),
+                            particles: particles.view(),
+                            burst: *burst,
+                        };
+                        vec![op(registry::BURST_AND_FADE, burst.particles(), args, 28)]
+                    })
+                    .unwrap_or_default(),
                 "free" => self.free_ops(),
                 "tally" => master
                     .map(|m| vec![op(registry::TALLY, 1, m, 128)])
@@ -615,6 +693,38 @@ impl Drop for Pipeline<'_> {
     }
 }
 
+/// The explosions' particles as read back: one element each, as [`Particles`] holds them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParticleSnapshot {
+    /// World positions.
+    pub pos: Vec<Vec2>,
+    /// Velocities.
+    pub vel: Vec<Vec2>,
+    /// Steps left to live (0: not shown).
+    pub life: Vec<u32>,
+    /// The kind whose death made each.
+    pub kind: Vec<u32>,
+    /// How kills burst, with the owning slots.
+    pub burst: Burst,
+}
+
+impl ParticleSnapshot {
+    /// Particles shown (with life left).
+    pub fn shown(&self) -> usize {
+        self.life.iter().filter(|&&l| l > 0).count()
+    }
+
+    /// XXH3-64 of every particle's bytes: equal only if two runs agree bit for bit.
+    pub fn hash(&self) -> u64 {
+        let mut h = xxhash_rust::xxh3::Xxh3::new();
+        h.update(bytemuck::cast_slice(&self.pos));
+        h.update(bytemuck::cast_slice(&self.vel));
+        h.update(bytemuck::cast_slice(&self.life));
+        h.update(bytemuck::cast_slice(&self.kind));
+        h.digest()
+    }
+}
+
 /// A world description that breaks a rule, as the backend's error.
 fn invalid_world(e: SpecError) -> Error {
     Error::Invalid(format!("invalid world: {e}"))
@@ -635,6 +745,22 @@ impl Pipeline<'_> {
     /// Enemies spawned so far, per kind.
     pub(crate) fn spawned(&self) -> Result<Vec<u32>, Error> {
         self.device.download(&self.game()?.spawned)
+    }
+
+    /// The explosions' particles, read back (waits for the queued steps); `None` for a
+    /// world without explosions.
+    pub fn particles(&self) -> Result<Option<ParticleSnapshot>, Error> {
+        let Some((p, burst)) = self.game.as_ref().and_then(|g| g.effects.as_ref()) else {
+            return Ok(None);
+        };
+        let d = self.device;
+        Ok(Some(ParticleSnapshot {
+            pos: d.download(&p.pos)?,
+            vel: d.download(&p.vel)?,
+            life: d.download(&p.life)?,
+            kind: d.download(&p.kind)?,
+            burst: *burst,
+        }))
     }
 }
 

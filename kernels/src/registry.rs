@@ -4,7 +4,7 @@
 //! [`ALL`], and, on nvptx, the `extern "ptx-kernel"` entry point that calls the body. Because
 //! the entry's name and the constant's `name` come from the same identifier, they cannot drift.
 
-use crate::game::{ai, autopilot, master};
+use crate::game::{ai, autopilot, effects, master};
 use crate::primitives::{histogram, scan, sort};
 use crate::render;
 use crate::rng::streams;
@@ -76,6 +76,8 @@ kernels! {
     SCATTER = scatter(scatter::ScatterArgs) => scatter::scatter;
     /// The master thread before the physics: ship, shots, spawn counts (one thread).
     MASTER = master(master::MasterArgs) => master::master;
+    /// Explosions: kills burst into particles, the others move and fade.
+    BURST_AND_FADE = burst_and_fade(effects::EffectsArgs) => effects::burst_and_fade;
     /// The master thread after the physics: score, counts, FPS meter, game over (one thread).
     TALLY = tally(master::MasterArgs) => master::tally;
     /// Brings the enemies the master thread ordered to life at random places.

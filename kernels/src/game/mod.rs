@@ -9,7 +9,8 @@
 //! 4. the narrow phase (`crate::sim::narrow`): contacts, damage;
 //! 5. [`ai::think`], once per enemy kind: perception through the grid, the finite-state
 //!    machine ([`fsm`]), the steering force;
-//! 6. integration and the free lists (`crate::sim`).
+//! 6. integration, [`effects::burst_and_fade`] (a scene's explosions), and the free lists
+//!    (`crate::sim`).
 //!
 //! [`control`] holds the two structs that cross between CPU and GPU; [`rules`] the scene's
 //! constants.
@@ -17,6 +18,7 @@
 pub mod ai;
 pub mod autopilot;
 pub mod control;
+pub mod effects;
 pub mod fsm;
 pub mod master;
 pub mod rules;
