@@ -7,10 +7,10 @@ use std::time::Instant;
 use gpuwars_kernels::game::control::{DESTROYED, Input, Status, TOO_SLOW};
 use serde::Serialize;
 
+use super::Game;
 use super::engine::Options;
 use super::replay::Replay;
 use super::spec::Scene;
-use super::Game;
 use crate::graphics::Renderer;
 use crate::graphics::bodies::BodyRenderer;
 use crate::graphics::camera::Camera;

@@ -3,10 +3,10 @@
 //! tricky ones violet) and a silhouette of its own, other bodies (obstacles) grey
 //! underneath. The radar shows the enemies and the obstacles.
 
+use gpuwars_kernels::render::Look;
 use gpuwars_kernels::render::shapes::{
     BOWTIE, CHEVRON, CROSS, DIAMOND, DISC, HEXAGON, RING, SQUARE, STREAK, TRIANGLE,
 };
-use gpuwars_kernels::render::{Look, View};
 
 use super::spec::{Machine, Scene};
 
@@ -89,9 +89,4 @@ pub fn looks(scene: &Scene) -> Vec<Look> {
             }
         })
         .collect()
-}
-
-/// The whole field of `scene` in a `width × height` frame.
-pub fn whole_field(scene: &Scene, width: u32, height: u32) -> View {
-    View::whole(scene.world.size, width, height, BACKGROUND)
 }

@@ -37,7 +37,13 @@ use crate::{BackendKind, Buffer, Error};
 const LAYOUT: glium::vertex::VertexFormat = &[
     (Cow::Borrowed("centre"), 0, -1, AttributeType::F32F32, false),
     (Cow::Borrowed("facing"), 8, -1, AttributeType::F32F32, false),
-    (Cow::Borrowed("half_size"), 16, -1, AttributeType::F32F32, false),
+    (
+        Cow::Borrowed("half_size"),
+        16,
+        -1,
+        AttributeType::F32F32,
+        false,
+    ),
     (Cow::Borrowed("radius"), 24, -1, AttributeType::F32, false),
     (Cow::Borrowed("bound"), 28, -1, AttributeType::F32, false),
     (Cow::Borrowed("kind"), 32, -1, AttributeType::U32, false),
@@ -123,20 +129,20 @@ vec2 local(vec2 d, vec2 h) {{
 bool inside(uint s, vec2 p, float r) {{
     float u = p.x;
     float v = abs(p.y);
-    if (s == {SQUARE}u) return abs(u) <= 0.75 * r && v <= 0.75 * r;
+    if (s == {SQUARE}u) return abs(u) <= 0.7 * r && v <= 0.7 * r;
     if (s == {DIAMOND}u) return abs(u) + v <= r;
     if (s == {TRIANGLE}u) return u >= -0.6 * r && v <= (r - u) * 0.5;
     if (s == {RING}u) {{
         float d2 = u * u + v * v;
         return d2 <= r * r && d2 >= {RING_HOLE:?} * {RING_HOLE:?} * r * r;
     }}
-    if (s == {CHEVRON}u) return v <= (r - u) * 0.4 && u >= -0.4 * r - 0.75 * v;
+    if (s == {CHEVRON}u) return 3.0 * v <= r - u && u >= -0.5 * r - 0.5 * v;
     if (s == {CROSS}u) {{
         float a = abs(u);
-        return (a <= 0.3 * r && v <= r) || (v <= 0.3 * r && a <= r);
+        return (a <= 0.3 * r && v <= 0.95 * r) || (v <= 0.3 * r && a <= 0.95 * r);
     }}
     if (s == {HEXAGON}u) return v <= {HALF_SQRT3:?} * r && abs(u) + v * {INV_SQRT3:?} <= r;
-    if (s == {BOWTIE}u) return abs(u) <= 0.9 * r && v <= abs(u) * 0.8;
+    if (s == {BOWTIE}u) return abs(u) <= 0.75 * r && v <= abs(u) * 0.8;
     if (s == {STREAK}u) {{
         float along = max(min(u, 0.0), -{STREAK_LENGTH:?} * r);
         float du = u - along;

@@ -38,9 +38,10 @@ impl CameraMode {
     }
 }
 
-/// The zoom of the default camera: 2 pixels per unit at 1080p, so that the `paper` ship
-/// (radius 10) is 40 pixels across, twice its largest enemy.
-pub const DEFAULT_ZOOM: f32 = 2.0;
+/// The zoom of the default camera: 1.5 pixels per unit at 1080p, so that the `paper`
+/// ship (radius 10) is a chevron 30 pixels across (about 200 pixels), clearly larger than
+/// its largest enemy (radius 8), with 1,280 × 720 units of the field around it.
+pub const DEFAULT_ZOOM: f32 = 1.5;
 /// Smallest zoom kept; the device shows the whole field at any zoom below the one at
 /// which it fits.
 pub const MIN_ZOOM: f32 = 0.001;

@@ -128,7 +128,7 @@ impl Pipeline<'_> {
     }
 
     /// The last frame rendered, read back (waits for it).
-    pub(crate) fn frame(&self) -> Result<Frame, Error> {
+    pub fn frame(&self) -> Result<Frame, Error> {
         let canvas = self.canvas()?;
         Ok(Frame {
             width: canvas.width,
@@ -238,7 +238,10 @@ impl Pipeline<'_> {
         let bodies = self.state.bodies();
         let camera = CameraArgs {
             bodies,
-            input: self.game.as_ref().map_or(DevSlice::EMPTY, |g| g.input.view()),
+            input: self
+                .game
+                .as_ref()
+                .map_or(DevSlice::EMPTY, |g| g.input.view()),
             state: canvas.camera.view(),
             shown: canvas.shown.view(),
             lens: *lens,
@@ -258,7 +261,12 @@ impl Pipeline<'_> {
         Ok(unsafe {
             vec![
                 op(registry::CAMERA, 1, camera, 64),
-                op(registry::RADAR_BODIES, self.layout.slots.div_ceil(stride), radar, 24),
+                op(
+                    registry::RADAR_BODIES,
+                    self.layout.slots.div_ceil(stride),
+                    radar,
+                    24,
+                ),
             ]
         })
     }

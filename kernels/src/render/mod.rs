@@ -228,12 +228,21 @@ pub struct Sprite {
 
 /// How the body in live `slot` is drawn in `shown`'s view.
 #[inline(always)]
-pub fn sprite(b: &Bodies, kinds: &DevSlice<KindInfo>, look: &Look, shown: &Shown, slot: u32) -> Sprite {
+pub fn sprite(
+    b: &Bodies,
+    kinds: &DevSlice<KindInfo>,
+    look: &Look,
+    shown: &Shown,
+    slot: u32,
+) -> Sprite {
     let view = &shown.view;
     let info = kinds.get(b.kind.get(slot));
     let reach = (info.radius * view.scale).min(MAX_RADIUS_PX);
     let (silhouette, half) = if info.shape == SHAPE_RECT {
-        (RECT, (info.half * view.scale).min(Vec2::splat(MAX_RADIUS_PX)))
+        (
+            RECT,
+            (info.half * view.scale).min(Vec2::splat(MAX_RADIUS_PX)),
+        )
     } else {
         (shapes::drawn(look.silhouette, reach), Vec2::splat(reach))
     };
@@ -348,8 +357,13 @@ pub fn splat_bodies(t: Thread, args: &SplatArgs) {
                 None if under == Some((x, y)) => sprite.shade,
                 None => continue,
             };
-            let layer = if shade == HALO { HALO_LAYER } else { look.layer };
-            args.keys.atomic_max(y * view.width + x, key(layer, kind, shade));
+            let layer = if shade == HALO {
+                HALO_LAYER
+            } else {
+                look.layer
+            };
+            args.keys
+                .atomic_max(y * view.width + x, key(layer, kind, shade));
         }
     }
 }

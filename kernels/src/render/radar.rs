@@ -27,7 +27,7 @@ pub const MAX_SIDE: u32 = 220;
 /// Smallest side of the radar's inside; a frame too small for it has no radar.
 pub const MIN_SIDE: u32 = 24;
 /// The radar's side as a share of the frame's smaller side.
-pub const SHARE: f32 = 0.18;
+pub const SHARE: f32 = 0.2;
 /// Pixels between the radar's frame and the frame's edges.
 pub const MARGIN: u32 = 8;
 /// Colour of the radar's 1-pixel frame.

@@ -5,14 +5,14 @@
 //! centre in the body's own frame (`u` along the heading, `v` across it) and the body's
 //! radius in pixels. The kernel renderer calls it; the GL renderer's fragment shader is a
 //! line-for-line copy (`host/graphics/bodies.rs`), so both draw the same shapes. Every
-//! silhouette lies inside the circle of the radius, except [`STREAK`], which trails
-//! [`STREAK_LENGTH`] radii behind.
+//! silhouette lies inside the circle of the radius (so the pixels a body covers are found
+//! in its bounding square), except [`STREAK`], which trails [`STREAK_LENGTH`] radii behind.
 
 use glam::Vec2;
 
 /// A disc: bodies smaller than [`SHAPE_FROM_PX`], and kinds with no silhouette.
 pub const DISC: u32 = 0;
-/// A square of side 1.5 radii.
+/// A square of side 1.4 radii (its corners just inside the circle).
 pub const SQUARE: u32 = 1;
 /// A square standing on a corner, its corners on the circle.
 pub const DIAMOND: u32 = 2;
@@ -20,9 +20,10 @@ pub const DIAMOND: u32 = 2;
 pub const TRIANGLE: u32 = 3;
 /// A ring: the circle less the middle, out to [`RING_HOLE`] radii.
 pub const RING: u32 = 4;
-/// An arrowhead pointing along the heading, notched at the back (the ship).
+/// An arrowhead pointing along the heading, its back corners on the circle at
+/// `(−0.8, ±0.6)` radii, notched back to `−0.5` (the ship).
 pub const CHEVRON: u32 = 5;
-/// A plus sign whose arms are 0.6 radii wide.
+/// A plus sign whose arms are 0.6 radii wide and reach 0.95 radii.
 pub const CROSS: u32 = 6;
 /// A regular hexagon, its corners on the circle.
 pub const HEXAGON: u32 = 7;
@@ -85,20 +86,20 @@ pub fn local(d: Vec2, heading: Vec2) -> Vec2 {
 pub fn inside(silhouette: u32, p: Vec2, r: f32) -> bool {
     let (u, v) = (p.x, p.y.abs());
     match silhouette {
-        SQUARE => u.abs() <= 0.75 * r && v <= 0.75 * r,
+        SQUARE => u.abs() <= 0.7 * r && v <= 0.7 * r,
         DIAMOND => u.abs() + v <= r,
         TRIANGLE => u >= -0.6 * r && v <= (r - u) * 0.5,
         RING => {
             let d2 = u * u + v * v;
             d2 <= r * r && d2 >= RING_HOLE * RING_HOLE * r * r
         }
-        CHEVRON => v <= (r - u) * 0.4 && u >= -0.4 * r - 0.75 * v,
+        CHEVRON => 3.0 * v <= r - u && u >= -0.5 * r - 0.5 * v,
         CROSS => {
             let (a, b) = (u.abs(), v);
-            (a <= 0.3 * r && b <= r) || (b <= 0.3 * r && a <= r)
+            (a <= 0.3 * r && b <= 0.95 * r) || (b <= 0.3 * r && a <= 0.95 * r)
         }
         HEXAGON => v <= HALF_SQRT3 * r && u.abs() + v * INV_SQRT3 <= r,
-        BOWTIE => u.abs() <= 0.9 * r && v <= u.abs() * 0.8,
+        BOWTIE => u.abs() <= 0.75 * r && v <= u.abs() * 0.8,
         STREAK => {
             // The segment from the centre back to STREAK_LENGTH radii behind, thickened
             // by the radius.
