@@ -231,11 +231,16 @@ pub struct DemoArgs {
     pub render: Renderer,
     /// What the screenshot and the frames show: the ship, centred, with the radar in a
     /// corner (follow), or the whole field (field).
-    #[arg(long, value_enum, default_value_t)]
+    #[arg(long, env = "GPUWARS_CAMERA", value_enum, default_value_t)]
     pub camera: CameraMode,
     /// How close the camera follows the ship: pixels per field unit are zoom × height /
     /// 1080 (at least the whole field, at most 8 times zoom 1's).
-    #[arg(long, default_value_t = DEFAULT_ZOOM, value_parser = decimal(MIN_ZOOM, MAX_ZOOM))]
+    #[arg(
+        long,
+        env = "GPUWARS_ZOOM",
+        default_value_t = DEFAULT_ZOOM,
+        value_parser = decimal(MIN_ZOOM, MAX_ZOOM)
+    )]
     pub zoom: f32,
     /// How the game runs on its device.
     #[command(flatten)]
