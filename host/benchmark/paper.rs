@@ -15,7 +15,7 @@ use crate::game::scene::built_in;
 use crate::game::{Game, Options};
 use crate::graphics::Renderer;
 use crate::graphics::bodies::BodyRenderer;
-use crate::graphics::camera::Camera;
+use crate::graphics::camera::{Camera, CameraMode, DEFAULT_ZOOM};
 use crate::graphics::headless::{Headless, Target};
 use crate::graphics::unpack;
 use crate::pipeline::Profile;
@@ -24,8 +24,8 @@ use crate::play::{Pilot, PlayOptions};
 /// What the measured frames show: the whole field, as the paper's experiment drew it (and
 /// as earlier runs of this benchmark did, so that their summaries compare).
 const CAMERA: Camera = Camera {
-    mode: crate::graphics::camera::CameraMode::Field,
-    zoom: crate::graphics::camera::DEFAULT_ZOOM,
+    mode: CameraMode::Field,
+    zoom: DEFAULT_ZOOM,
 };
 
 /// The paper's Figure 8: frames per second over five minutes, on its two cards.

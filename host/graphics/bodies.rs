@@ -23,10 +23,10 @@ use glium::uniforms::{MagnifySamplerFilter, MinifySamplerFilter};
 use glium::vertex::AttributeType;
 use glium::{Depth, DepthTest, DrawParameters, Program, Rect, Surface, VertexBuffer, uniform};
 use gpuwars_kernels::render::camera::Lens;
-use gpuwars_kernels::render::radar::RadarBox;
+use gpuwars_kernels::render::radar::{RadarBox, radar_box};
 use gpuwars_kernels::render::{BodyVertex, Look, NOSE_FROM};
 
-use super::picture::{Blit, Upload};
+use super::picture::{Blit, DeviceImage, Upload};
 use super::{gl_error, program};
 use crate::backend::GlBuffer;
 use crate::game::{Game, looks};
@@ -221,7 +221,10 @@ pub struct BodyRenderer {
     fallback: Option<String>,
     /// The radar of the last update, and where it goes.
     radar: Option<RadarBox>,
-    radar_image: Upload,
+    /// On the CUDA backend, the radar written by a kernel into a GL pixel buffer: `Err`
+    /// once that failed (GL not on the NVIDIA driver), and the radar is read back.
+    radar_device: Result<Option<DeviceImage>, ()>,
+    radar_upload: Upload,
     blit: Blit,
 }
 
@@ -269,7 +272,12 @@ impl BodyRenderer {
             feed,
             fallback,
             radar: None,
-            radar_image: Upload::default(),
+            radar_device: if device.kind() == BackendKind::Cuda {
+                Ok(None)
+            } else {
+                Err(())
+            },
+            radar_upload: Upload::default(),
             blit: Blit::new(facade)?,
         })
     }
@@ -291,7 +299,7 @@ impl BodyRenderer {
 
     /// Points the camera of `lens` and writes every body's vertex in its view after the
     /// steps queued on `pipeline` (the pipeline this renderer was made for), and takes the
-    /// radar's image (a few thousand pixels, read back and uploaded).
+    /// radar's image.
     pub fn update(
         &mut self,
         facade: &impl Facade,
@@ -313,19 +321,45 @@ impl BodyRenderer {
                 self.vertices.write(&vertices);
             }
         }
-        self.radar = match pipeline.radar_image()? {
-            Some((radar, pixels)) => {
-                let image = Frame {
-                    width: radar.width,
-                    height: radar.height,
-                    pixels,
-                };
-                self.radar_image.set(facade, &image)?;
-                Some(radar)
-            }
-            None => None,
-        };
+        self.radar = (lens.radar != 0)
+            .then(|| radar_box(lens.width, lens.height, lens.field))
+            .filter(|radar| radar.width != 0);
+        if let Some(radar) = self.radar {
+            self.show_radar(facade, pipeline, radar)?;
+        }
         Ok(())
+    }
+
+    /// Takes the radar's image of the last vertices written: on the GPU into a GL pixel
+    /// buffer, without leaving it, where CUDA–GL interop works; else read back and
+    /// uploaded (a few thousand pixels).
+    fn show_radar(
+        &mut self,
+        facade: &impl Facade,
+        pipeline: &Pipeline,
+        radar: RadarBox,
+    ) -> Result<(), Error> {
+        let size = (radar.width, radar.height);
+        if let Ok(image) = &mut self.radar_device
+            && image.as_ref().is_none_or(|i| i.size() != size)
+        {
+            match DeviceImage::new(facade, pipeline.device(), size.0, size.1) {
+                Ok(made) => *image = Some(made),
+                Err(_) => self.radar_device = Err(()),
+            }
+        }
+        if let Ok(Some(image)) = &mut self.radar_device {
+            // SAFETY: the mapped buffer holds the radar's box and only this launch touches
+            // it until the unmap.
+            image.set(|pixels| unsafe { pipeline.radar_into(pixels) })?;
+            return Ok(());
+        }
+        let image = Frame {
+            width: radar.width,
+            height: radar.height,
+            pixels: pipeline.radar_image(radar)?,
+        };
+        self.radar_upload.set(facade, &image)
     }
 
     /// Draws the bodies as the last [`BodyRenderer::update`] placed them, and its radar,
@@ -364,7 +398,11 @@ impl BodyRenderer {
                 &params,
             )
             .map_err(gl_error("drawing the bodies"))?;
-        if let (Some(radar), Some(texture)) = (self.radar, self.radar_image.texture()) {
+        let texture = match &self.radar_device {
+            Ok(Some(image)) => Some(image.texture()),
+            _ => self.radar_upload.texture(),
+        };
+        if let (Some(radar), Some(texture)) = (self.radar, texture) {
             let at = (radar.left, radar.top);
             self.blit
                 .draw(target, texture, true, at, lens.height, false)?;

@@ -143,18 +143,42 @@ impl Pipeline<'_> {
         Ok(self.device.download(&self.canvas()?.shown)?[0])
     }
 
-    /// The radar's pixels of the last vertices written (see [`Pipeline::write_vertices`]),
-    /// row-major from its box's top-left corner, and where that box is in the frame; `None`
-    /// when the frame has no radar. Waits for them.
-    pub fn radar_image(&self) -> Result<Option<(RadarBox, Vec<u32>)>, Error> {
-        let shown = self.shown()?;
-        let radar = shown.radar;
-        if radar.width == 0 {
-            return Ok(None);
-        }
-        let mut pixels = self.device.download(&self.canvas()?.radar_image)?;
+    /// The radar's pixels after the last vertices written (see [`Pipeline::write_vertices`]),
+    /// row-major from the top-left corner of `radar` (the box of that frame); this clears
+    /// the radar's counts. Waits for them.
+    pub fn radar_image(&self, radar: RadarBox) -> Result<Vec<u32>, Error> {
+        let canvas = self.canvas()?;
+        // SAFETY: the canvas's radar image holds the largest radar's box, and only this
+        // launch touches it until `download` has waited for it.
+        unsafe { self.radar_into(canvas.radar_image.view()) }?;
+        let mut pixels = self.device.download(&canvas.radar_image)?;
         pixels.truncate((radar.width * radar.height) as usize);
-        Ok(Some((radar, pixels)))
+        Ok(pixels)
+    }
+
+    /// Queues the writing of the radar's pixels after the last vertices written into
+    /// `image` (row-major from its box's top-left corner), which clears the radar's counts,
+    /// without waiting.
+    ///
+    /// # Safety
+    /// `image` views memory of this pipeline's device (a GL pixel buffer mapped for CUDA, a
+    /// buffer) that holds the frame's radar box and that nothing else touches until the
+    /// launch completes.
+    pub unsafe fn radar_into(&self, image: DevSlice<u32>) -> Result<(), Error> {
+        let canvas = self.canvas()?;
+        let args = RadarImageArgs {
+            looks: canvas.looks.view(),
+            shown: canvas.shown.view(),
+            radar: canvas.radar(),
+            image,
+            stride: radar::stride(self.layout.slots),
+            reserved: 0,
+        };
+        // SAFETY: the views are this pipeline's, sized as the kernel's contract asks; the
+        // caller vouches for `image`; one thread per pixel of the largest box.
+        let ops = unsafe { vec![op(registry::RADAR_IMAGE, RADAR_BOX as u32, args, 12)] };
+        let device = self.device;
+        device.run(&device.plan(ops, false)?)
     }
 
     fn canvas(&self) -> Result<&Canvas, Error> {
@@ -327,8 +351,9 @@ impl Pipeline<'_> {
     }
 
     /// Queues, after the steps queued before and without waiting: the camera of `lens`,
-    /// every slot's vertex in its view, each kind as `looks` says, and the radar's image
-    /// (see [`Pipeline::radar_image`]).
+    /// the radar's counts, and every slot's vertex in its view, each kind as `looks` says.
+    /// The radar's pixels follow with [`Pipeline::radar_image`] or
+    /// [`Pipeline::radar_into`].
     ///
     /// # Safety
     /// `vertices` views memory of this pipeline's device (a mapped GL buffer, a buffer)
@@ -356,20 +381,8 @@ impl Pipeline<'_> {
             shown: canvas.shown.view(),
             vertices,
         };
-        let image = RadarImageArgs {
-            looks: canvas.looks.view(),
-            shown: canvas.shown.view(),
-            radar: canvas.radar(),
-            image: canvas.radar_image.view(),
-            stride: radar::stride(self.layout.slots),
-            reserved: 0,
-        };
-        // SAFETY: the body views are this pipeline's; the caller vouches for `vertices`;
-        // the radar image holds the largest radar's box.
-        unsafe {
-            ops.push(op(registry::RADAR_IMAGE, RADAR_BOX as u32, image, 12));
-            ops.push(op(registry::WRITE_VERTICES, self.layout.slots, args, 40));
-        }
+        // SAFETY: the body views are this pipeline's; the caller vouches for `vertices`.
+        unsafe { ops.push(op(registry::WRITE_VERTICES, self.layout.slots, args, 40)) };
         let device = self.device;
         device.run(&device.plan(ops, false)?)
     }
