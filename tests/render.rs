@@ -601,6 +601,7 @@ fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
 }
 
 fn silhouettes_cover_the_pixels_of_their_shapes(device: &Device) {
+    let gl = headless(device);
     let size = Vec2::splat(240.0);
     let colour = rgb(200, 100, 50);
     let centre = Vec2::new(120.3, 119.6);
@@ -618,10 +619,19 @@ fn silhouettes_cover_the_pixels_of_their_shapes(device: &Device) {
                 silhouette,
                 ..look(colour, 100)
             }];
+            let mut renderer = BodyRenderer::new(gl.facade(), &sim, &looks).unwrap();
             for heading in [0.0f32, 0.5, 2.0, 3.9] {
                 let dir = Vec2::new(heading.cos(), heading.sin());
                 sim.place(&[(0, centre, dir)]).unwrap();
                 let frame = sim.draw(&lens, &looks).unwrap();
+                // The GL renderer's shader mirrors the inside tests: at most an edge pixel
+                // or two rounds the other way.
+                let on_gl = gl.draw(&mut renderer, &mut sim, &lens).unwrap();
+                let differ = differing(&on_gl, &frame);
+                assert!(
+                    differ <= 2,
+                    "{silhouette} at {heading}: GL differs in {differ} pixels"
+                );
                 let shape = if radius < shapes::SHAPE_FROM_PX {
                     DISC
                 } else {
