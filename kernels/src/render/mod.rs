@@ -235,8 +235,16 @@ pub fn sprite(
     shown: &Shown,
     slot: u32,
 ) -> Sprite {
-    let view = &shown.view;
     let info = kinds.get(b.kind.get(slot));
+    outline(b, &info, look, shown, slot).dressed(b, &info, shown, slot)
+}
+
+/// Where and how large the body in live `slot` (of kind `info`) is drawn, from its
+/// position and kind alone: enough to skip a body off the image before reading more of
+/// it. Its facing and shade are left for [`Sprite::dressed`].
+#[inline(always)]
+fn outline(b: &Bodies, info: &KindInfo, look: &Look, shown: &Shown, slot: u32) -> Sprite {
+    let view = &shown.view;
     let reach = (info.radius * view.scale).min(MAX_RADIUS_PX);
     let (silhouette, half) = if info.shape == SHAPE_RECT {
         (
@@ -246,11 +254,6 @@ pub fn sprite(
     } else {
         (shapes::drawn(look.silhouette, reach), Vec2::splat(reach))
     };
-    let heading = if slot == shown.ship {
-        shown.ship_aim
-    } else {
-        b.dir.get(slot)
-    };
     let halo = slot == shown.ship && silhouette != DISC && silhouette != RECT;
     let bound = if halo {
         reach * HALO_TO
@@ -259,14 +262,32 @@ pub fn sprite(
     };
     Sprite {
         centre: view.to_image(b.pos.get(slot)),
-        // Image y runs down: the facing direction flips its y.
-        facing: Vec2::new(heading.x, -heading.y),
+        facing: Vec2::X,
         half,
         radius: reach,
         bound,
         silhouette,
-        shade: if is_hurt(b, &info, slot) { HURT } else { BODY },
+        shade: BODY,
         halo,
+    }
+}
+
+impl Sprite {
+    /// This outline of the body in `slot` (of kind `info`) with its facing (the ship's: its
+    /// aim) and its shade.
+    #[inline(always)]
+    fn dressed(self, b: &Bodies, info: &KindInfo, shown: &Shown, slot: u32) -> Sprite {
+        let heading = if slot == shown.ship {
+            shown.ship_aim
+        } else {
+            b.dir.get(slot)
+        };
+        Sprite {
+            // Image y runs down: the facing direction flips its y.
+            facing: Vec2::new(heading.x, -heading.y),
+            shade: if is_hurt(b, info, slot) { HURT } else { BODY },
+            ..self
+        }
     }
 }
 
@@ -325,7 +346,8 @@ pub fn splat_bodies(t: Thread, args: &SplatArgs) {
     let view = &shown.view;
     let kind = b.kind.get(slot);
     let look = args.looks.get(kind);
-    let sprite = sprite(b, &args.kinds, &look, &shown, slot);
+    let info = args.kinds.get(kind);
+    let sprite = outline(b, &info, &look, &shown, slot);
     let (centre, bound) = (sprite.centre, sprite.bound);
     let (w, h) = (view.width as f32, view.height as f32);
     // Off the image by more than its size: nothing to draw (and no huge loop bounds).
@@ -336,6 +358,7 @@ pub fn splat_bodies(t: Thread, args: &SplatArgs) {
     if !near_image {
         return;
     }
+    let sprite = sprite.dressed(b, &info, &shown, slot);
     let reach = if sprite.silhouette == RECT {
         sprite.half
     } else {
