@@ -238,7 +238,6 @@ impl Painter {
             Painter::Kernel => game.draw(width, height, camera),
             Painter::Gl(gl) => {
                 let (gl, bodies) = &mut **gl;
-                game.settle()?;
                 let lens = game.lens(camera, width, height, 0.0);
                 gl.draw(bodies, game.pipeline_mut(), &lens)
             }

@@ -277,7 +277,7 @@ impl<'d> Game<'d> {
     }
 
     /// Waits for every queued step and takes the last status.
-    pub(crate) fn settle(&mut self) -> Result<(), Error> {
+    fn settle(&mut self) -> Result<(), Error> {
         while self.next_status()?.is_some() {}
         Ok(())
     }

@@ -18,7 +18,6 @@ use anyhow::Context as _;
 use glium::{Display, Rect, Surface};
 use glutin::surface::WindowSurface;
 use gpuwars_kernels::game::control::{DESTROYED, Input, Status};
-use gpuwars_kernels::render::camera::Lens;
 use serde::Serialize;
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, WindowEvent};
@@ -266,17 +265,16 @@ struct Screen {
     window: Window,
 }
 
-/// Draws the kernel renderer's frame of `game` after the queued steps through `camera`
-/// (`lens` says its size and frame time) onto `frame`: written on the GPU into a GL pixel
-/// buffer where CUDA–GL interop works, else read back and uploaded.
+/// Draws the kernel renderer's frame of `game` after the queued steps, `width × height`,
+/// through `camera` `dt` seconds after the previous frame, onto `frame`: written on the GPU
+/// into a GL pixel buffer where CUDA–GL interop works, else read back and uploaded.
 fn show_kernel_frame(
     screen: &mut Screen,
     game: &mut Game,
     frame: &mut glium::Frame,
     camera: &Camera,
-    lens: &Lens,
+    ((width, height), dt): ((u32, u32), f32),
 ) -> anyhow::Result<()> {
-    let (width, height, dt) = (lens.width, lens.height, lens.dt);
     if let Ok(image) = &mut screen.device_image
         && image.as_ref().is_none_or(|i| i.size() != (width, height))
     {
@@ -546,12 +544,11 @@ impl<'d> App<'d> {
             .drawn_at
             .replace(now)
             .map_or(0.0, |then| (now - then).as_secs_f32());
-        let lens = self.round.game.lens(&self.camera, width, height, frame_dt);
         let mut frame = screen.display.draw();
         match &mut screen.bodies {
             None => {
-                let game = &mut self.round.game;
-                show_kernel_frame(screen, game, &mut frame, &self.camera, &lens)?;
+                let (game, at) = (&mut self.round.game, ((width, height), frame_dt));
+                show_kernel_frame(screen, game, &mut frame, &self.camera, at)?;
             }
             Some(bodies) => {
                 let fits = screen
@@ -562,6 +559,7 @@ impl<'d> App<'d> {
                     screen.target = Some(Target::new(&screen.display, width, height)?);
                 }
                 let target = screen.target.as_ref().expect("made above");
+                let lens = self.round.game.lens(&self.camera, width, height, frame_dt);
                 let mut surface = target.surface(&screen.display)?;
                 surface.clear_color_and_depth(unpack(lens.background), 0.0);
                 let pipeline = self.round.game.pipeline_mut();
