@@ -14,6 +14,7 @@ use crate::game::Options;
 use crate::game::demo::{Frames, Pilot, RunOptions};
 use crate::game::replay::MAX_STEPS;
 use crate::graphics::Renderer;
+use crate::graphics::camera::{Camera, CameraMode, DEFAULT_ZOOM, MAX_ZOOM, MIN_ZOOM};
 use crate::pipeline::draw::MAX_SIDE;
 use crate::play::Pilot as PlayPilot;
 
@@ -151,11 +152,14 @@ pub struct BenchOut {
 }
 
 /// A value parser for a number from `low` to `high`, whose errors say so.
-pub fn decimal(low: f64, high: f64) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync {
+pub fn decimal<T>(low: T, high: T) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync
+where
+    T: std::str::FromStr + PartialOrd + std::fmt::Display + Copy + Send + Sync + 'static,
+{
     move |text| {
         let allowed = format!("allowed a number from {low} to {high}");
-        match text.trim().parse::<f64>() {
-            Ok(v) if (low..=high).contains(&v) => Ok(v),
+        match text.trim().parse::<T>() {
+            Ok(v) if low <= v && v <= high => Ok(v),
             Ok(_) => Err(format!("out of range ({allowed})")),
             Err(_) => Err(format!("not a number ({allowed})")),
         }
@@ -225,12 +229,30 @@ pub struct DemoArgs {
     /// window from a CUDA–GL interop vertex buffer (an EGL device).
     #[arg(long, value_enum, default_value_t)]
     pub render: Renderer,
+    /// What the screenshot and the frames show: the ship, centred, with the radar in a
+    /// corner (follow), or the whole field (field).
+    #[arg(long, env = "GPUWARS_CAMERA", value_enum, default_value_t)]
+    pub camera: CameraMode,
+    /// How close the camera follows the ship: pixels per field unit are zoom × height /
+    /// 1080 (at least the whole field, at most 8 times zoom 1's).
+    #[arg(
+        long,
+        env = "GPUWARS_ZOOM",
+        default_value_t = DEFAULT_ZOOM,
+        value_parser = decimal(MIN_ZOOM, MAX_ZOOM)
+    )]
+    pub zoom: f32,
     /// How the game runs on its device.
     #[command(flatten)]
     pub run: RunArgs,
 }
 
 impl DemoArgs {
+    /// The camera of `--camera` and `--zoom`.
+    pub fn camera(&self) -> Camera {
+        Camera::new(self.camera, self.zoom)
+    }
+
     /// `--frames-every N DIR`, checked: N from 1, DIR an existing folder.
     pub fn frames(&self, size: (u32, u32)) -> anyhow::Result<Option<Frames>> {
         let Some([every, dir]) = self.frames_every.as_deref() else {

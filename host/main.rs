@@ -145,6 +145,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 frame: args.screenshot.as_ref().map(|_| args.size),
                 frames: args.frames(args.size)?,
                 renderer: args.render,
+                camera: args.camera(),
                 ..args.run.options()
             };
             let (report, replay) = demo::demo(&device, &scene, args.seed, args.steps, options)?;

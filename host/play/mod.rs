@@ -29,8 +29,9 @@ use crate::benchmark::paper::Seconds;
 use crate::game::demo::{Record, device_name};
 use crate::game::highscore::{self, HighScores};
 use crate::game::replay::Replay;
-use crate::game::{Game, Options, Scene, looks};
+use crate::game::{Game, Options, Scene};
 use crate::graphics::bodies::BodyRenderer;
+use crate::graphics::camera::Camera;
 use crate::graphics::headless::Target;
 use crate::graphics::hud::text_image;
 use crate::graphics::picture::{Blit, DeviceImage, Upload};
@@ -180,6 +181,8 @@ pub fn measure(
         .context("no display to open a window on (leave out --window to render offscreen)")?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App::new(device, scene, options)?;
+    // The paper's experiment draws the whole field (see `benchmark::paper`).
+    app.camera = Camera::field();
     app.bench = Some(Bench {
         seconds: Seconds::new(Instant::now()),
         duration,
@@ -263,13 +266,14 @@ struct Screen {
 }
 
 /// Draws the kernel renderer's frame of `game` after the queued steps, `width × height`,
-/// onto `frame`: written on the GPU into a GL pixel buffer where CUDA–GL interop works, else
-/// read back and uploaded.
+/// through `camera` `dt` seconds after the previous frame, onto `frame`: written on the GPU
+/// into a GL pixel buffer where CUDA–GL interop works, else read back and uploaded.
 fn show_kernel_frame(
     screen: &mut Screen,
     game: &mut Game,
     frame: &mut glium::Frame,
-    (width, height): (u32, u32),
+    camera: &Camera,
+    ((width, height), dt): ((u32, u32), f32),
 ) -> anyhow::Result<()> {
     if let Ok(image) = &mut screen.device_image
         && image.as_ref().is_none_or(|i| i.size() != (width, height))
@@ -286,13 +290,14 @@ fn show_kernel_frame(
     if let Ok(Some(image)) = &mut screen.device_image {
         // SAFETY: the mapped pixel buffer holds `width × height` pixels and only these
         // launches touch it until the unmap.
-        let texture = image.set(|pixels| unsafe { game.render_into(width, height, pixels) })?;
+        let texture =
+            image.set(|pixels| unsafe { game.render_into(width, height, camera, dt, pixels) })?;
         screen
             .blit
             .draw(frame, texture, true, (0, 0), height, false)?;
         return Ok(());
     }
-    game.render(width, height)?;
+    game.render(width, height, camera, dt)?;
     let image = game.pipeline().frame()?;
     screen.picture.set(&screen.display, &image)?;
     let texture = screen.picture.texture().expect("set above");
@@ -335,6 +340,10 @@ struct App<'d> {
     failure: Option<anyhow::Error>,
     /// The benchmark's loop, when `measure` runs the window.
     bench: Option<Bench>,
+    /// What the frames show.
+    camera: Camera,
+    /// When the last frame was drawn: the camera glides by the time since.
+    drawn_at: Option<Instant>,
 }
 
 impl<'d> App<'d> {
@@ -372,6 +381,8 @@ impl<'d> App<'d> {
             renderer: String::new(),
             failure: None,
             bench: None,
+            camera: Camera::default(),
+            drawn_at: None,
         })
     }
 
@@ -528,11 +539,16 @@ impl<'d> App<'d> {
         }
         let device = self.device;
         let start = timed.then(|| device.mark()).transpose()?;
-        let view = looks::whole_field(&self.scene, width, height);
+        let now = Instant::now();
+        let frame_dt = self
+            .drawn_at
+            .replace(now)
+            .map_or(0.0, |then| (now - then).as_secs_f32());
         let mut frame = screen.display.draw();
         match &mut screen.bodies {
             None => {
-                show_kernel_frame(screen, &mut self.round.game, &mut frame, (width, height))?;
+                let (game, at) = (&mut self.round.game, ((width, height), frame_dt));
+                show_kernel_frame(screen, game, &mut frame, &self.camera, at)?;
             }
             Some(bodies) => {
                 let fits = screen
@@ -543,10 +559,12 @@ impl<'d> App<'d> {
                     screen.target = Some(Target::new(&screen.display, width, height)?);
                 }
                 let target = screen.target.as_ref().expect("made above");
+                let lens = self.round.game.lens(&self.camera, width, height, frame_dt);
                 let mut surface = target.surface(&screen.display)?;
-                surface.clear_color_and_depth(unpack(view.background), 0.0);
-                bodies.update(self.round.game.pipeline())?;
-                bodies.draw(&mut surface, &view)?;
+                surface.clear_color_and_depth(unpack(lens.background), 0.0);
+                let pipeline = self.round.game.pipeline_mut();
+                bodies.update(&screen.display, pipeline, &lens)?;
+                bodies.draw(&mut surface, &lens)?;
                 screen
                     .blit
                     .draw(&mut frame, target.colour(), false, (0, 0), height, false)?;

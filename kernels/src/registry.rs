@@ -6,7 +6,7 @@
 
 use crate::game::{ai, autopilot, effects, master};
 use crate::primitives::{histogram, scan, sort};
-use crate::render;
+use crate::render::{self, camera, radar};
 use crate::rng::streams;
 use crate::sim::{broad, free_list, integrate, narrow, scatter};
 use crate::{Kernel, KernelInfo};
@@ -86,6 +86,12 @@ kernels! {
     THINK = think(ai::ThinkArgs) => ai::think;
     /// Sets up every slot's generator from its seed and the parameter table.
     SEED_STREAMS = seed_streams(streams::SeedArgs) => streams::seed_streams;
+    /// Points the camera: the frame's view from the ship's position (one thread).
+    CAMERA = camera(camera::CameraArgs) => camera::camera;
+    /// Counts sampled bodies per radar pixel (atomic adds and maxima: order-free).
+    RADAR_BODIES = radar_bodies(radar::RadarArgs) => radar::radar_bodies;
+    /// Writes the radar's pixels into an image of their own, and clears its counts.
+    RADAR_IMAGE = radar_image(radar::RadarImageArgs) => radar::radar_image;
     /// Draws every live body's shape into the pixel keys (atomic maximum: order-free).
     SPLAT_BODIES = splat_bodies(render::SplatArgs) => render::splat_bodies;
     /// Turns each pixel's key into its colour and clears the key.
