@@ -25,7 +25,6 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::PhysicalKey;
 use winit::window::{Fullscreen, Window, WindowId};
 
-use crate::benchmark::paper::Seconds;
 use crate::game::demo::{Record, device_name};
 use crate::game::highscore::{self, HighScores};
 use crate::game::replay::Replay;
@@ -35,6 +34,7 @@ use crate::graphics::headless::Target;
 use crate::graphics::hud::text_image;
 use crate::graphics::picture::{Blit, DeviceImage, Upload};
 use crate::graphics::{Renderer, unpack};
+use crate::meter::Seconds;
 use crate::pipeline::Profile;
 use crate::sound::Sound;
 use crate::{BackendKind, Device};
