@@ -1,26 +1,32 @@
 //! `gpuwars play`: the game in a window. A fixed-step loop submits the steps that real time
-//! has made due, each with the keyboard's input of the moment, draws the world with the
-//! renderer asked for, and puts the HUD, the help and the game-over banner over it; sound
-//! effects follow each step's events.
+//! has made due, each with the input of the moment (keyboard, mouse and gamepad merged by
+//! [`controls::Controls`]), draws the world with the renderer asked for, and puts the HUD,
+//! the start screen, the help and the game-over banner over it; sound effects follow each
+//! step's events. The game waits for a first key, click or button, and pauses while the help
+//! shows or the window is left.
 //!
 //! A slow frame never changes the outcome: the simulation's dt is the scene's, and a frame
 //! that falls behind plays its due steps late (at most [`MAX_CATCH_UP`] per frame, after
 //! which the game slows down rather than skipping). The inputs of every step are recorded,
-//! so `--record` writes a replay that `gpuwars replay` plays headless to the same state.
+//! so `--record` writes a replay that `gpuwars replay` plays headless to the same state, and
+//! [`watch`] plays in the same window loop (`gpuwars replay --window`).
 
+pub mod controls;
+mod gamepad;
 pub mod keys;
 mod window;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use anyhow::Context as _;
+use anyhow::{Context as _, anyhow, bail};
+use glam::Vec2;
 use glium::{Display, Rect, Surface};
 use glutin::surface::WindowSurface;
 use gpuwars_kernels::game::control::{DESTROYED, Input, Status};
 use serde::Serialize;
 use winit::application::ApplicationHandler;
-use winit::event::{ElementState, WindowEvent};
+use winit::event::{ElementState, MouseButton, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::PhysicalKey;
 use winit::window::{Fullscreen, Window, WindowId};
@@ -38,9 +44,12 @@ use crate::meter::Seconds;
 use crate::pipeline::Profile;
 use crate::sound::Sound;
 use crate::{BackendKind, Device};
-use keys::{Action, HELP, Held};
+use controls::Controls;
+use gamepad::Gamepads;
+use keys::{Action, HELP, REPLAY_HELP};
 
-/// The most steps one frame plays; beyond it the game slows down instead.
+/// The most steps one frame plays (times a replay's speed); beyond it the game slows down
+/// instead.
 pub const MAX_CATCH_UP: u64 = 8;
 /// How often the HUD's figures are redrawn.
 const HUD_EVERY: Duration = Duration::from_millis(250);
@@ -117,6 +126,9 @@ pub struct PlayReport {
     pub frames: u64,
     /// Frames per second over the session.
     pub frame_rate: f64,
+    /// For a replay: whether its end state matched the recording, or where it stopped.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub replay: Option<String>,
 }
 
 impl PlayReport {
@@ -145,7 +157,9 @@ impl PlayReport {
                 format!("{} ({:.1} per second)", self.frames, self.frame_rate),
             ),
         ];
-        rows.iter().map(|(k, v)| format!("{k:<18}{v}\n")).collect()
+        let replay = self.replay.iter().map(|r| ("replay:", r.clone()));
+        let rows = rows.into_iter().chain(replay);
+        rows.map(|(k, v)| format!("{k:<18}{v}\n")).collect()
     }
 }
 
@@ -162,7 +176,47 @@ pub fn play(device: &Device, scene: &Scene, options: PlayOptions) -> anyhow::Res
     let event_loop = EventLoop::new()
         .context("no display to open a window on (`gpuwars demo` plays without one)")?;
     event_loop.set_control_flow(ControlFlow::Poll);
-    let mut app = App::new(device, scene, options)?;
+    let mut app = App::new(device, scene, options, None)?;
+    event_loop.run_app(&mut app).context("running the window")?;
+    app.finish()
+}
+
+/// Plays `replay` (read from `file`, its scene already read from it) in a window, with
+/// pause, single steps and speeds, until Esc or the window is closed; at its end, checks the
+/// state against the recording's hash (a mismatch is an error). `options.seed` is ignored
+/// for the replay's own.
+pub fn watch(
+    device: &Device,
+    scene: &Scene,
+    replay: Replay,
+    file: &Path,
+    options: PlayOptions,
+) -> anyhow::Result<PlayReport> {
+    let headless = format!(
+        "`gpuwars replay {}` (without --window) checks it headless",
+        file.display()
+    );
+    if !display_present() {
+        bail!(
+            "no display to open a window on (neither DISPLAY nor WAYLAND_DISPLAY is set): {headless}"
+        );
+    }
+    let event_loop = EventLoop::new()
+        .map_err(|e| anyhow!("no display to open a window on ({e}): {headless}"))?;
+    event_loop.set_control_flow(ControlFlow::Poll);
+    let options = PlayOptions {
+        seed: replay.seed,
+        record: None,
+        ..options
+    };
+    let watch = Watch {
+        replay,
+        file: file.display().to_string(),
+        speed: 1,
+        single: 0,
+        checked: false,
+    };
+    let mut app = App::new(device, scene, options, Some(watch))?;
     event_loop.run_app(&mut app).context("running the window")?;
     app.finish()
 }
@@ -179,7 +233,8 @@ pub fn measure(
     let event_loop = EventLoop::new()
         .context("no display to open a window on (leave out --window to render offscreen)")?;
     event_loop.set_control_flow(ControlFlow::Poll);
-    let mut app = App::new(device, scene, options)?;
+    let mut app = App::new(device, scene, options, None)?;
+    app.begun = true;
     app.bench = Some(Bench {
         seconds: Seconds::new(Instant::now()),
         duration,
@@ -202,14 +257,16 @@ struct Bench {
     until: Option<Instant>,
 }
 
-/// Game time: runs while the game is neither paused nor over, and tells how many steps are
-/// due.
+/// Game time: runs while the game is neither paused nor over, `rate` times as fast as real
+/// time, and tells how many steps are due.
 struct Clock {
     dt: f64,
     /// Game time banked before `since`.
     banked: f64,
     /// When it last started running, if it runs.
     since: Option<Instant>,
+    /// Game seconds per real second.
+    rate: u32,
 }
 
 impl Clock {
@@ -218,6 +275,7 @@ impl Clock {
             dt: f64::from(dt),
             banked: 0.0,
             since: None,
+            rate: 1,
         }
     }
 
@@ -225,23 +283,52 @@ impl Clock {
         match (running, self.since) {
             (true, None) => self.since = Some(now),
             (false, Some(since)) => {
-                self.banked += (now - since).as_secs_f64();
+                self.banked += (now - since).as_secs_f64() * f64::from(self.rate);
                 self.since = None;
             }
             _ => {}
         }
     }
 
-    /// Steps due at `now` when `played` have been played; the time of the steps beyond
-    /// [`MAX_CATCH_UP`] is given up (the game slows down, it does not skip).
-    fn due(&mut self, played: u64, now: Instant) -> u64 {
-        let elapsed = self.banked + self.since.map_or(0.0, |s| (now - s).as_secs_f64());
-        let due = ((elapsed / self.dt) as u64).saturating_sub(played);
-        if due > MAX_CATCH_UP {
-            self.banked -= (due - MAX_CATCH_UP) as f64 * self.dt;
-        }
-        due.min(MAX_CATCH_UP)
+    /// Runs `rate` times as fast as real time from `now` on.
+    fn set_rate(&mut self, rate: u32, now: Instant) {
+        let running = self.since.is_some();
+        self.run(false, now);
+        self.rate = rate;
+        self.run(running, now);
     }
+
+    /// Counts one step played out of time (a single step while paused), so that the steps
+    /// due later do not wait for it.
+    fn bank_step(&mut self) {
+        self.banked += self.dt;
+    }
+
+    /// Steps due at `now` when `played` have been played; the time of the steps beyond
+    /// [`MAX_CATCH_UP`] (times the rate) is given up (the game slows down, it does not skip).
+    fn due(&mut self, played: u64, now: Instant) -> u64 {
+        let rate = f64::from(self.rate);
+        let elapsed = self.banked + self.since.map_or(0.0, |s| (now - s).as_secs_f64() * rate);
+        let due = ((elapsed / self.dt) as u64).saturating_sub(played);
+        let most = MAX_CATCH_UP * u64::from(self.rate);
+        if due > most {
+            self.banked -= (due - most) as f64 * self.dt;
+        }
+        due.min(most)
+    }
+}
+
+/// A replay playing in the window: the pilot is the recording.
+struct Watch {
+    replay: Replay,
+    /// The file it came from, for messages.
+    file: String,
+    /// Times real time.
+    speed: u32,
+    /// Steps asked for one at a time while paused, not yet played.
+    single: u64,
+    /// The end state has been checked against the recording.
+    checked: bool,
 }
 
 /// The window and what draws into it.
@@ -317,8 +404,13 @@ struct App<'d> {
     options: PlayOptions,
     screen: Option<Screen>,
     round: Round<'d>,
-    held: Held,
-    last_aim: u32,
+    controls: Controls,
+    /// The gamepads, when a player flies the ship.
+    gamepads: Option<Gamepads>,
+    /// A replay playing instead of a game.
+    watch: Option<Watch>,
+    /// The first key, click or button has come (the start screen is gone).
+    begun: bool,
     paused: bool,
     help: bool,
     sound: Sound,
@@ -338,7 +430,12 @@ struct App<'d> {
 }
 
 impl<'d> App<'d> {
-    fn new(device: &'d Device, scene: &Scene, options: PlayOptions) -> anyhow::Result<Self> {
+    fn new(
+        device: &'d Device,
+        scene: &Scene,
+        options: PlayOptions,
+        watch: Option<Watch>,
+    ) -> anyhow::Result<Self> {
         let round = Round::new(device, scene, &options)?;
         let scores = match highscore::default_path() {
             Some(path) => {
@@ -356,11 +453,13 @@ impl<'d> App<'d> {
             scene: scene.clone(),
             sound: Sound::open(options.muted),
             scores,
-            options,
             screen: None,
             round,
-            held: Held::default(),
-            last_aim: 0,
+            controls: Controls::new(),
+            gamepads: (options.pilot == Pilot::Human && watch.is_none()).then(Gamepads::open),
+            // A replay plays at once: nobody is there to start it.
+            begun: watch.is_some(),
+            watch,
             paused: false,
             help: false,
             flash: 0,
@@ -372,6 +471,7 @@ impl<'d> App<'d> {
             renderer: String::new(),
             failure: None,
             bench: None,
+            options,
         })
     }
 
@@ -421,28 +521,58 @@ impl<'d> App<'d> {
         Ok(())
     }
 
-    /// The input of the next step, by the pilot.
+    /// The input of the next step, by the pilot (or the recording).
     fn input(&mut self) -> Option<Input> {
+        if let Some(watch) = &self.watch {
+            return Some(watch.replay.inputs[self.round.submitted as usize]);
+        }
         match self.options.pilot {
             Pilot::Human => {
-                let input = self.held.input(self.last_aim);
-                self.last_aim = input.aim;
-                Some(input)
+                let size = self.screen.as_ref().map(|s| s.window.inner_size().into());
+                let ship = size.map_or(Vec2::ZERO, |size| {
+                    ship_on_screen(&self.scene, &self.round.record.last, size)
+                });
+                Some(self.controls.input(ship))
             }
             Pilot::Auto => None,
             Pilot::None => Some(Input::default()),
         }
     }
 
+    /// Whether game time runs: the game has started and is neither paused, nor behind the
+    /// help, nor over; a replay has steps left.
+    fn running(&self) -> bool {
+        self.begun && !self.paused && !self.help && !self.round.record.over && !self.at_end()
+    }
+
+    /// Whether a replay has submitted its every step.
+    fn at_end(&self) -> bool {
+        self.watch
+            .as_ref()
+            .is_some_and(|w| self.round.submitted >= w.replay.inputs.len() as u64)
+    }
+
+    /// Leaves the start screen; returns whether this call did.
+    fn begin(&mut self) -> bool {
+        !std::mem::replace(&mut self.begun, true)
+    }
+
     /// Plays the due steps (the benchmark's one step, profiled when `profiled`) and takes
     /// the statuses that came back; returns the profile of a profiled step.
     fn advance(&mut self, now: Instant, profiled: bool) -> anyhow::Result<Option<Profile>> {
-        let running = !self.paused && !self.round.record.over;
+        let running = self.running();
         self.round.clock.run(running, now);
         let due = match (running, &self.bench) {
             (false, _) => 0,
             (true, Some(_)) => 1,
             (true, None) => self.round.clock.due(self.round.submitted, now),
+        };
+        let due = match &mut self.watch {
+            Some(watch) => {
+                let left = watch.replay.inputs.len() as u64 - self.round.submitted;
+                (due + std::mem::take(&mut watch.single)).min(left)
+            }
+            None => due,
         };
         let mut profile = None;
         for _ in 0..due {
@@ -460,11 +590,50 @@ impl<'d> App<'d> {
         while let Some(status) = self.round.game.ready_status() {
             self.take(status);
         }
+        if self.at_end() || (self.watch.is_some() && self.round.record.over) {
+            self.check_replay()?;
+        }
         Ok(profile)
+    }
+
+    /// At a replay's end (once): every status taken, the state's hash compared with the
+    /// recording's; a mismatch is an error.
+    fn check_replay(&mut self) -> anyhow::Result<()> {
+        let Some(watch) = self.watch.as_mut().filter(|w| !w.checked) else {
+            return Ok(());
+        };
+        watch.checked = true;
+        while let Some(status) = self.round.game.next_status()? {
+            self.take(status);
+        }
+        let hash = self.round.game.state_hash()?;
+        let watch = self.watch.as_ref().expect("checked above");
+        let recorded = watch.replay.state_hash;
+        if hash != recorded {
+            bail!(
+                "{}: the replay ended in state {hash:#018x} but was recorded ending in {recorded:#018x}",
+                watch.file
+            );
+        }
+        eprintln!(
+            "gpuwars: the replay ended after {} steps in the recorded state {hash:#018x}",
+            self.round.submitted
+        );
+        self.hud_at = None;
+        Ok(())
     }
 
     /// One frame: the due steps, then the drawing; in the benchmark's loop, counted.
     fn frame(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
+        if let Some(gamepads) = &mut self.gamepads {
+            for action in gamepads.poll(&mut self.controls) {
+                if !self.begin()
+                    && let Some(action) = action
+                {
+                    self.act(action, event_loop)?;
+                }
+            }
+        }
         let now = Instant::now();
         let sample = self
             .bench
@@ -619,12 +788,32 @@ impl<'d> App<'d> {
                 .blit
                 .draw(frame, texture, true, (8, 8), height, true)?;
         }
-        let overlay: Option<Vec<String>> = if self.help {
-            Some(HELP.iter().map(|l| l.to_string()).collect())
-        } else if self.round.record.over {
+        let help: &[&str] = match self.watch {
+            Some(_) => &REPLAY_HELP,
+            None => &HELP,
+        };
+        let overlay: Option<Vec<String>> = if !self.begun {
+            let mut lines = vec![
+                format!("GpuWars: {}", self.scene.name),
+                "press a key, click, or press a gamepad button to start".into(),
+                String::new(),
+            ];
+            lines.extend(help.iter().map(|l| l.to_string()));
+            Some(lines)
+        } else if self.help {
+            Some(help.iter().map(|l| l.to_string()).collect())
+        } else if let Some(watch) = self.watch.as_ref().filter(|w| w.checked) {
+            Some(vec![
+                "end of the replay: the state matches the recording".into(),
+                format!("{:#018x}", watch.replay.state_hash),
+                "Esc quit".into(),
+            ])
+        } else if self.round.record.over && self.watch.is_none() {
             Some(game_over_lines(self))
+        } else if self.paused && self.watch.is_some() {
+            Some(vec!["paused: P or Space to go on, . or N one step".into()])
         } else if self.paused {
-            Some(vec!["paused: P to go on".into()])
+            Some(vec!["paused: P, Space or Start to go on".into()])
         } else {
             None
         };
@@ -652,11 +841,23 @@ impl<'d> App<'d> {
     fn act(&mut self, action: Action, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
         match action {
             Action::Pause => self.paused = !self.paused,
+            Action::Step => {
+                if let Some(watch) = self.watch.as_mut().filter(|_| self.paused) {
+                    watch.single += 1;
+                    self.round.clock.bank_step();
+                }
+            }
+            Action::Speed(speed) => {
+                if let Some(watch) = &mut self.watch {
+                    watch.speed = speed;
+                    self.round.clock.set_rate(speed, Instant::now());
+                }
+            }
             Action::Mute => {
                 self.sound.toggle_muted();
             }
             Action::Help => self.help = !self.help,
-            Action::Restart if self.round.record.over => {
+            Action::Restart if self.round.record.over && self.watch.is_none() => {
                 self.round = Round::new(self.device, &self.scene, &self.options)?;
                 self.hud_at = None;
             }
@@ -691,7 +892,12 @@ impl<'d> App<'d> {
         while let Some(status) = self.round.game.next_status()? {
             self.take(status);
         }
-        self.keep_score();
+        if self.at_end() {
+            self.check_replay()?;
+        }
+        if self.watch.is_none() {
+            self.keep_score();
+        }
         let hash = self.round.game.state_hash()?;
         let record = &self.round.record;
         let status = record.last;
@@ -723,6 +929,14 @@ impl<'d> App<'d> {
             game_over: status.is_over(),
             frames: self.frames,
             frame_rate: self.frames as f64 / seconds,
+            replay: self.watch.as_ref().map(|w| match w.checked {
+                true => "the end state matches the recording".into(),
+                false => format!(
+                    "stopped at step {} of {}: the end state was not checked",
+                    played,
+                    w.replay.inputs.len()
+                ),
+            }),
         })
     }
 }
@@ -748,6 +962,16 @@ impl<'d> Round<'d> {
     }
 }
 
+/// Where the ship of `status` is in a `width × height` window, in pixels (x right, y down):
+/// the mouse aims from there. Before the first status, where it is born: the world's middle.
+fn ship_on_screen(scene: &Scene, status: &Status, (width, height): (u32, u32)) -> Vec2 {
+    let ship = match status.step {
+        0 => scene.world.size * 0.5,
+        _ => status.ship,
+    };
+    looks::whole_field(scene, width, height).to_image(ship)
+}
+
 /// The HUD's lines.
 fn hud_lines(app: &App, status: &Status) -> Vec<String> {
     let best = best_score(app).max(status.score);
@@ -762,28 +986,40 @@ fn hud_lines(app: &App, status: &Status) -> Vec<String> {
         flags.push("muted");
     }
     flags.push("F1 help");
-    vec![
-        format!("score {}   best {best}", status.score),
+    let replay = app.watch.as_ref().map(|w| {
         format!(
-            "FPS meter {:.1} (over below {})",
-            status.fps_meter, app.scene.game.fps.min
-        ),
-        format!("frame rate {frame_rate:.0}/s   steps {step_rate:.0}/s"),
-        format!(
-            "enemies {} alive, {} processed",
-            status.enemies_alive, status.enemies_killed
-        ),
-        format!(
-            "game time {:.1} s",
-            f64::from(status.step) * f64::from(app.scene.world.dt)
-        ),
-        format!("{}: {}", app.device.kind(), device_name(app.device)),
-        format!(
-            "{} renderer   {}",
-            app.options.renderer.name(),
-            flags.join("   ")
-        ),
-    ]
+            "REPLAY of {}   step {} of {}   speed x{}",
+            w.file,
+            app.round.submitted,
+            w.replay.inputs.len(),
+            w.speed
+        )
+    });
+    replay
+        .into_iter()
+        .chain([
+            format!("score {}   best {best}", status.score),
+            format!(
+                "FPS meter {:.1} (over below {})",
+                status.fps_meter, app.scene.game.fps.min
+            ),
+            format!("frame rate {frame_rate:.0}/s   steps {step_rate:.0}/s"),
+            format!(
+                "enemies {} alive, {} processed",
+                status.enemies_alive, status.enemies_killed
+            ),
+            format!(
+                "game time {:.1} s",
+                f64::from(status.step) * f64::from(app.scene.world.dt)
+            ),
+            format!("{}: {}", app.device.kind(), device_name(app.device)),
+            format!(
+                "{} renderer   {}",
+                app.options.renderer.name(),
+                flags.join("   ")
+            ),
+        ])
+        .collect()
 }
 
 /// The scene's high score (0 when none is kept).
@@ -831,7 +1067,29 @@ impl ApplicationHandler for App<'_> {
                 Ok(())
             }
             WindowEvent::Focused(false) => {
-                self.held.release_all();
+                // The releases go to another window; a game in play waits for the player.
+                self.controls.release_all();
+                if self.watch.is_none() && self.begun && !self.round.record.over {
+                    self.paused = true;
+                    self.hud_at = None;
+                }
+                Ok(())
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                self.controls
+                    .cursor(Vec2::new(position.x as f32, position.y as f32));
+                Ok(())
+            }
+            WindowEvent::MouseInput {
+                state,
+                button: MouseButton::Left,
+                ..
+            } => {
+                let down = state == ElementState::Pressed;
+                if down {
+                    self.begin();
+                }
+                self.controls.click(down);
                 Ok(())
             }
             WindowEvent::KeyboardInput { event, .. } => {
@@ -839,12 +1097,19 @@ impl ApplicationHandler for App<'_> {
                     return;
                 };
                 let pressed = event.state == ElementState::Pressed;
-                if self.held.set(key, pressed) || !pressed || event.repeat {
-                    Ok(())
-                } else if let Some(action) = Action::of(key) {
-                    self.act(action, event_loop)
-                } else {
-                    Ok(())
+                // The key that starts the game does nothing else, but Esc still quits.
+                let starting = pressed && !event.repeat && self.begin();
+                let moving = self.controls.key(key, pressed);
+                match Action::of(key) {
+                    Some(action)
+                        if pressed
+                            && !event.repeat
+                            && !moving
+                            && (!starting || action == Action::Quit) =>
+                    {
+                        self.act(action, event_loop)
+                    }
+                    _ => Ok(()),
                 }
             }
             WindowEvent::RedrawRequested => self.frame(event_loop),
