@@ -671,9 +671,9 @@ impl<'d> App<'d> {
     }
 
     /// Records the game's score as the scene's best if it is, once per game: at game over,
-    /// or when the window closes mid-game.
+    /// or when the window closes mid-game. A replay's is not the player's.
     fn keep_score(&mut self) {
-        if std::mem::replace(&mut self.round.scored, true) {
+        if std::mem::replace(&mut self.round.scored, true) || self.watch.is_some() {
             return;
         }
         let score = self.round.record.last.score;
@@ -895,9 +895,7 @@ impl<'d> App<'d> {
         if self.at_end() {
             self.check_replay()?;
         }
-        if self.watch.is_none() {
-            self.keep_score();
-        }
+        self.keep_score();
         let hash = self.round.game.state_hash()?;
         let record = &self.round.record;
         let status = record.last;
@@ -1097,16 +1095,14 @@ impl ApplicationHandler for App<'_> {
                     return;
                 };
                 let pressed = event.state == ElementState::Pressed;
-                // The key that starts the game does nothing else, but Esc still quits.
-                let starting = pressed && !event.repeat && self.begin();
+                let action = Action::of(key);
+                // Esc quits from the start screen without starting; the key that starts the
+                // game does nothing else (but move or aim).
+                let quit = action == Some(Action::Quit);
+                let starting = pressed && !event.repeat && !quit && self.begin();
                 let moving = self.controls.key(key, pressed);
-                match Action::of(key) {
-                    Some(action)
-                        if pressed
-                            && !event.repeat
-                            && !moving
-                            && (!starting || action == Action::Quit) =>
-                    {
+                match action {
+                    Some(action) if pressed && !event.repeat && !moving && !starting => {
                         self.act(action, event_loop)
                     }
                     _ => Ok(()),
