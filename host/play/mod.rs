@@ -1122,3 +1122,47 @@ impl ApplicationHandler for App<'_> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A clock of 10 ms steps, started at `t0`.
+    fn running(t0: Instant) -> Clock {
+        let mut clock = Clock::new(0.01);
+        clock.run(true, t0);
+        clock
+    }
+
+    #[test]
+    fn a_faster_clock_makes_steps_due_faster_from_the_change_on() {
+        let t0 = Instant::now();
+        let ms = Duration::from_millis;
+        let mut clock = running(t0);
+        assert_eq!(clock.due(0, t0 + ms(45)), 4);
+        // Four times real time from 50 ms on: 50 ms at x1 and 10 ms at x4 make 9 steps of
+        // game time, 4 of them played.
+        clock.set_rate(4, t0 + ms(50));
+        assert_eq!(clock.due(4, t0 + ms(60)), 5);
+        // Catching up is capped at MAX_CATCH_UP times the rate, the rest given up.
+        assert_eq!(clock.due(9, t0 + ms(1050)), MAX_CATCH_UP * 4);
+        assert_eq!(clock.due(9 + MAX_CATCH_UP * 4, t0 + ms(1050)), 0);
+    }
+
+    #[test]
+    fn single_steps_while_paused_do_not_delay_the_steps_after() {
+        let t0 = Instant::now();
+        let ms = Duration::from_millis;
+        let mut clock = running(t0);
+        assert_eq!(clock.due(0, t0 + ms(30)), 3);
+        clock.run(false, t0 + ms(30));
+        // Paused for a second: nothing due; three single steps are banked.
+        assert_eq!(clock.due(3, t0 + ms(1030)), 0);
+        for _ in 0..3 {
+            clock.bank_step();
+        }
+        clock.run(true, t0 + ms(1030));
+        // 10 ms after going on: one step due after the six played.
+        assert_eq!(clock.due(6, t0 + ms(1040)), 1);
+    }
+}
