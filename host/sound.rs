@@ -277,13 +277,6 @@ impl Sound {
         }
     }
 
-    /// Plays one effect now, unless it started less than [`MIN_GAP`] ago.
-    pub fn cue(&mut self, effect: Effect) {
-        if self.cues.allow(effect, Instant::now()) {
-            self.start(effect);
-        }
-    }
-
     /// Mutes (pausing the music) or unmutes (resuming it where it paused).
     pub fn set_muted(&mut self, muted: bool) {
         self.muted = muted;
