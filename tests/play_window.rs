@@ -297,3 +297,38 @@ fn a_replay_plays_in_the_window_to_its_checked_end() {
         "{stderr}"
     );
 }
+
+#[test]
+fn leaving_the_window_pauses_the_game_until_p() {
+    let _one = ONE_WINDOW.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tempfile::tempdir().unwrap();
+    // D starts the game and moves right; the window is left (unmapped, so it loses the
+    // focus) and shown again; W is held while paused, then P goes on and ← aims left.
+    let keys = "
+xdotool keydown d
+sleep 2
+xdotool keyup d
+xdotool windowunmap --sync \"$win\"
+sleep 1
+xdotool windowmap --sync \"$win\"
+xdotool windowfocus --sync \"$win\"
+xdotool keydown w
+sleep 2
+xdotool keyup w key p keydown Left
+sleep 2
+xdotool keyup Left key Escape";
+    let out = in_xvfb(dir.path(), &play_script(keys), &[]);
+    succeeded(dir.path(), &out);
+    let replay = Replay::load(&dir.path().join("played.json")).unwrap();
+    let inputs = &replay.inputs;
+    let right = inputs.iter().filter(|i| i.move_x == MOVE_SCALE).count();
+    let left = inputs
+        .iter()
+        .filter(|i| i.aim == AIM_STEPS / 2 && i.fire == 1)
+        .count();
+    assert!(right > 10 && left > 10, "D for {right} steps, ← for {left}");
+    assert!(
+        inputs.iter().all(|i| i.move_y == 0),
+        "W was held while paused, yet steps played"
+    );
+}
