@@ -1,5 +1,6 @@
 //! The keyboard, as in the paper: one set of keys moves the ship (WASD), another aims its
-//! shots (the arrow keys, eight directions, firing while held).
+//! shots (the arrow keys, eight directions, firing while held); what the other keys and the
+//! gamepad's buttons do; the help's lines.
 
 use glam::Vec2;
 use winit::keyboard::KeyCode;
