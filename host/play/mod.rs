@@ -552,6 +552,12 @@ impl<'d> App<'d> {
             .is_some_and(|w| self.round.submitted >= w.replay.inputs.len() as u64)
     }
 
+    /// Whether a person flies the ship (not the autopilot, nobody, a recording or the
+    /// benchmark).
+    fn player(&self) -> bool {
+        self.options.pilot == Pilot::Human && self.watch.is_none() && self.bench.is_none()
+    }
+
     /// Leaves the start screen; returns whether this call did.
     fn begin(&mut self) -> bool {
         !std::mem::replace(&mut self.begun, true)
@@ -1065,9 +1071,9 @@ impl ApplicationHandler for App<'_> {
                 Ok(())
             }
             WindowEvent::Focused(false) => {
-                // The releases go to another window; a game in play waits for the player.
+                // The releases go to another window; a game in play waits for its player.
                 self.controls.release_all();
-                if self.watch.is_none() && self.begun && !self.round.record.over {
+                if self.player() && self.begun && !self.round.record.over {
                     self.paused = true;
                     self.hud_at = None;
                 }
