@@ -1045,7 +1045,7 @@ fn game_over_lines(app: &App) -> Vec<String> {
         "GAME OVER".into(),
         why.into(),
         format!("score {}   best {best}", status.score),
-        "R new game   Esc quit".into(),
+        "R (A on a gamepad) new game   Esc quit".into(),
     ]
 }
 
