@@ -53,7 +53,10 @@ pub enum Command {
     Scenes,
     /// The autopilot plays a scene without a window and prints its figures (the default).
     Demo(DemoArgs),
-    /// Plays a scene in a window, at the keyboard (the default when a display is present).
+    /// Plays a scene in a window with the keyboard, the mouse or a gamepad (the default when
+    /// a display is present). WASD, the left stick or the D-pad move; the arrow keys, the
+    /// mouse (left button fires) or the right stick aim and fire; P, Space or Start pause;
+    /// F1 shows every key. The game starts at the first key, click or button.
     Play(PlayArgs),
     /// Measures: the paper's experiment, how the game scales, and the change between runs.
     Bench {
@@ -77,13 +80,26 @@ pub enum Command {
         #[command(flatten)]
         out: BenchOut,
     },
-    /// Plays a recorded game again and checks that it ends in the recorded state.
+    /// Plays a recorded game again and checks that it ends in the recorded state: headless,
+    /// or in a window to watch (Space or P pauses, `.` or N steps, 1 2 3 4 set the speed).
     Replay {
-        /// The replay file (written by `demo --record`).
+        /// The replay file (written by `demo --record` or `play --record`).
         file: PathBuf,
         /// Print JSON instead of text.
         #[arg(long)]
         json: bool,
+        /// Watch it in a window; the end state is checked when it reaches its end.
+        #[arg(long)]
+        window: bool,
+        /// With --window: which renderer draws the world.
+        #[arg(long, value_enum, default_value_t, requires = "window")]
+        render: Renderer,
+        /// With --window: the window's size, WIDTHxHEIGHT in pixels.
+        #[arg(long, default_value = "1280x720", value_parser = parse_size, requires = "window")]
+        size: (u32, u32),
+        /// With --window: start with the sound off (M toggles it).
+        #[arg(long, requires = "window")]
+        mute: bool,
         /// How the game runs on its device.
         #[command(flatten)]
         run: RunArgs,
@@ -282,7 +298,7 @@ pub struct PlayArgs {
     /// Seed of the random number generators.
     #[arg(long, default_value_t = 1, value_parser = whole(0, u32::MAX))]
     pub seed: u32,
-    /// Who flies the ship: you (WASD moves, the arrow keys fire), the autopilot, or nobody.
+    /// Who flies the ship: you (keyboard, mouse or gamepad), the autopilot, or nobody.
     #[arg(long, value_enum, default_value_t)]
     pub pilot: PlayPilot,
     /// Start with the sound off (M toggles it).

@@ -330,6 +330,24 @@ fn a_recorded_demo_replays_to_the_same_hash_and_a_tampered_one_fails() {
         "{stderr}"
     );
 
+    // Watching needs a display; without one, the error says how to check it headless.
+    let out = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
+        .args(["--backend", "cpu", "replay", path, "--window"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("no display")
+            && stderr.contains(&format!("`gpuwars replay {path}` (without --window)")),
+        "{stderr}"
+    );
+    // The window's options need --window.
+    let out = gpuwars(&["replay", path, "--render", "interop"]);
+    assert_eq!(out.status.code(), Some(2));
+
     std::fs::write(&file, &text[..text.len() / 2]).unwrap();
     let out = gpuwars(&["replay", path, "--backend", "cpu"]);
     assert_eq!(out.status.code(), Some(1));

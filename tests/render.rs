@@ -722,29 +722,6 @@ fn a_followed_1080p_frame_of_paper_shows_a_large_ship_and_a_full_picture() {
 /// time, every wave of the first 16 s spawned.
 const STEPS_FOR_COVERAGE: u32 = 1200;
 
-#[test]
-fn coverage_probe() {
-    let scene = paper();
-    for zoom in [1.0f32, 1.5] {
-        let mut game = Game::new(common::cpu(), &scene, 1).unwrap();
-        for k in 1..=3 {
-            for _ in 0..600 {
-                game.submit(None).unwrap();
-            }
-            let frame = game
-                .draw(1920, 1080, &Camera::new(CameraMode::Follow, zoom))
-                .unwrap();
-            let drawn = frame.pixels.iter().filter(|&&p| p != BACKGROUND).count();
-            println!(
-                "zoom {zoom} steps {} drawn {:.4} alive {}",
-                k * 600,
-                drawn as f64 / frame.pixels.len() as f64,
-                game.status().enemies_alive
-            );
-        }
-    }
-}
-
 fn the_radar_marks_the_ship_and_outlines_the_view(device: &Device) {
     let scene = paper();
     let mut game = Game::new(device, &scene, 1).unwrap();
@@ -867,3 +844,18 @@ on_both_backends!(
     gl_draws_each_body_in_its_kinds_colour,
     gl_draws_a_game_as_the_kernel_does,
 );
+
+#[test]
+fn zooming_out_stops_at_the_whole_field_and_zooming_in_starts_at_once() {
+    use gpuwars::graphics::camera::Camera;
+    let field = Vec2::new(4096.0, 4096.0);
+    let mut camera = Camera::default();
+    for _ in 0..40 {
+        camera.zoom_within(0.8, field, (1920, 1080));
+    }
+    // The whole field's height in 1,080 pixels: 1080 / 4096 pixels a unit, zoom 1 being one.
+    let whole = 1080.0 / 4096.0;
+    assert!((camera.zoom - whole).abs() < 1e-6, "{}", camera.zoom);
+    camera.zoom_within(1.25, field, (1920, 1080));
+    assert!((camera.zoom - whole * 1.25).abs() < 1e-6, "{}", camera.zoom);
+}

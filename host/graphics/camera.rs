@@ -83,6 +83,16 @@ impl Camera {
         self.zoom = (self.zoom * factor).clamp(MIN_ZOOM, MAX_ZOOM);
     }
 
+    /// Zooms by `factor` as [`Camera::zoom_by`] does, but no farther out than the zoom at
+    /// which a `field`-sized world fills a `width × height` frame: zooming back in from
+    /// the whole field then starts at once.
+    pub fn zoom_within(&mut self, factor: f32, field: Vec2, (width, height): (u32, u32)) {
+        let unit = height.max(1) as f32 / camera::REFERENCE_HEIGHT;
+        let whole = camera::fit_scale(field, width.max(1), height.max(1)) / unit;
+        self.zoom_by(factor);
+        self.zoom = self.zoom.max(whole.min(MAX_ZOOM));
+    }
+
     /// Switches between following the ship and the whole field.
     pub fn toggle_overview(&mut self) {
         self.mode = match self.mode {
