@@ -1,4 +1,5 @@
-//! Time per frame at 1920 × 1080: `paper` full (8,190 enemies) and `scale-1m` (1,048,576),
+//! Time per frame at 1920 × 1080: `paper` full (8,190 enemies), `scale-1m` (1,048,576) and,
+//! for the kernel renderer, `scale-16m` (16,760,000),
 //! on the backend `GPUWARS_BACKEND` names (default: auto).
 //!
 //! - `kernel_frame_1080p`: the kernel renderer's frame of the whole field left on the
@@ -34,7 +35,7 @@ fn frame(c: &mut Criterion) {
     let device = device();
     let mut group = c.benchmark_group("kernel_frame_1080p");
     group.sample_size(10);
-    for (scene, steps) in [("paper", 900), ("scale-1m", 2)] {
+    for (scene, steps) in [("paper", 900), ("scale-1m", 2), ("scale-16m", 2)] {
         let scene = built_in(scene).unwrap().unwrap();
         let mut game = Game::new(&device, &scene, 1).unwrap();
         for _ in 0..steps {
