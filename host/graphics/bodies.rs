@@ -9,8 +9,9 @@
 //! kernel renderer's rules (silhouettes, nose, hurt shade, the ship's halo, and the key
 //! that decides which body is on top, kept in the depth buffer), so both draw the same
 //! picture; where their arithmetic rounds differently an edge pixel may differ, and a body
-//! whose centre is off the image is clipped whole. The radar is the kernels' own image,
-//! shown over the bodies.
+//! whose centre is off the image is clipped whole. Explosions' particles are discs drawn
+//! from vertices after the bodies' in the same buffer and the same draw call. The radar is
+//! the kernels' own image, shown over the bodies.
 
 use std::borrow::Cow;
 
@@ -100,7 +101,10 @@ void main() {
 /// line, with the kernels' constants filled in.
 fn fragment_shader() -> String {
     use gpuwars_kernels::render::shapes::*;
-    use gpuwars_kernels::render::{HALO_FADE, HALO_FROM, HALO_LAYER, HALO_TO};
+    use gpuwars_kernels::render::{
+        HALO_FADE, HALO_FROM, HALO_LAYER, HALO_TO, PARTICLE_LAYER, VERTEX_LEVEL_SHIFT,
+        VERTEX_PARTICLE,
+    };
     format!(
         r#"
 #version 330 core
@@ -166,7 +170,19 @@ void main() {{
     // This pixel as the kernel renderer numbers it (row 0 at the top).
     vec2 pixel = vec2(floor(gl_FragCoord.x), height - 1.0 - floor(gl_FragCoord.y));
     vec2 d = pixel + 0.5 - v_centre;
-    uint s = v_flags >> 8;
+    // A body smaller than a pixel still shows in the pixel under its centre.
+    bool under = v_centre.x >= 0.0 && v_centre.y >= 0.0 && floor(v_centre) == pixel;
+    uint key;
+    if ((v_flags & {VERTEX_PARTICLE}u) != 0u) {{
+        // A particle: a disc in the lowest layer, its kind's colour faded by its level.
+        if (!(under || dot(d, d) <= v_radius * v_radius)) discard;
+        uint level = v_flags >> {VERTEX_LEVEL_SHIFT};
+        key = (uint({PARTICLE_LAYER}) << 13) | (v_kind << 5) | 16u | level;
+        gl_FragDepth = float(key) / 16777216.0;
+        colour = rgba(fade(look.x, background, int(level)));
+        return;
+    }}
+    uint s = (v_flags >> 8) & 255u;
     float r = v_radius;
     bool within = s == {RECT}u
         ? abs(d.x) <= v_half.x && abs(d.y) <= v_half.y
@@ -179,8 +195,6 @@ void main() {{
         float from = {HALO_FROM:?} * r;
         float to = {HALO_TO:?} * r;
         float d2 = dot(d, d);
-        // A body smaller than a pixel still shows in the pixel under its centre.
-        bool under = v_centre.x >= 0.0 && v_centre.y >= 0.0 && floor(v_centre) == pixel;
         if ((v_flags & 4u) != 0u && d2 >= from * from && d2 <= to * to) {{
             shade = 3u;
         }} else if (under) {{
@@ -190,8 +204,9 @@ void main() {{
         }}
     }}
     uint layer = shade == 3u ? {HALO_LAYER}u : look.w;
-    // The kernel renderer's key order: layer, then kind, then shade; the highest is on top.
-    uint key = (layer << 10) | (v_kind << 2) | shade;
+    // The kernel renderer's key order: layer, then kind, then shade (a particle's: its
+    // level), with a drawn bit; the highest is on top.
+    key = (layer << 13) | (v_kind << 5) | 16u | shade;
     gl_FragDepth = float(key) / 16777216.0;
     uint c = shade == 1u ? look.y
         : (shade == 2u ? look.z : (shade == 3u ? fade(look.x, background, {HALO_FADE}) : look.x));
@@ -362,10 +377,16 @@ impl BodyRenderer {
         self.radar_upload.set(facade, &image)
     }
 
-    /// Draws the bodies as the last [`BodyRenderer::update`] placed them, and its radar,
-    /// onto `target`, whose size must be `lens`'s (the lens of that update). The caller
-    /// clears colour to the background and depth to 0 first.
+    /// Draws the bodies and particles as the last [`BodyRenderer::update`] placed them,
+    /// and its radar, onto `target`, whose size must be `lens`'s (the lens of that update).
+    /// The caller clears colour to the background and depth to 0 first.
     pub fn draw(&self, target: &mut impl Surface, lens: &Lens) -> Result<(), Error> {
+        let viewport = Some(Rect {
+            left: 0,
+            bottom: 0,
+            width: lens.width,
+            height: lens.height,
+        });
         let uniforms = uniform! {
             kinds: self.kinds.sampled()
                 .magnify_filter(MagnifySamplerFilter::Nearest)
@@ -381,12 +402,7 @@ impl BodyRenderer {
                 write: true,
                 ..Depth::default()
             },
-            viewport: Some(Rect {
-                left: 0,
-                bottom: 0,
-                width: lens.width,
-                height: lens.height,
-            }),
+            viewport,
             ..DrawParameters::default()
         };
         target
