@@ -356,16 +356,16 @@ impl Canvas {
 }
 
 impl Pipeline<'_> {
-    /// The number of vertices [`Pipeline::write_vertices`] writes: one per slot, then one
-    /// per explosion particle.
+    /// The number of vertices [`Pipeline::write_vertices`] writes: one per slot, the
+    /// backdrop's, and one per explosion particle.
     pub fn vertex_count(&self) -> u32 {
         let particles = self.particle_view().map_or(0, |(p, _)| p.len());
-        self.layout.slots + particles
+        self.layout.slots + 1 + particles
     }
 
     /// Queues, after the steps queued before and without waiting: the camera of `lens`,
     /// the radar's counts, and every slot's vertex in its view, each kind as `looks` says,
-    /// then every particle's (see [`Pipeline::vertex_count`]).
+    /// then the backdrop's and every particle's (see [`Pipeline::vertex_count`]).
     /// The radar's pixels follow with [`Pipeline::radar_image`] or
     /// [`Pipeline::radar_into`].
     ///
@@ -393,17 +393,17 @@ impl Pipeline<'_> {
             kinds: self.state.kinds.view(),
             looks: canvas.looks.view(),
             shown: canvas.shown.view(),
-            vertices: vertices.range(0, slots),
+            vertices: vertices.range(0, slots + 1),
         };
         // SAFETY: the body and particle views are this pipeline's; the caller vouches for
         // `vertices`, which holds them all (checked above).
         unsafe {
-            ops.push(op(registry::WRITE_VERTICES, slots, args, 40));
+            ops.push(op(registry::WRITE_VERTICES, slots + 1, args, 40));
             if let Some((particles, lifetime)) = self.particle_view() {
                 let args = ParticleVertexArgs {
                     particles,
                     shown: canvas.shown.view(),
-                    vertices: vertices.range(slots, particles.len()),
+                    vertices: vertices.range(slots + 1, particles.len()),
                     lifetime,
                     reserved: 0,
                 };

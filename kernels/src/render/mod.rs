@@ -13,8 +13,8 @@
 //!    With explosions, [`particles::splat_particles`] then draws each shown particle's disc
 //!    the same way, in the lowest layer.
 //! 4. [`resolve_pixels`]: each pixel turns its key into a colour from the kinds' looks (the
-//!    background where nothing was drawn), or the radar's colour in its corner, and clears
-//!    the key for the next frame.
+//!    backdrop's, [`backdrop::on_grid`], or the background where nothing was drawn), or the
+//!    radar's colour in its corner, and clears the key for the next frame.
 //!
 //! The GL renderer (the paper's way) draws from [`BodyVertex`]es instead, which
 //! [`write_vertices`] writes straight into the vertex buffer GL draws from, in image
@@ -25,6 +25,7 @@
 //! [`BODY`], [`NOSE`], [`HURT`], [`HALO`], and [`PARTICLE`]`..`[`PARTICLE`]` + 16` for
 //! particles at fade levels 0 to 15 ([`particle_key`], [`fade`]).
 
+pub mod backdrop;
 pub mod camera;
 pub mod particles;
 pub mod radar;
@@ -125,6 +126,11 @@ pub struct Shown {
     pub ship: u32,
     /// The ship's kind.
     pub ship_kind: u32,
+    /// Nonzero: the backdrop ([`backdrop::on_grid`]) is drawn where nothing else is (a
+    /// camera following a ship).
+    pub backdrop: u32,
+    /// Keeps the struct free of implicit padding.
+    pub reserved: u32,
 }
 
 /// How the bodies of one kind look.
@@ -449,6 +455,9 @@ pub fn resolve_pixels(t: Thread, args: &ResolveArgs) {
     let radar = radar::radar_colour(&shown, &args.radar, &args.looks, args.stride, x, y);
     let colour = match radar {
         Some(colour) => colour,
+        None if key == EMPTY && shown.backdrop != 0 => {
+            backdrop::on_grid(&shown.view, shown.field, x, y).unwrap_or(background)
+        }
         None if key == EMPTY => background,
         None => {
             let (kind, shade) = unkey(key);
@@ -468,6 +477,9 @@ pub const VERTEX_HALO: u32 = 4;
 /// [`BodyVertex::flags`]: an explosion's particle, a disc under every body, faded by its
 /// level (from bit [`VERTEX_LEVEL_SHIFT`] up).
 pub const VERTEX_PARTICLE: u32 = 16;
+/// [`BodyVertex::flags`]: the backdrop's vertex ([`backdrop_vertex`]), when it is drawn;
+/// never with [`VERTEX_ALIVE`].
+pub const VERTEX_BACKDROP: u32 = 32;
 /// [`BodyVertex::flags`]: the silhouette drawn, from this bit up.
 pub const VERTEX_SILHOUETTE_SHIFT: u32 = 8;
 /// [`BodyVertex::flags`]: a particle's fade level, from this bit up.
@@ -493,7 +505,7 @@ pub struct BodyVertex {
     /// Kind index.
     pub kind: u32,
     /// [`VERTEX_ALIVE`], [`VERTEX_HURT`], [`VERTEX_HALO`] and the silhouette; or
-    /// [`VERTEX_PARTICLE`] and the fade level.
+    /// [`VERTEX_PARTICLE`] and the fade level; or [`VERTEX_BACKDROP`].
     pub flags: u32,
 }
 
@@ -509,18 +521,45 @@ pub struct VertexArgs {
     pub looks: DevSlice<Look>,
     /// What the image shows (one element, from the camera).
     pub shown: DevSlice<Shown>,
-    /// Output: one vertex per slot (the GL vertex buffer, mapped, on the GPU).
+    /// Output: one vertex per slot, then the backdrop's (the GL vertex buffer, mapped, on
+    /// the GPU).
     pub vertices: DevSlice<BodyVertex>,
 }
 // SAFETY: repr(C) plain data.
 unsafe impl KernelArgs for VertexArgs {}
 
-/// Thread `i` writes slot `i`'s vertex (flags 0 for a free slot).
+/// The vertex the GL renderer draws the backdrop from (see [`backdrop::on_grid`]):
+/// `centre` is the view's origin, `facing` the field's size, `radius` the view's scale;
+/// flags [`VERTEX_BACKDROP`] when `shown` has a backdrop, else 0.
+#[inline(always)]
+pub fn backdrop_vertex(shown: &Shown) -> BodyVertex {
+    let view = &shown.view;
+    BodyVertex {
+        centre: view.origin,
+        facing: shown.field,
+        half: Vec2::splat(view.scale),
+        radius: view.scale,
+        bound: 0.0,
+        kind: 0,
+        flags: if shown.backdrop != 0 {
+            VERTEX_BACKDROP
+        } else {
+            0
+        },
+    }
+}
+
+/// Thread `i` writes slot `i`'s vertex (flags 0 for a free slot); thread `slots` writes
+/// the [`backdrop_vertex`] after them.
 #[inline(always)]
 pub fn write_vertices(t: Thread, args: &VertexArgs) {
     let b = &args.bodies;
     let slot = t.global();
-    if slot >= b.slots() || slot >= args.vertices.len() {
+    if slot > b.slots() || slot >= args.vertices.len() {
+        return;
+    }
+    if slot == b.slots() {
+        args.vertices.set(slot, backdrop_vertex(&args.shown.get(0)));
         return;
     }
     let vertex = if b.is_alive(slot) {
