@@ -1163,6 +1163,13 @@ fn the_backdrop_grid_lies_on_the_worlds_multiples(device: &Device) {
         .zip(&on_gl.pixels)
         .filter(|&(&a, &b)| (a == backdrop::LINE) != (b == backdrop::LINE))
         .count();
+    println!(
+        "paper's followed frame, GL on {}: {apart} of {} pixels differ in being a line, {} \
+         in all",
+        gl.device(),
+        frame.pixels.len(),
+        differing(&frame, &on_gl)
+    );
     assert!(
         apart * 1000 <= frame.pixels.len(),
         "{apart} line pixels differ"
