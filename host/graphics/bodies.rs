@@ -9,7 +9,12 @@
 //! kernel renderer's rules (silhouettes, nose, hurt shade, the ship's halo, and the key
 //! that decides which body is on top, kept in the depth buffer), so both draw the same
 //! picture; where their arithmetic rounds differently an edge pixel may differ, and a body
-//! whose centre is off the image is clipped whole. The radar is the kernels' own image,
+//! whose centre is off the image is clipped whole. Explosions' particles are discs drawn
+//! from vertices after the bodies' in the same buffer and the same draw call. The backdrop
+//! (a followed frame's grid and the field's border) is a full-screen pass before them,
+//! drawn from one more vertex of that buffer, which a kernel fills from the frame's view
+//! (`gpuwars_kernels::render::backdrop_vertex`): the host neither computes the view nor
+//! waits for it, and it costs no mapping of its own. The radar is the kernels' own image,
 //! shown over the bodies.
 
 use std::borrow::Cow;
@@ -20,11 +25,11 @@ use glium::texture::{
     ClientFormat, MipmapsOption, RawImage2d, UncompressedUintFormat, UnsignedTexture2d,
 };
 use glium::uniforms::{MagnifySamplerFilter, MinifySamplerFilter};
-use glium::vertex::AttributeType;
+use glium::vertex::{AttributeType, EmptyVertexAttributes};
 use glium::{Depth, DepthTest, DrawParameters, Program, Rect, Surface, VertexBuffer, uniform};
 use gpuwars_kernels::render::camera::Lens;
 use gpuwars_kernels::render::radar::{RadarBox, radar_box};
-use gpuwars_kernels::render::{BodyVertex, Look, NOSE_FROM};
+use gpuwars_kernels::render::{BodyVertex, Look, NOSE_FROM, backdrop};
 
 use super::picture::{Blit, DeviceImage, Upload};
 use super::{gl_error, program};
@@ -100,7 +105,10 @@ void main() {
 /// line, with the kernels' constants filled in.
 fn fragment_shader() -> String {
     use gpuwars_kernels::render::shapes::*;
-    use gpuwars_kernels::render::{HALO_FADE, HALO_FROM, HALO_LAYER, HALO_TO};
+    use gpuwars_kernels::render::{
+        HALO_FADE, HALO_FROM, HALO_LAYER, HALO_TO, PARTICLE_LAYER, VERTEX_LEVEL_SHIFT,
+        VERTEX_PARTICLE,
+    };
     format!(
         r#"
 #version 330 core
@@ -166,7 +174,19 @@ void main() {{
     // This pixel as the kernel renderer numbers it (row 0 at the top).
     vec2 pixel = vec2(floor(gl_FragCoord.x), height - 1.0 - floor(gl_FragCoord.y));
     vec2 d = pixel + 0.5 - v_centre;
-    uint s = v_flags >> 8;
+    // A body smaller than a pixel still shows in the pixel under its centre.
+    bool under = v_centre.x >= 0.0 && v_centre.y >= 0.0 && floor(v_centre) == pixel;
+    uint key;
+    if ((v_flags & {VERTEX_PARTICLE}u) != 0u) {{
+        // A particle: a disc in the lowest layer, its kind's colour faded by its level.
+        if (!(under || dot(d, d) <= v_radius * v_radius)) discard;
+        uint level = v_flags >> {VERTEX_LEVEL_SHIFT};
+        key = (uint({PARTICLE_LAYER}) << 13) | (v_kind << 5) | 16u | level;
+        gl_FragDepth = float(key) / 16777216.0;
+        colour = rgba(fade(look.x, background, int(level)));
+        return;
+    }}
+    uint s = (v_flags >> 8) & 255u;
     float r = v_radius;
     bool within = s == {RECT}u
         ? abs(d.x) <= v_half.x && abs(d.y) <= v_half.y
@@ -179,8 +199,6 @@ void main() {{
         float from = {HALO_FROM:?} * r;
         float to = {HALO_TO:?} * r;
         float d2 = dot(d, d);
-        // A body smaller than a pixel still shows in the pixel under its centre.
-        bool under = v_centre.x >= 0.0 && v_centre.y >= 0.0 && floor(v_centre) == pixel;
         if ((v_flags & 4u) != 0u && d2 >= from * from && d2 <= to * to) {{
             shade = 3u;
         }} else if (under) {{
@@ -190,12 +208,84 @@ void main() {{
         }}
     }}
     uint layer = shade == 3u ? {HALO_LAYER}u : look.w;
-    // The kernel renderer's key order: layer, then kind, then shade; the highest is on top.
-    uint key = (layer << 10) | (v_kind << 2) | shade;
+    // The kernel renderer's key order: layer, then kind, then shade (a particle's: its
+    // level), with a drawn bit; the highest is on top.
+    key = (layer << 13) | (v_kind << 5) | 16u | shade;
     gl_FragDepth = float(key) / 16777216.0;
     uint c = shade == 1u ? look.y
         : (shade == 2u ? look.z : (shade == 3u ? fade(look.x, background, {HALO_FADE}) : look.x));
     colour = rgba(c);
+}}
+"#
+    )
+}
+
+/// The backdrop pass's vertex shader: a quad over the viewport, drawn once (one instance)
+/// with the backdrop's vertex as its attributes; off the clip volume when the frame has no
+/// backdrop.
+const BACKDROP_VERTEX_SHADER: &str = r#"
+#version 330 core
+in vec2 centre;
+in vec2 facing;
+in float radius;
+in uint flags;
+flat out vec2 origin;
+flat out vec2 field;
+flat out float scale;
+
+void main() {
+    origin = centre;
+    field = facing;
+    scale = radius;
+    vec2 corner = vec2(float(gl_VertexID & 1), float(gl_VertexID >> 1));
+    gl_Position = (flags & BACKDROP_FLAG) != 0u
+        ? vec4(corner * 2.0 - 1.0, 0.0, 1.0)
+        : vec4(2.0, 2.0, 2.0, 1.0);
+}
+"#;
+
+/// The backdrop pass's fragment shader: `gpuwars_kernels::render::backdrop::on_grid`, line
+/// for line, with the kernels' constants filled in.
+fn backdrop_fragment_shader() -> String {
+    use backdrop::{BORDER, LINE, MIN_GAP_PX, SPACING};
+    format!(
+        r#"
+#version 330 core
+flat in vec2 origin;
+flat in vec2 field;
+flat in float scale;
+out vec4 colour;
+
+vec4 rgba(uint c) {{
+    return vec4(float(c & 255u), float((c >> 8) & 255u), float((c >> 16) & 255u),
+        float(c >> 24)) / 255.0;
+}}
+
+// Along one axis: 0 outside the field, 1 inside on no line, 2 on a line, 3 the border.
+int mark(float origin, float scale, float field, bool lines, float p) {{
+    float centre = p + 0.5;
+    float low = (0.0 - origin) * scale;
+    float high = (field - origin) * scale;
+    if (centre < low || centre >= high) return 0;
+    if (centre - 1.0 < low || centre + 1.0 >= high) return 3;
+    float k = floor((origin + centre / scale) / {SPACING:?} + 0.5);
+    if (lines && floor((k * {SPACING:?} - origin) * scale) == p) return 2;
+    return 1;
+}}
+
+void main() {{
+    bool lines = {SPACING:?} * scale >= {MIN_GAP_PX:?};
+    // Rows count from the bottom, as the world's y runs (and GL's).
+    int across = mark(origin.x, scale, field.x, lines, floor(gl_FragCoord.x));
+    int up = mark(origin.y, scale, field.y, lines, floor(gl_FragCoord.y));
+    if (across == 0 || up == 0) discard;
+    if (across == 3 || up == 3) {{
+        colour = rgba({BORDER}u);
+    }} else if (across == 2 || up == 2) {{
+        colour = rgba({LINE}u);
+    }} else {{
+        discard;
+    }}
 }}
 "#
     )
@@ -213,7 +303,10 @@ enum Feed {
 /// by a kernel, as an image over them.
 pub struct BodyRenderer {
     program: Program,
+    backdrop: Program,
     vertices: VertexBuffer<BodyVertex>,
+    /// Index of the backdrop's vertex (after the bodies').
+    backdrop_at: usize,
     kinds: UnsignedTexture2d,
     looks: Vec<Look>,
     feed: Feed,
@@ -266,7 +359,16 @@ impl BodyRenderer {
         };
         Ok(BodyRenderer {
             program: program(facade, VERTEX_SHADER, &fragment_shader())?,
+            backdrop: program(
+                facade,
+                &BACKDROP_VERTEX_SHADER.replace(
+                    "BACKDROP_FLAG",
+                    &format!("{}u", gpuwars_kernels::render::VERTEX_BACKDROP),
+                ),
+                &backdrop_fragment_shader(),
+            )?,
             vertices,
+            backdrop_at: pipeline.layout().slots as usize,
             kinds: kind_texture(facade, looks)?,
             looks: looks.to_vec(),
             feed,
@@ -362,10 +464,39 @@ impl BodyRenderer {
         self.radar_upload.set(facade, &image)
     }
 
-    /// Draws the bodies as the last [`BodyRenderer::update`] placed them, and its radar,
-    /// onto `target`, whose size must be `lens`'s (the lens of that update). The caller
-    /// clears colour to the background and depth to 0 first.
+    /// Draws the backdrop, then the bodies and particles as the last
+    /// [`BodyRenderer::update`] placed them, and its radar, onto `target`, whose size must
+    /// be `lens`'s (the lens of that update). The caller clears colour to the background
+    /// and depth to 0 first.
     pub fn draw(&self, target: &mut impl Surface, lens: &Lens) -> Result<(), Error> {
+        let viewport = Some(Rect {
+            left: 0,
+            bottom: 0,
+            width: lens.width,
+            height: lens.height,
+        });
+        let at = self.backdrop_at;
+        let vertex = self
+            .vertices
+            .slice(at..at + 1)
+            .expect("the buffer holds the backdrop's vertex");
+        let instance = vertex.per_instance().map_err(|_| Error::Graphics {
+            during: "drawing the backdrop".into(),
+            message: "GL has no instanced drawing (OpenGL 3.3 has)".into(),
+        })?;
+        let backdrop = DrawParameters {
+            viewport,
+            ..DrawParameters::default()
+        };
+        target
+            .draw(
+                (EmptyVertexAttributes { len: 4 }, instance),
+                NoIndices(PrimitiveType::TriangleStrip),
+                &self.backdrop,
+                &uniform! {},
+                &backdrop,
+            )
+            .map_err(gl_error("drawing the backdrop"))?;
         let uniforms = uniform! {
             kinds: self.kinds.sampled()
                 .magnify_filter(MagnifySamplerFilter::Nearest)
@@ -381,12 +512,7 @@ impl BodyRenderer {
                 write: true,
                 ..Depth::default()
             },
-            viewport: Some(Rect {
-                left: 0,
-                bottom: 0,
-                width: lens.width,
-                height: lens.height,
-            }),
+            viewport,
             ..DrawParameters::default()
         };
         target

@@ -6,6 +6,7 @@
 use std::path::Path;
 
 use gpuwars_kernels::render::camera::{self, CameraArgs, CameraState, Lens};
+use gpuwars_kernels::render::particles::{ParticleSplatArgs, ParticleVertexArgs};
 use gpuwars_kernels::render::radar::{self, RadarArgs, RadarBox, RadarCounts, RadarImageArgs};
 use gpuwars_kernels::render::{BodyVertex, Look, ResolveArgs, Shown, SplatArgs, VertexArgs};
 use gpuwars_kernels::{DevSlice, registry};
@@ -327,6 +328,16 @@ impl Pipeline<'_> {
         // before this borrow ends.
         unsafe {
             ops.push(op(registry::SPLAT_BODIES, self.layout.slots, splat, 64));
+            if let Some((particles, lifetime)) = self.particle_view() {
+                let args = ParticleSplatArgs {
+                    particles,
+                    shown: canvas.shown.view(),
+                    keys: canvas.keys.view(),
+                    lifetime,
+                    reserved: 0,
+                };
+                ops.push(op(registry::SPLAT_PARTICLES, particles.len(), args, 24));
+            }
             ops.push(op(registry::RESOLVE_PIXELS, pixels, resolve, 12));
         }
         let device = self.device;
@@ -345,13 +356,16 @@ impl Canvas {
 }
 
 impl Pipeline<'_> {
-    /// The number of vertices [`Pipeline::write_vertices`] writes: one per slot.
+    /// The number of vertices [`Pipeline::write_vertices`] writes: one per slot, the
+    /// backdrop's, and one per explosion particle.
     pub fn vertex_count(&self) -> u32 {
-        self.layout.slots
+        let particles = self.particle_view().map_or(0, |(p, _)| p.len());
+        self.layout.slots + 1 + particles
     }
 
     /// Queues, after the steps queued before and without waiting: the camera of `lens`,
-    /// the radar's counts, and every slot's vertex in its view, each kind as `looks` says.
+    /// the radar's counts, and every slot's vertex in its view, each kind as `looks` says,
+    /// then the backdrop's and every particle's (see [`Pipeline::vertex_count`]).
     /// The radar's pixels follow with [`Pipeline::radar_image`] or
     /// [`Pipeline::radar_into`].
     ///
@@ -365,11 +379,11 @@ impl Pipeline<'_> {
         looks: &[Look],
         vertices: DevSlice<BodyVertex>,
     ) -> Result<(), Error> {
-        if vertices.len() < self.layout.slots {
+        let (slots, count) = (self.layout.slots, self.vertex_count());
+        if vertices.len() < count {
             return Err(Error::Invalid(format!(
-                "a vertex buffer of {} vertices for {} slots",
+                "a vertex buffer of {} vertices for {count} (of {slots} slots)",
                 vertices.len(),
-                self.layout.slots
             )));
         }
         let mut ops = self.prepare(lens, looks)?;
@@ -379,10 +393,28 @@ impl Pipeline<'_> {
             kinds: self.state.kinds.view(),
             looks: canvas.looks.view(),
             shown: canvas.shown.view(),
-            vertices,
+            vertices: vertices.range(0, slots + 1),
         };
-        // SAFETY: the body views are this pipeline's; the caller vouches for `vertices`.
-        unsafe { ops.push(op(registry::WRITE_VERTICES, self.layout.slots, args, 40)) };
+        // SAFETY: the body and particle views are this pipeline's; the caller vouches for
+        // `vertices`, which holds them all (checked above).
+        unsafe {
+            ops.push(op(registry::WRITE_VERTICES, slots + 1, args, 40));
+            if let Some((particles, lifetime)) = self.particle_view() {
+                let args = ParticleVertexArgs {
+                    particles,
+                    shown: canvas.shown.view(),
+                    vertices: vertices.range(slots + 1, particles.len()),
+                    lifetime,
+                    reserved: 0,
+                };
+                ops.push(op(
+                    registry::WRITE_PARTICLE_VERTICES,
+                    particles.len(),
+                    args,
+                    60,
+                ));
+            }
+        }
         let device = self.device;
         device.run(&device.plan(ops, false)?)
     }

@@ -217,5 +217,7 @@ pub fn shown(lens: &Lens, view: View, ship: Option<(Vec2, u32)>, aim: Vec2) -> S
         ship_aim: aim,
         ship: if ship.is_some() { lens.ship } else { NO_SHIP },
         ship_kind: ship.map_or(0, |(_, kind)| kind),
+        backdrop: u32::from(lens.mode == FOLLOW && ship.is_some()),
+        reserved: 0,
     }
 }

@@ -2,7 +2,7 @@
 //! source on the GPU and on the CPU emulation, so a frame is the same pixels on both (and
 //! can be hashed like a state).
 //!
-//! Four launches, barrier-free:
+//! Four launches (five with explosions), barrier-free:
 //! 1. [`camera::camera`] (one thread): where the view is, from the ship's position and the
 //!    camera's state between frames, written as the frame's [`Shown`] for the others.
 //! 2. [`radar::radar_bodies`]: bodies counted per radar pixel (atomic adds and maxima).
@@ -10,9 +10,11 @@
 //!    key that says who is drawn there (layer, kind, shade). Overlaps are settled by an
 //!    atomic maximum, which does not depend on the order threads arrive in: the highest
 //!    layer wins, then the highest kind, then the higher shade.
+//!    With explosions, [`particles::splat_particles`] then draws each shown particle's disc
+//!    the same way, in the lowest layer.
 //! 4. [`resolve_pixels`]: each pixel turns its key into a colour from the kinds' looks (the
-//!    background where nothing was drawn), or the radar's colour in its corner, and clears
-//!    the key for the next frame.
+//!    backdrop's, [`backdrop::on_grid`], or the background where nothing was drawn), or the
+//!    radar's colour in its corner, and clears the key for the next frame.
 //!
 //! The GL renderer (the paper's way) draws from [`BodyVertex`]es instead, which
 //! [`write_vertices`] writes straight into the vertex buffer GL draws from, in image
@@ -23,7 +25,9 @@
 //! [`BODY`], [`NOSE`], [`HURT`], [`HALO`], and [`PARTICLE`]`..`[`PARTICLE`]` + 16` for
 //! particles at fade levels 0 to 15 ([`particle_key`], [`fade`]).
 
+pub mod backdrop;
 pub mod camera;
+pub mod particles;
 pub mod radar;
 pub mod shapes;
 
@@ -122,6 +126,11 @@ pub struct Shown {
     pub ship: u32,
     /// The ship's kind.
     pub ship_kind: u32,
+    /// Nonzero: the backdrop ([`backdrop::on_grid`]) is drawn where nothing else is (a
+    /// camera following a ship).
+    pub backdrop: u32,
+    /// Keeps the struct free of implicit padding.
+    pub reserved: u32,
 }
 
 /// How the bodies of one kind look.
@@ -348,45 +357,63 @@ pub fn splat_bodies(t: Thread, args: &SplatArgs) {
     let look = args.looks.get(kind);
     let info = args.kinds.get(kind);
     let sprite = outline(b, &info, &look, &shown, slot);
-    let (centre, bound) = (sprite.centre, sprite.bound);
-    let (w, h) = (view.width as f32, view.height as f32);
-    // Off the image by more than its size: nothing to draw (and no huge loop bounds).
-    let near_image = centre.x > -bound - 1.0
-        && centre.x < w + bound + 1.0
-        && centre.y > -bound - 1.0
-        && centre.y < h + bound + 1.0;
-    if !near_image {
+    // Off the image by more than its size: nothing to draw (checked before the body's
+    // heading and energy are read).
+    if !near_image(view, sprite.centre, sprite.bound) {
         return;
     }
     let sprite = sprite.dressed(b, &info, &shown, slot);
     let reach = if sprite.silhouette == RECT {
         sprite.half
     } else {
-        Vec2::splat(bound)
+        Vec2::splat(sprite.bound)
     };
+    cover(view, sprite.centre, reach, |pixel, d, under| {
+        let shade = match shade_at(&sprite, d) {
+            Some(shade) => shade,
+            None if under => sprite.shade,
+            None => return,
+        };
+        let layer = if shade == HALO {
+            HALO_LAYER
+        } else {
+            look.layer
+        };
+        args.keys.atomic_max(pixel, key(layer, kind, shade));
+    });
+}
+
+/// Whether something centred at image position `centre` and `bound` pixels across (each
+/// way) may cover a pixel of `view`'s image.
+#[inline(always)]
+fn near_image(view: &View, centre: Vec2, bound: f32) -> bool {
+    let (w, h) = (view.width as f32, view.height as f32);
+    centre.x > -bound - 1.0
+        && centre.x < w + bound + 1.0
+        && centre.y > -bound - 1.0
+        && centre.y < h + bound + 1.0
+}
+
+/// Calls `f(pixel, d, under)` for every pixel of `view`'s image within `reach` (half
+/// extents, in pixels) of image position `centre`: its row-major index, the offset of its
+/// centre from `centre`, and whether it is the pixel under `centre` (which a drawing
+/// covers however small it is). Nothing for a `centre` far off the image.
+#[inline(always)]
+fn cover(view: &View, centre: Vec2, reach: Vec2, mut f: impl FnMut(u32, Vec2, bool)) {
+    if !near_image(view, centre, reach.max_element()) {
+        return;
+    }
+    let (w, h) = (view.width as f32, view.height as f32);
     let x0 = (centre.x - reach.x).max(0.0) as u32;
     let y0 = (centre.y - reach.y).max(0.0) as u32;
     let x1 = ((centre.x + reach.x) as u32).min(view.width - 1);
     let y1 = ((centre.y + reach.y) as u32).min(view.height - 1);
-    // The pixel under the centre, if the centre is on the image: a body smaller than a
-    // pixel still shows.
     let on_image = centre.x >= 0.0 && centre.x < w && centre.y >= 0.0 && centre.y < h;
     let under = on_image.then_some((centre.x as u32, centre.y as u32));
     for y in y0..=y1 {
         for x in x0..=x1 {
             let d = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) - centre;
-            let shade = match shade_at(&sprite, d) {
-                Some(shade) => shade,
-                None if under == Some((x, y)) => sprite.shade,
-                None => continue,
-            };
-            let layer = if shade == HALO {
-                HALO_LAYER
-            } else {
-                look.layer
-            };
-            args.keys
-                .atomic_max(y * view.width + x, key(layer, kind, shade));
+            f(y * view.width + x, d, under == Some((x, y)));
         }
     }
 }
@@ -428,6 +455,9 @@ pub fn resolve_pixels(t: Thread, args: &ResolveArgs) {
     let radar = radar::radar_colour(&shown, &args.radar, &args.looks, args.stride, x, y);
     let colour = match radar {
         Some(colour) => colour,
+        None if key == EMPTY && shown.backdrop != 0 => {
+            backdrop::on_grid(&shown.view, shown.field, x, y).unwrap_or(background)
+        }
         None if key == EMPTY => background,
         None => {
             let (kind, shade) = unkey(key);
@@ -444,8 +474,16 @@ pub const VERTEX_ALIVE: u32 = 1;
 pub const VERTEX_HURT: u32 = 2;
 /// [`BodyVertex::flags`]: a halo rings the body.
 pub const VERTEX_HALO: u32 = 4;
+/// [`BodyVertex::flags`]: an explosion's particle, a disc under every body, faded by its
+/// level (from bit [`VERTEX_LEVEL_SHIFT`] up).
+pub const VERTEX_PARTICLE: u32 = 16;
+/// [`BodyVertex::flags`]: the backdrop's vertex ([`backdrop_vertex`]), when it is drawn;
+/// never with [`VERTEX_ALIVE`].
+pub const VERTEX_BACKDROP: u32 = 32;
 /// [`BodyVertex::flags`]: the silhouette drawn, from this bit up.
 pub const VERTEX_SILHOUETTE_SHIFT: u32 = 8;
+/// [`BodyVertex::flags`]: a particle's fade level, from this bit up.
+pub const VERTEX_LEVEL_SHIFT: u32 = 16;
 
 /// One slot as the GL renderer draws it: "the positions and type are put in a VBO" (paper,
 /// section 5), here already in image coordinates of the frame's view (the same f32
@@ -466,7 +504,8 @@ pub struct BodyVertex {
     pub bound: f32,
     /// Kind index.
     pub kind: u32,
-    /// [`VERTEX_ALIVE`], [`VERTEX_HURT`], [`VERTEX_HALO`] and the silhouette.
+    /// [`VERTEX_ALIVE`], [`VERTEX_HURT`], [`VERTEX_HALO`] and the silhouette; or
+    /// [`VERTEX_PARTICLE`] and the fade level; or [`VERTEX_BACKDROP`].
     pub flags: u32,
 }
 
@@ -482,18 +521,45 @@ pub struct VertexArgs {
     pub looks: DevSlice<Look>,
     /// What the image shows (one element, from the camera).
     pub shown: DevSlice<Shown>,
-    /// Output: one vertex per slot (the GL vertex buffer, mapped, on the GPU).
+    /// Output: one vertex per slot, then the backdrop's (the GL vertex buffer, mapped, on
+    /// the GPU).
     pub vertices: DevSlice<BodyVertex>,
 }
 // SAFETY: repr(C) plain data.
 unsafe impl KernelArgs for VertexArgs {}
 
-/// Thread `i` writes slot `i`'s vertex (flags 0 for a free slot).
+/// The vertex the GL renderer draws the backdrop from (see [`backdrop::on_grid`]):
+/// `centre` is the view's origin, `facing` the field's size, `radius` the view's scale;
+/// flags [`VERTEX_BACKDROP`] when `shown` has a backdrop, else 0.
+#[inline(always)]
+pub fn backdrop_vertex(shown: &Shown) -> BodyVertex {
+    let view = &shown.view;
+    BodyVertex {
+        centre: view.origin,
+        facing: shown.field,
+        half: Vec2::splat(view.scale),
+        radius: view.scale,
+        bound: 0.0,
+        kind: 0,
+        flags: if shown.backdrop != 0 {
+            VERTEX_BACKDROP
+        } else {
+            0
+        },
+    }
+}
+
+/// Thread `i` writes slot `i`'s vertex (flags 0 for a free slot); thread `slots` writes
+/// the [`backdrop_vertex`] after them.
 #[inline(always)]
 pub fn write_vertices(t: Thread, args: &VertexArgs) {
     let b = &args.bodies;
     let slot = t.global();
-    if slot >= b.slots() || slot >= args.vertices.len() {
+    if slot > b.slots() || slot >= args.vertices.len() {
+        return;
+    }
+    if slot == b.slots() {
+        args.vertices.set(slot, backdrop_vertex(&args.shown.get(0)));
         return;
     }
     let vertex = if b.is_alive(slot) {
