@@ -5,7 +5,8 @@
 //! - `kernel_frame_1080p`: the kernel renderer's frame of the whole field left on the
 //!   device (`render`: the camera, radar, splat and resolve launches, then a synchronise),
 //!   read back to the host (`draw`: 8 MB of pixels more), and the ship followed at the
-//!   default zoom with the radar, gliding 1/60 s per frame (`follow`).
+//!   default zoom with the radar, gliding 1/60 s per frame (`follow`); `paper` also
+//!   without its explosions (`paper-no-effects`).
 //! - `displayed_frame_1080p`: a whole displayed frame with GL (no window: an EGL device),
 //!   `glFinish` included, for each renderer: `kernel` (render, read back, one texture
 //!   upload, one textured draw; `kernel-pbo` on the GPU: drawn into a GL pixel buffer
@@ -35,8 +36,20 @@ fn frame(c: &mut Criterion) {
     let device = device();
     let mut group = c.benchmark_group("kernel_frame_1080p");
     group.sample_size(10);
-    for (scene, steps) in [("paper", 900), ("scale-1m", 2), ("scale-16m", 2)] {
-        let scene = built_in(scene).unwrap().unwrap();
+    // `paper` without its explosions too: what the camera, silhouettes, radar and backdrop
+    // cost by themselves, the particles' cost being the difference.
+    let scenes = [
+        ("paper", 900, true),
+        ("paper", 900, false),
+        ("scale-1m", 2, true),
+        ("scale-16m", 2, true),
+    ];
+    for (scene, steps, effects) in scenes {
+        let mut scene = built_in(scene).unwrap().unwrap();
+        if !effects {
+            scene.game.effects = None;
+            scene.name += "-no-effects";
+        }
         let mut game = Game::new(&device, &scene, 1).unwrap();
         for _ in 0..steps {
             game.submit(None).unwrap();
