@@ -2,17 +2,18 @@
 //! name what is allowed in words (`a whole number from 1 to 1,024`). The binary runs what
 //! it parses; tests parse command lines here without starting it.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use clap::{Args, Parser, Subcommand};
 
 use crate::BackendRequest;
-use crate::benchmark::scale;
-use crate::files::thousands;
+use crate::benchmark::{Outputs, scale};
+use crate::files::{RunFiles, thousands};
 use crate::game::Options;
 use crate::game::demo::{Frames, Pilot, RunOptions};
 use crate::game::replay::MAX_STEPS;
+use crate::game::scene;
 use crate::graphics::Renderer;
 use crate::pipeline::draw::MAX_SIDE;
 use crate::play::Pilot as PlayPilot;
@@ -87,6 +88,49 @@ pub enum Command {
         #[command(flatten)]
         run: RunArgs,
     },
+}
+
+impl Command {
+    /// Every file this command reads and writes, with the flag that names it: the one place
+    /// a new file flag is declared, so that [`RunFiles::check`] keeps its outputs off its
+    /// inputs and each other before the run.
+    pub fn files(&self) -> RunFiles {
+        let scene = |name: &str| {
+            let is_file = !scene::BUILT_IN.iter().any(|b| b.name == name);
+            is_file.then(|| Path::new(name).to_owned())
+        };
+        let benchmark = |files: RunFiles, out: &BenchOut, name: &str| {
+            let outputs = Outputs::at(&out.out, name);
+            [&outputs.csv, &outputs.png, &outputs.json]
+                .into_iter()
+                .fold(files, |files, path| files.writes_into("--out", path))
+        };
+        match self {
+            Command::Info { .. } | Command::Scenes => RunFiles::new(),
+            Command::Demo(args) => RunFiles::new()
+                .reads("--scene", scene(&args.scene).as_deref())
+                .writes("--record", args.record.as_deref())
+                .writes("--screenshot", args.screenshot.as_deref()),
+            Command::Play(args) => RunFiles::new()
+                .reads("--scene", scene(&args.scene).as_deref())
+                .writes("--record", args.record.as_deref()),
+            Command::Replay { file, .. } => RunFiles::new().reads("FILE", Some(file)),
+            Command::Tradeoff {
+                scene: name, out, ..
+            } => {
+                let files = RunFiles::new().reads("--scene", scene(name).as_deref());
+                let markdown = Outputs::at(&out.out, "tradeoff").markdown();
+                benchmark(files, out, "tradeoff").writes_into("--out", &markdown)
+            }
+            Command::Bench { which } => match which {
+                BenchCommand::Paper { out, .. } => benchmark(RunFiles::new(), out, "paper"),
+                BenchCommand::Scale { out, .. } => benchmark(RunFiles::new(), out, "scale"),
+                BenchCommand::Compare { a, b } => {
+                    RunFiles::new().reads("A", Some(a)).reads("B", Some(b))
+                }
+            },
+        }
+    }
 }
 
 /// The measurements of `gpuwars bench`.

@@ -11,7 +11,7 @@ use gpuwars::benchmark::paper::{self, PaperOptions, PaperSummary};
 use gpuwars::benchmark::scale::{self, ScaleOptions, ScaleSummary};
 use gpuwars::benchmark::tradeoff::{self, TradeoffOptions, TradeoffSummary};
 use gpuwars::cli::{BenchCommand, Cli, Command, default_demo, defaults};
-use gpuwars::files::{check_output, excerpt, thousands};
+use gpuwars::files::{excerpt, shown, thousands};
 use gpuwars::game::Scene;
 use gpuwars::game::demo::{self, Report, RunOptions};
 use gpuwars::game::engine::footprint;
@@ -43,6 +43,9 @@ fn default_command() -> Command {
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     let command = cli.command.unwrap_or_else(default_command);
+    // Before a run that could take hours: outputs it could not write, or that would replace
+    // one of its inputs, are errors now.
+    command.files().check()?;
     if let Command::Bench {
         which: BenchCommand::Compare { a, b },
     } = &command
@@ -134,10 +137,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Command::Demo(args) => {
-            // Before a game that could take hours: outputs it could not write are errors now.
-            for path in args.record.iter().chain(&args.screenshot) {
-                check_output(path)?;
-            }
             let scene = Scene::load(&args.scene)?;
             announce(&device, &scene);
             let options = RunOptions {
@@ -157,9 +156,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             print_report(&report, args.json, args.screenshot.as_deref())?;
         }
         Command::Play(args) => {
-            if let Some(path) = &args.record {
-                check_output(path)?;
-            }
             let scene = Scene::load(&args.scene)?;
             announce(&device, &scene);
             let options = PlayOptions {
@@ -190,7 +186,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             if report.state_hash != recorded {
                 bail!(
                     "{}: the replay ended in state {} but was recorded ending in {recorded}",
-                    file.display(),
+                    shown(&file),
                     report.state_hash
                 );
             }

@@ -573,3 +573,84 @@ fn a_large_world_on_the_cpu_says_its_size_before_it_is_allocated() {
     );
     assert!(first.contains("GB of host memory"), "{first}");
 }
+
+#[test]
+fn an_output_never_replaces_an_input_or_another_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let scene = path("k.toml");
+    let source = gpuwars::game::scene::BUILT_IN[1].source;
+    std::fs::write(&scene, source).unwrap();
+    std::os::unix::fs::symlink(&scene, path("link.toml")).unwrap();
+    std::fs::hard_link(&scene, path("hard.toml")).unwrap();
+    let long = ["demo", "--steps", "1000000", "--scene"];
+    let cases: [(&[&str], &str, &str); 6] = [
+        (&[&scene, "--record", &scene], "--record", "--scene"),
+        (&[&scene, "--screenshot", &scene], "--screenshot", "--scene"),
+        (
+            &[&path("link.toml"), "--record", &scene],
+            "--record",
+            "--scene",
+        ),
+        (
+            &[&scene, "--record", &path("hard.toml")],
+            "--record",
+            "--scene",
+        ),
+        (
+            &["paper", "--record", &path("x"), "--screenshot", &path("x")],
+            "--screenshot",
+            "--record",
+        ),
+        (
+            &[
+                "paper",
+                "--record",
+                &path("x"),
+                "--screenshot",
+                &format!("{}/./x", dir.path().display()),
+            ],
+            "--screenshot",
+            "--record",
+        ),
+    ];
+    for (args, output, input) in cases {
+        let args = [&long[..], args].concat();
+        let says = format!("cannot write ({output}): it is the file {input} names");
+        refused(&args, 1, &[&says, &format!("give {output} another path")]);
+    }
+    // Tradeoff's tables go into --out, where its scene may be.
+    let table = path("bench-tradeoff.csv");
+    std::fs::write(&table, source).unwrap();
+    let out = dir.path().to_str().unwrap();
+    refused(
+        &["tradeoff", "--scene", &table, "--out", out],
+        1,
+        &["cannot write (--out): it is the file --scene names"],
+    );
+    assert_eq!(std::fs::read_to_string(&scene).unwrap(), source);
+    assert_eq!(std::fs::read_to_string(&table).unwrap(), source);
+    let mut left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    left.sort();
+    assert_eq!(
+        left,
+        ["bench-tradeoff.csv", "hard.toml", "k.toml", "link.toml"]
+    );
+}
+
+#[test]
+fn a_long_path_is_shown_shortened() {
+    let long = format!("/no/such/{}/scene.toml", "a".repeat(6000));
+    let stderr = refused(&["demo", "--scene", &long], 1, &["scene.toml", "…"]);
+    assert!(stderr.len() < 400, "{stderr}");
+    let record = format!("/no/such/{}/game.json", "b".repeat(6000));
+    let stderr = refused(
+        &["demo", "--record", &record],
+        1,
+        &["cannot write", "game.json"],
+    );
+    assert!(stderr.len() < 400, "{stderr}");
+}
