@@ -91,16 +91,57 @@ pub fn excerpt(text: &str) -> String {
     out
 }
 
-/// `text` with its control characters escaped.
+/// `text` with its control characters escaped as JSON and TOML write them (`\n`,
+/// `\u001b`).
 fn escaped(text: &str) -> String {
     let mut out = String::with_capacity(text.len());
     for c in text.chars() {
-        match c.is_control() {
-            true => out.extend(c.escape_default()),
-            false => out.push(c),
+        match c {
+            '\n' => out.push_str("\\n"),
+            '\r' => out.push_str("\\r"),
+            '\t' => out.push_str("\\t"),
+            c if c.is_control() => out.push_str(&format!("\\u{:04x}", u32::from(c))),
+            c => out.push(c),
         }
     }
     out
+}
+
+/// What a JSON parse error means, in words (without serde_json's position, which the
+/// error gives as its line).
+pub fn json_problem(e: &serde_json::Error) -> String {
+    let message = e.to_string();
+    let position = format!(" at line {} column {}", e.line(), e.column());
+    let message = message.strip_suffix(&position).unwrap_or(&message);
+    let said = match message {
+        "EOF while parsing a list" => "the text ends inside a list (a `]` is missing)",
+        "EOF while parsing an object" => "the text ends inside an object (a `}` is missing)",
+        "EOF while parsing a string" => "the text ends inside a string (a `\"` is missing)",
+        "EOF while parsing a value" => "the text ends where a value should be",
+        "expected ident" | "expected value" => {
+            "not a JSON value (a number, a \"string\", true, false, null, a list or an object)"
+        }
+        "expected `:`" => "a `:` should follow the key",
+        "expected `,` or `]`" => "a `,` or `]` should follow the list's item",
+        "expected `,` or `}`" => "a `,` or `}` should follow the object's value",
+        "key must be a string" => "a key must be a \"string\" in double quotes",
+        "invalid escape" => "not an escape sequence of JSON (\\n, \\\", \\uXXXX, …)",
+        "invalid number" => "not a number",
+        "number out of range" => "a number too large to read",
+        "invalid unicode code point" | "lone leading surrogate in hex escape" => {
+            "a \\u escape that is not a character"
+        }
+        "unexpected end of hex escape" => "a \\u escape needs 4 hexadecimal digits",
+        "trailing comma" => "a `,` before the closing bracket",
+        "trailing characters" => "more text after the end of the JSON value",
+        "recursion limit exceeded" => "lists or objects nested too deeply",
+        m if m.starts_with("control character") => {
+            "a control character inside a string (write it as an escape, such as \\n)"
+        }
+        // The readers' own errors (already in words) and anything new.
+        m => return m.to_owned(),
+    };
+    said.to_owned()
 }
 
 /// A file's name as an error shows it: control characters escaped, and a long one cut to

@@ -50,8 +50,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         which: BenchCommand::Compare { a, b },
     } = &command
     {
+        let (a_name, b_name) = (shown(a), shown(b));
         let (a, b) = (compare::load(a)?, compare::load(b)?);
-        print!("{}", compare::to_text(&compare::compare(&a, &b)?, &a, &b));
+        let changes = compare::compare(&a, &a_name, &b, &b_name)?;
+        print!("{}", compare::to_text(&changes, &a, &b));
         return Ok(());
     }
     if let Command::Scenes = command {
