@@ -10,7 +10,9 @@ use gpuwars::benchmark::compare;
 use gpuwars::benchmark::paper::{self, PaperOptions, PaperSummary};
 use gpuwars::benchmark::scale::{self, ScaleOptions, ScaleSummary};
 use gpuwars::benchmark::tradeoff::{self, TradeoffOptions, TradeoffSummary};
-use gpuwars::cli::{BenchCommand, Cli, Command, default_demo, defaults};
+use gpuwars::cli::{
+    BenchCommand, Cli, Command, THREADS_PER_CPU, cpu_threads, default_demo, defaults,
+};
 use gpuwars::files::{excerpt, shown, thousands};
 use gpuwars::game::Scene;
 use gpuwars::game::demo::{self, Report, RunOptions};
@@ -63,7 +65,18 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         return Ok(());
     }
-    let device = Device::select(cli.backend, cli.cpu_threads.map(usize::from))?;
+    let cpus = std::thread::available_parallelism().map_or(1, usize::from);
+    let threads = cli.cpu_threads.map(|asked| {
+        let (threads, capped) = cpu_threads(asked, cpus);
+        if capped {
+            eprintln!(
+                "gpuwars: --cpu-threads {asked}: using {threads}, {THREADS_PER_CPU} for each of \
+                 this machine's {cpus} logical CPUs (more only wait on each other)"
+            );
+        }
+        threads
+    });
+    let device = Device::select(cli.backend, threads)?;
     match command {
         Command::Scenes
         | Command::Bench {

@@ -533,7 +533,7 @@ fn flag_values_are_checked_in_words() {
     refused(
         &["demo", "--frames-every", "0", dir],
         1,
-        &["is not a step count"],
+        &["--frames-every: N: out of range (allowed a whole number from 1 to 1,000,000)"],
     );
     refused(
         &["demo", "--frames-every", "1", "/dev/null"],
@@ -653,4 +653,73 @@ fn a_long_path_is_shown_shortened() {
         &["cannot write", "game.json"],
     );
     assert!(stderr.len() < 400, "{stderr}");
+}
+
+#[test]
+fn every_command_checks_its_flags_in_the_same_words() {
+    let seeds = [
+        vec!["demo"],
+        vec!["play"],
+        vec!["tradeoff"],
+        vec!["bench", "paper"],
+    ];
+    for command in seeds {
+        for (seed, says) in [
+            (
+                "abc",
+                "not a whole number (allowed a whole number from 0 to 4,294,967,295)",
+            ),
+            (
+                "4294967296",
+                "out of range (allowed a whole number from 0 to 4,294,967,295)",
+            ),
+        ] {
+            let args = [&command[..], &["--seed", seed]].concat();
+            let stderr = refused(&args, 2, &[says]);
+            for rust in ["..=", "invalid digit", "u32"] {
+                assert!(!stderr.contains(rust), "{stderr} speaks of `{rust}`");
+            }
+        }
+    }
+    // A constraint is said in the help and checked with the flag, not after it.
+    let stderr = refused(
+        &["bench", "scale", "--max", "1025"],
+        2,
+        &["not a multiple of 8"],
+    );
+    assert!(stderr.contains("from 1,024 to 16,760,000"), "{stderr}");
+    assert!(!stderr.contains("1025 enemies"), "{stderr}");
+    let help = gpuwars(&["bench", "scale", "--help"]);
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(
+        help.contains("a multiple of 8 from 1,024 to 16,760,000"),
+        "{help}"
+    );
+}
+
+#[test]
+fn more_cpu_threads_than_the_machine_can_use_are_capped_with_a_note() {
+    let cpus = std::thread::available_parallelism().unwrap().get();
+    let most = cpus * gpuwars::cli::THREADS_PER_CPU;
+    let out = gpuwars(&[
+        "info",
+        "--json",
+        "--backend",
+        "cpu",
+        "--cpu-threads",
+        "1024",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let info: Value = serde_json::from_slice(&out.stdout).unwrap();
+    if most < 1024 {
+        assert_eq!(info["cpu_threads"], most, "{stderr}");
+        assert!(
+            stderr.contains(&format!("--cpu-threads 1024: using {most}")),
+            "{stderr}"
+        );
+    } else {
+        assert_eq!(info["cpu_threads"], 1024);
+    }
+    let info = info_json(&["info", "--json", "--backend", "cpu", "--cpu-threads", "2"]);
+    assert_eq!(info["cpu_threads"], 2);
 }

@@ -316,6 +316,8 @@ fn number_text() -> impl Strategy<Value = String> {
         "1e-40",
         "1e-38",
         "1.1754944e-38",
+        "1.1754943e-38",
+        "1.17549435e-38",
         "3.4028235e38",
         "3.4028236e38",
         "1e400",
@@ -438,7 +440,7 @@ fn follows(rule: Rule, value: &str) -> bool {
             let inside = if closed { x >= low } else { x > low } && x <= high;
             let stored = x as f32;
             let storable = !(x.is_finite() && stored.is_infinite())
-                && (x == 0.0 || stored.abs() >= f32::MIN_POSITIVE);
+                && (x == 0.0 || x.abs() >= f64::from(f32::MIN_POSITIVE));
             inside && storable
         }
         Rule::Mass => {
