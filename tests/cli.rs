@@ -723,3 +723,24 @@ fn more_cpu_threads_than_the_machine_can_use_are_capped_with_a_note() {
     let info = info_json(&["info", "--json", "--backend", "cpu", "--cpu-threads", "2"]);
     assert_eq!(info["cpu_threads"], 2);
 }
+
+#[test]
+fn play_without_a_display_says_what_to_do_in_words() {
+    for display in [None, Some(":987")] {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_gpuwars"));
+        command
+            .args(["--backend", "cpu", "play"])
+            .env_remove("WAYLAND_DISPLAY")
+            .env_remove("DISPLAY");
+        if let Some(display) = display {
+            command.env("DISPLAY", display);
+        }
+        let out = command.output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{stderr}");
+        assert_eq!(
+            stderr.trim_end(),
+            "gpuwars: error: no display to open a window on; `gpuwars demo` plays without one"
+        );
+    }
+}

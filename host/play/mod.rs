@@ -14,7 +14,7 @@ mod window;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use anyhow::Context as _;
+use anyhow::{Context as _, anyhow};
 use glium::{Display, Rect, Surface};
 use glutin::surface::WindowSurface;
 use gpuwars_kernels::game::control::{DESTROYED, Input, Status};
@@ -159,8 +159,9 @@ pub fn display_present() -> bool {
 /// Plays `scene` in a window until Esc or the window is closed; returns the last game's
 /// report (and writes its replay if asked).
 pub fn play(device: &Device, scene: &Scene, options: PlayOptions) -> anyhow::Result<PlayReport> {
+    // winit's error quotes its own source file: the user is told what to do instead.
     let event_loop = EventLoop::new()
-        .context("no display to open a window on (`gpuwars demo` plays without one)")?;
+        .map_err(|_| anyhow!("no display to open a window on; `gpuwars demo` plays without one"))?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App::new(device, scene, options)?;
     event_loop.run_app(&mut app).context("running the window")?;
@@ -176,8 +177,9 @@ pub fn measure(
     options: PlayOptions,
     duration: Duration,
 ) -> anyhow::Result<(Seconds, bool)> {
-    let event_loop = EventLoop::new()
-        .context("no display to open a window on (leave out --window to render offscreen)")?;
+    let event_loop = EventLoop::new().map_err(|_| {
+        anyhow!("no display to open a window on; leave out --window to render offscreen")
+    })?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App::new(device, scene, options)?;
     app.bench = Some(Bench {
