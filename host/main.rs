@@ -133,8 +133,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             seed,
             out,
         } => {
+            let scene = Scene::load(&scene)?;
+            // Its game tables play the scene many times: a large one is said first.
+            announce(&device, &scene);
             let options = TradeoffOptions {
-                scene: Scene::load(&scene)?,
+                scene,
                 quick,
                 seed,
                 out: out.out,

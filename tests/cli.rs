@@ -544,17 +544,23 @@ fn flag_values_are_checked_in_words() {
 
 #[test]
 fn a_large_world_on_the_cpu_says_its_size_before_it_is_allocated() {
+    let out = tempfile::tempdir().unwrap();
+    let out = out.path().to_str().unwrap();
+    for command in [
+        &["demo", "--scene", "scale-16m", "--steps", "1"][..],
+        &["tradeoff", "--quick", "--scene", "scale-16m", "--out", out],
+    ] {
+        says_its_size_first(command);
+    }
+}
+
+/// Starts `gpuwars --backend cpu ARGS`, whose first line on stderr must say the size of
+/// `scale-16m`'s world, and stops it there.
+fn says_its_size_first(args: &[&str]) {
     use std::io::BufRead;
     let mut child = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
-        .args([
-            "--backend",
-            "cpu",
-            "demo",
-            "--scene",
-            "scale-16m",
-            "--steps",
-            "1",
-        ])
+        .args(["--backend", "cpu"])
+        .args(args)
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::piped())
         .spawn()
