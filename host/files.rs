@@ -125,7 +125,7 @@ pub fn json_problem(e: &serde_json::Error) -> String {
         "expected `,` or `]`" => "a `,` or `]` should follow the list's item",
         "expected `,` or `}`" => "a `,` or `}` should follow the object's value",
         "key must be a string" => "a key must be a \"string\" in double quotes",
-        "invalid escape" => "not an escape sequence of JSON (\\n, \\\", \\uXXXX, …)",
+        "invalid escape" => "a backslash that starts no escape of JSON (\\n, \\\", \\uXXXX, …)",
         "invalid number" => "not a number",
         "number out of range" => "a number too large to read",
         "invalid unicode code point" | "lone leading surrogate in hex escape" => {
@@ -469,6 +469,23 @@ impl RunFiles {
             });
         }
         self
+    }
+
+    /// The files read, with their flags.
+    pub fn inputs(&self) -> impl Iterator<Item = (&str, &Path)> {
+        self.uses_where(|how| how == How::Reads)
+    }
+
+    /// The files written, with their flags.
+    pub fn outputs(&self) -> impl Iterator<Item = (&str, &Path)> {
+        self.uses_where(|how| how != How::Reads)
+    }
+
+    fn uses_where(&self, keep: impl Fn(How) -> bool) -> impl Iterator<Item = (&str, &Path)> {
+        self.uses
+            .iter()
+            .filter(move |u| keep(u.how))
+            .map(|u| (u.flag.as_str(), u.path.as_path()))
     }
 
     /// Checks, before the run, that every output may be written (see [`check_output`]) and

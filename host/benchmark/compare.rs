@@ -37,16 +37,19 @@ pub const MAX_SUMMARY_BYTES: u64 = 16 << 20;
 /// [`MAX_SUMMARY_BYTES`] bytes (see [`read_text`]) holding a JSON object with a
 /// `benchmark` field.
 pub fn load(path: &Path) -> Result<Value, FileError> {
-    let text = read_text(path, MAX_SUMMARY_BYTES)?;
-    let name = shown(path);
-    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+    parse(&read_text(path, MAX_SUMMARY_BYTES)?, &shown(path))
+}
+
+/// Reads the summary `text`; `origin` names it in errors.
+pub fn parse(text: &str, origin: &str) -> Result<Value, FileError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let value: Value = serde_json::from_str(text).map_err(|e| {
         let problem = format!("not a benchmark summary: {}", json_problem(&e));
-        FileError::new(&name, (e.line() > 0).then_some(e.line()), "", problem)
+        FileError::new(origin, (e.line() > 0).then_some(e.line()), "", problem)
     })?;
     if value.get("benchmark").and_then(Value::as_str).is_none() {
         let problem = "not a benchmark summary (it has no \"benchmark\" field)";
-        return Err(FileError::new(&name, None, "", problem));
+        return Err(FileError::new(origin, None, "", problem));
     }
     Ok(value)
 }
