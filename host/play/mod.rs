@@ -8,6 +8,7 @@
 //! which the game slows down rather than skipping). The inputs of every step are recorded,
 //! so `--record` writes a replay that `gpuwars replay` plays headless to the same state.
 
+mod guard;
 pub mod keys;
 mod window;
 
@@ -164,7 +165,9 @@ pub fn play(device: &Device, scene: &Scene, options: PlayOptions) -> anyhow::Res
         .map_err(|_| anyhow!("no display to open a window on; `gpuwars demo` plays without one"))?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App::new(device, scene, options)?;
-    event_loop.run_app(&mut app).context("running the window")?;
+    if let Some(ran) = guard::surviving_winit(|| event_loop.run_app(&mut app)) {
+        ran.context("running the window")?;
+    }
     app.finish()
 }
 
