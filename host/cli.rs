@@ -13,7 +13,7 @@ use crate::files::{RunFiles, shown, thousands};
 use crate::game::Options;
 use crate::game::demo::{Frames, Pilot, RunOptions};
 use crate::game::replay::MAX_STEPS;
-use crate::game::scene;
+use crate::game::{highscore, scene};
 use crate::graphics::Renderer;
 use crate::pipeline::draw::MAX_SIDE;
 use crate::play::Pilot as PlayPilot;
@@ -112,8 +112,11 @@ impl Command {
                 .reads("--scene", scene(&args.scene).as_deref())
                 .writes("--record", args.record.as_deref())
                 .writes("--screenshot", args.screenshot.as_deref()),
+            // The high scores are read, and rewritten only when a game beats them: an
+            // output on them is refused, a problem with them only warned of (as before).
             Command::Play(args) => RunFiles::new()
                 .reads("--scene", scene(&args.scene).as_deref())
+                .reads("the high scores", highscore::default_path().as_deref())
                 .writes("--record", args.record.as_deref()),
             Command::Replay { file, .. } => RunFiles::new().reads("FILE", Some(file)),
             Command::Tradeoff {

@@ -525,7 +525,7 @@ impl RunFiles {
                     None,
                     "",
                     format!(
-                        "cannot write ({}): it is the file {} names, which this run {verb} \
+                        "cannot write ({}): it is the same file as {}, which this run {verb} \
                          (give {} another path)",
                         out.flag, other.flag, out.flag
                     ),

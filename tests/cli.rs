@@ -622,9 +622,29 @@ fn an_output_never_replaces_an_input_or_another_output() {
     ];
     for (args, output, input) in cases {
         let args = [&long[..], args].concat();
-        let says = format!("cannot write ({output}): it is the file {input} names");
+        let says = format!("cannot write ({output}): it is the same file as {input}");
         refused(&args, 1, &[&says, &format!("give {output} another path")]);
     }
+    // Play's high scores are read, and rewritten after a game.
+    let scores = dir.path().join(gpuwars::game::highscore::FILE_NAME);
+    std::fs::write(&scores, "").unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
+        .args([
+            "--backend",
+            "cpu",
+            "play",
+            "--record",
+            scores.to_str().unwrap(),
+        ])
+        .env("GPUWARS_DATA_DIR", dir.path())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("cannot write (--record): it is the same file as the high scores"),
+        "{stderr}"
+    );
+    std::fs::remove_file(&scores).unwrap();
     // Tradeoff's tables go into --out, where its scene may be.
     let table = path("bench-tradeoff.csv");
     std::fs::write(&table, source).unwrap();
@@ -632,7 +652,7 @@ fn an_output_never_replaces_an_input_or_another_output() {
     refused(
         &["tradeoff", "--scene", &table, "--out", out],
         1,
-        &["cannot write (--out): it is the file --scene names"],
+        &["cannot write (--out): it is the same file as --scene"],
     );
     assert_eq!(std::fs::read_to_string(&scene).unwrap(), source);
     assert_eq!(std::fs::read_to_string(&table).unwrap(), source);
