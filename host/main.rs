@@ -156,8 +156,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Command::Demo(args) => {
             let scene = Scene::load(&args.scene)?;
-            announce(&device, &scene);
+            let slow = announce(&device, &scene);
             let options = RunOptions {
+                progress: slow && !args.json,
                 pilot: args.pilot,
                 frame: args.screenshot.as_ref().map(|_| args.size),
                 frames: args.frames(args.size)?,
@@ -197,8 +198,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let replay = Replay::load(&file)?;
             let origin = format!("{} (scene `{}`)", file.display(), replay.scene);
             let scene = Scene::from_toml(&replay.scene_toml, &origin)?;
-            announce(&device, &scene);
-            let report = demo::replay(&device, &scene, &replay, run.options())?;
+            let options = RunOptions {
+                progress: announce(&device, &scene) && !json,
+                ..run.options()
+            };
+            let report = demo::replay(&device, &scene, &replay, options)?;
             print_report(&report, json, None)?;
             let recorded = format!("{:#018x}", replay.state_hash);
             if report.state_hash != recorded {
@@ -217,10 +221,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
 const LARGE_WORLD_BYTES: u64 = 1 << 30;
 
 /// Says on stderr, before a large world is allocated on the CPU emulation, how large it is
-/// and that it plays slowly there (the device's free memory is checked next).
-fn announce(device: &Device, scene: &Scene) {
+/// and that it plays slowly there (the device's free memory is checked next); returns
+/// whether it did, so that the run shows its progress.
+fn announce(device: &Device, scene: &Scene) -> bool {
     let (slots, bytes) = footprint(scene);
-    if device.kind() == BackendKind::Cpu && bytes >= LARGE_WORLD_BYTES {
+    let large = device.kind() == BackendKind::Cpu && bytes >= LARGE_WORLD_BYTES;
+    if large {
         eprintln!(
             "gpuwars: scene `{}` has {} slots, which take {:.1} GB of host memory; the CPU \
              emulation may take seconds per step",
@@ -229,6 +235,7 @@ fn announce(device: &Device, scene: &Scene) {
             bytes as f64 / 1e9
         );
     }
+    large
 }
 
 /// The report, and where the screenshot went if one was written.

@@ -143,7 +143,7 @@ fn write_json<T: Serialize>(path: &Path, value: &T) -> anyhow::Result<()> {
 
 /// A progress bar over `len` units on stderr when `show` and stderr is a terminal; hidden
 /// otherwise.
-fn progress(len: u64, show: bool, what: &str) -> ProgressBar {
+pub(crate) fn progress(len: u64, show: bool, what: &str) -> ProgressBar {
     use std::io::IsTerminal;
     if !show || !std::io::stderr().is_terminal() {
         return ProgressBar::hidden();

@@ -11,6 +11,7 @@ use super::engine::Options;
 use super::replay::Replay;
 use super::spec::Scene;
 use super::{Game, looks};
+use crate::benchmark::progress;
 use crate::graphics::Renderer;
 use crate::graphics::bodies::BodyRenderer;
 use crate::graphics::headless::Headless;
@@ -189,6 +190,8 @@ pub struct RunOptions {
     pub frames: Option<Frames>,
     /// What draws the frames.
     pub renderer: Renderer,
+    /// Show the steps played in a progress bar on stderr, when it is a terminal.
+    pub progress: bool,
 }
 
 /// What draws a demo's frames: the kernel renderer, or GL with no window (the interop
@@ -282,8 +285,10 @@ fn play(
         true => Some(Painter::new(options.renderer, game)?),
         false => None,
     };
+    let bar = progress(steps, options.progress, "steps");
     let start = Instant::now();
     for i in 0..steps {
+        bar.inc(1);
         match &mut profile {
             Some(profile) => game.submit_profiled(pilot(i), profile)?,
             None => game.submit(pilot(i))?,
@@ -310,6 +315,7 @@ fn play(
     while let Some(status) = game.next_status()? {
         record.take(status);
     }
+    bar.finish_and_clear();
     let seconds = start.elapsed().as_secs_f64();
     let hash = game.state_hash()?;
     let frame = match (options.frame, &mut painter) {
