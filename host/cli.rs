@@ -111,7 +111,8 @@ impl Command {
             Command::Demo(args) => RunFiles::new()
                 .reads("--scene", scene(&args.scene).as_deref())
                 .writes("--record", args.record.as_deref())
-                .writes("--screenshot", args.screenshot.as_deref()),
+                .writes("--screenshot", args.screenshot.as_deref())
+                .writes_frames("--frames-every", frames_dir(args)),
             // The high scores are read, and rewritten only when a game beats them: an
             // output on them is refused, a problem with them only warned of (as before).
             Command::Play(args) => RunFiles::new()
@@ -292,6 +293,14 @@ impl DemoArgs {
         }
         Ok(Some(Frames { every, dir, size }))
     }
+}
+
+/// The folder of `--frames-every N DIR`.
+fn frames_dir(args: &DemoArgs) -> Option<&Path> {
+    args.frames_every
+        .as_deref()
+        .and_then(|values| values.get(1))
+        .map(Path::new)
 }
 
 /// What `gpuwars play` plays, and how.

@@ -7,6 +7,8 @@ use std::fs::{File, FileType};
 use std::io::{ErrorKind, Read, Write};
 use std::path::{Path, PathBuf};
 
+use crate::game::demo::Frames;
+
 /// Most bytes of a scene file (the built-in ones take a few thousand).
 pub const MAX_SCENE_BYTES: u64 = 1 << 20;
 
@@ -428,6 +430,8 @@ enum How {
     Writes,
     /// Writes, in a folder that the run makes if it is missing.
     WritesInto,
+    /// Writes the frames of `demo --frames-every` into this folder.
+    Frames,
 }
 
 /// Which file a path is: by device and inode where it exists (links followed, so a link
@@ -458,6 +462,12 @@ impl RunFiles {
     /// The run writes `path` into a folder it makes if missing, named by `flag`.
     pub fn writes_into(self, flag: &str, path: &Path) -> Self {
         self.with(flag, Some(path), How::WritesInto)
+    }
+
+    /// The run writes `demo`'s frames (see [`Frames::is_file_name`]) into the folder
+    /// `dir`, named by `flag` (nothing when `None`).
+    pub fn writes_frames(self, flag: &str, dir: Option<&Path>) -> Self {
+        self.with(flag, dir, How::Frames)
     }
 
     fn with(mut self, flag: &str, path: Option<&Path>, how: How) -> Self {
@@ -492,12 +502,44 @@ impl RunFiles {
     /// that no two uses are one file but where both only read it: an output that is an
     /// input or another output is refused, naming both.
     pub fn check(&self) -> Result<(), FileError> {
-        for out in self.uses.iter().filter(|u| u.how != How::Reads) {
+        let files = |how: How| !matches!(how, How::Reads | How::Frames);
+        for out in self.uses.iter().filter(|u| files(u.how)) {
             if out.how == How::Writes || std::fs::metadata(folder(&out.path)).is_ok() {
                 check_output(&out.path).map_err(|e| FileError {
                     problem: format!("{} ({})", e.problem, out.flag),
                     ..e
                 })?;
+            }
+        }
+        // A frame may land on any other file of the run named like one, in its folder.
+        for frames in self.uses.iter().filter(|u| u.how == How::Frames) {
+            let Ok(dir) = std::fs::canonicalize(&frames.path) else {
+                continue;
+            };
+            let landed = self.uses.iter().find(|u| {
+                let exists = u.how != How::Reads || u.path.exists();
+                let real = real_path(&u.path);
+                u.how != How::Frames
+                    && exists
+                    && real.as_ref().is_some_and(|real| {
+                        real.parent() == Some(&dir)
+                            && real
+                                .file_name()
+                                .and_then(|n| n.to_str())
+                                .is_some_and(Frames::is_file_name)
+                    })
+            });
+            if let Some(other) = landed {
+                return Err(FileError::new(
+                    &origin(&other.path),
+                    None,
+                    "",
+                    format!(
+                        "cannot write ({}): a frame would replace {}, named like a frame in \
+                         that folder (give {} another folder)",
+                        frames.flag, other.flag, frames.flag
+                    ),
+                ));
             }
         }
         // An input that is not there is not read over (reading it fails in its own words).
@@ -543,6 +585,15 @@ impl Identity {
     }
 }
 
+/// `path` with its folder's real path (links followed), and itself resolved where it is a
+/// link to a file that exists.
+fn real_path(path: &Path) -> Option<PathBuf> {
+    std::fs::canonicalize(path).ok().or_else(|| {
+        let dir = std::fs::canonicalize(folder(path)).ok()?;
+        Some(dir.join(path.file_name()?))
+    })
+}
+
 /// Which file `path` is, when it can be told (a missing folder cannot be resolved).
 fn identity(path: &Path) -> Option<Identity> {
     #[cfg(unix)]
@@ -550,6 +601,5 @@ fn identity(path: &Path) -> Option<Identity> {
         use std::os::unix::fs::MetadataExt;
         return Some(Identity::Inode(meta.dev(), meta.ino()));
     }
-    let dir = std::fs::canonicalize(folder(path)).ok()?;
-    Some(Identity::Named(dir.join(path.file_name()?)))
+    real_path(path).map(Identity::Named)
 }

@@ -378,7 +378,7 @@ fn demo_writes_numbered_frames_and_plays_the_same_game() {
     let frame = image::open(dir.path().join("frame-000020.png")).unwrap();
     assert_eq!((frame.width(), frame.height()), (32, 24));
     for (every, folder, says) in [
-        ("0", folder, "not a step count"),
+        ("0", folder, "--frames-every: N: out of range"),
         ("5", "/no/such/folder", "is not a folder"),
     ] {
         let out = gpuwars(&["demo", "--backend", "cpu", "--frames-every", every, folder]);
@@ -625,6 +625,25 @@ fn an_output_never_replaces_an_input_or_another_output() {
         let says = format!("cannot write ({output}): it is the same file as {input}");
         refused(&args, 1, &[&says, &format!("give {output} another path")]);
     }
+    // A frame lands on a file of the run named like one.
+    let frames = dir.path().join("frames");
+    std::fs::create_dir(&frames).unwrap();
+    let frame = frames.join("frame-000060.png");
+    std::fs::write(&frame, source).unwrap();
+    let (frames, frame) = (frames.to_str().unwrap(), frame.to_str().unwrap());
+    for args in [
+        &["--scene", frame, "--frames-every", "60", frames][..],
+        &["--record", frame, "--frames-every", "60", frames],
+    ] {
+        let args = [&long[..3], args].concat();
+        refused(
+            &args,
+            1,
+            &["cannot write (--frames-every): a frame would replace"],
+        );
+    }
+    assert_eq!(std::fs::read_to_string(frame).unwrap(), source);
+    std::fs::remove_dir_all(frames).unwrap();
     // Play's high scores are read, and rewritten after a game.
     let scores = dir.path().join(gpuwars::game::highscore::FILE_NAME);
     std::fs::write(&scores, "").unwrap();

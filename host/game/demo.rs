@@ -175,6 +175,21 @@ pub struct Frames {
     pub size: (u32, u32),
 }
 
+impl Frames {
+    /// The name of the frame after step `step`: `frame-000060.png`.
+    pub fn file_name(step: u64) -> String {
+        format!("frame-{step:06}.png")
+    }
+
+    /// Whether `name` is one that [`Frames::file_name`] gives.
+    pub fn is_file_name(name: &str) -> bool {
+        let digits = name
+            .strip_prefix("frame-")
+            .and_then(|rest| rest.strip_suffix(".png"));
+        digits.is_some_and(|d| d.len() >= 6 && d.bytes().all(|b| b.is_ascii_digit()))
+    }
+}
+
 /// How `demo` and `replay` run a game.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct RunOptions {
@@ -304,7 +319,7 @@ fn play(
                 record.take(status);
             }
             let (width, height) = frames.size;
-            let path = frames.dir.join(format!("frame-{:06}.png", i + 1));
+            let path = frames.dir.join(Frames::file_name(i + 1));
             let painter = painter.as_mut().expect("made when frames are asked for");
             painter.draw(game, width, height)?.save_png(&path)?;
         }
