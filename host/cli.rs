@@ -112,7 +112,7 @@ impl Command {
                 .reads("--scene", scene(&args.scene).as_deref())
                 .writes("--record", args.record.as_deref())
                 .writes("--screenshot", args.screenshot.as_deref())
-                .writes_frames("--frames-every", frames_dir(args)),
+                .writes_many("--frames-every", frames_dir(args), Frames::is_file_name),
             // The high scores are read, and rewritten only when a game beats them: an
             // output on them is refused, a problem with them only warned of (as before).
             Command::Play(args) => RunFiles::new()

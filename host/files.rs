@@ -7,8 +7,6 @@ use std::fs::{File, FileType};
 use std::io::{ErrorKind, Read, Write};
 use std::path::{Path, PathBuf};
 
-use crate::game::demo::Frames;
-
 /// Most bytes of a scene file (the built-in ones take a few thousand).
 pub const MAX_SCENE_BYTES: u64 = 1 << 20;
 
@@ -421,6 +419,8 @@ struct Use {
     flag: String,
     path: PathBuf,
     how: How,
+    /// For [`How::Many`]: the names of the files written in the folder `path`.
+    named: fn(&str) -> bool,
 }
 
 /// What a run does with a file.
@@ -430,8 +430,8 @@ enum How {
     Writes,
     /// Writes, in a folder that the run makes if it is missing.
     WritesInto,
-    /// Writes the frames of `demo --frames-every` into this folder.
-    Frames,
+    /// Writes files of some names (`frame-000060.png`) into this folder.
+    Many,
 }
 
 /// Which file a path is: by device and inode where it exists (links followed, so a link
@@ -451,31 +451,32 @@ impl RunFiles {
 
     /// The run reads `path`, named by `flag` (nothing when `None`).
     pub fn reads(self, flag: &str, path: Option<&Path>) -> Self {
-        self.with(flag, path, How::Reads)
+        self.with(flag, path, How::Reads, |_| false)
     }
 
     /// The run writes `path`, named by `flag` (nothing when `None`).
     pub fn writes(self, flag: &str, path: Option<&Path>) -> Self {
-        self.with(flag, path, How::Writes)
+        self.with(flag, path, How::Writes, |_| false)
     }
 
     /// The run writes `path` into a folder it makes if missing, named by `flag`.
     pub fn writes_into(self, flag: &str, path: &Path) -> Self {
-        self.with(flag, Some(path), How::WritesInto)
+        self.with(flag, Some(path), How::WritesInto, |_| false)
     }
 
-    /// The run writes `demo`'s frames (see [`Frames::is_file_name`]) into the folder
-    /// `dir`, named by `flag` (nothing when `None`).
-    pub fn writes_frames(self, flag: &str, dir: Option<&Path>) -> Self {
-        self.with(flag, dir, How::Frames)
+    /// The run writes files whose names `named` accepts into the folder `dir`, named by
+    /// `flag` (nothing when `None`).
+    pub fn writes_many(self, flag: &str, dir: Option<&Path>, named: fn(&str) -> bool) -> Self {
+        self.with(flag, dir, How::Many, named)
     }
 
-    fn with(mut self, flag: &str, path: Option<&Path>, how: How) -> Self {
+    fn with(mut self, flag: &str, path: Option<&Path>, how: How, named: fn(&str) -> bool) -> Self {
         if let Some(path) = path {
             self.uses.push(Use {
                 flag: flag.to_owned(),
                 path: path.to_path_buf(),
                 how,
+                named,
             });
         }
         self
@@ -486,9 +487,9 @@ impl RunFiles {
         self.uses_where(|how| how == How::Reads)
     }
 
-    /// The files written, with their flags.
+    /// The files written, with their flags (not the folders of [`RunFiles::writes_many`]).
     pub fn outputs(&self) -> impl Iterator<Item = (&str, &Path)> {
-        self.uses_where(|how| how != How::Reads)
+        self.uses_where(|how| matches!(how, How::Writes | How::WritesInto))
     }
 
     fn uses_where(&self, keep: impl Fn(How) -> bool) -> impl Iterator<Item = (&str, &Path)> {
@@ -502,7 +503,7 @@ impl RunFiles {
     /// that no two uses are one file but where both only read it: an output that is an
     /// input or another output is refused, naming both.
     pub fn check(&self) -> Result<(), FileError> {
-        let files = |how: How| !matches!(how, How::Reads | How::Frames);
+        let files = |how: How| matches!(how, How::Writes | How::WritesInto);
         for out in self.uses.iter().filter(|u| files(u.how)) {
             if out.how == How::Writes || std::fs::metadata(folder(&out.path)).is_ok() {
                 check_output(&out.path).map_err(|e| FileError {
@@ -511,22 +512,20 @@ impl RunFiles {
                 })?;
             }
         }
-        // A frame may land on any other file of the run named like one, in its folder.
-        for frames in self.uses.iter().filter(|u| u.how == How::Frames) {
-            let Ok(dir) = std::fs::canonicalize(&frames.path) else {
+        // A folder's files may land on any other file of the run named like one of them.
+        for many in self.uses.iter().filter(|u| u.how == How::Many) {
+            let Ok(dir) = std::fs::canonicalize(&many.path) else {
                 continue;
             };
-            let landed = self.uses.iter().find(|u| {
-                let exists = u.how != How::Reads || u.path.exists();
-                let real = real_path(&u.path);
-                u.how != How::Frames
-                    && exists
-                    && real.as_ref().is_some_and(|real| {
-                        real.parent() == Some(&dir)
+            let mut others = self.uses.iter().filter(|u| u.how != How::Many);
+            let landed = others.find(|u| {
+                (u.how != How::Reads || u.path.exists())
+                    && real_path(&u.path).is_some_and(|real| {
+                        real.parent() == Some(dir.as_path())
                             && real
                                 .file_name()
-                                .and_then(|n| n.to_str())
-                                .is_some_and(Frames::is_file_name)
+                                .and_then(|name| name.to_str())
+                                .is_some_and(many.named)
                     })
             });
             if let Some(other) = landed {
@@ -535,9 +534,9 @@ impl RunFiles {
                     None,
                     "",
                     format!(
-                        "cannot write ({}): a frame would replace {}, named like a frame in \
-                         that folder (give {} another folder)",
-                        frames.flag, other.flag, frames.flag
+                        "cannot write ({}): a file it writes would replace {}, named like one \
+                         in that folder (give {} another folder)",
+                        many.flag, other.flag, many.flag
                     ),
                 ));
             }
@@ -551,7 +550,9 @@ impl RunFiles {
         for (j, later) in self.uses.iter().enumerate() {
             for (i, earlier) in self.uses[..j].iter().enumerate() {
                 let both_read = earlier.how == How::Reads && later.how == How::Reads;
-                if both_read || ids[i].is_none() || ids[i] != ids[j] {
+                // A folder of many files is checked above.
+                let many = earlier.how == How::Many || later.how == How::Many;
+                if both_read || many || ids[i].is_none() || ids[i] != ids[j] {
                     continue;
                 }
                 let (out, other) = match later.how {

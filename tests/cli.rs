@@ -639,7 +639,7 @@ fn an_output_never_replaces_an_input_or_another_output() {
         refused(
             &args,
             1,
-            &["cannot write (--frames-every): a frame would replace"],
+            &["cannot write (--frames-every): a file it writes would replace"],
         );
     }
     assert_eq!(std::fs::read_to_string(frame).unwrap(), source);
