@@ -1,8 +1,12 @@
-//! Time per frame at 1920 × 1080: `paper` full (8,190 enemies) and `scale-1m` (1,048,576),
+//! Time per frame at 1920 × 1080: `paper` full (8,190 enemies), `scale-1m` (1,048,576) and,
+//! for the kernel renderer, `scale-16m` (16,760,000),
 //! on the backend `GPUWARS_BACKEND` names (default: auto).
 //!
-//! - `kernel_frame_1080p`: the kernel renderer's frame left on the device (`render`: two
-//!   launches, then a synchronise), and read back to the host (`draw`: 8 MB of pixels more).
+//! - `kernel_frame_1080p`: the kernel renderer's frame of the whole field left on the
+//!   device (`render`: the camera, radar, splat and resolve launches, then a synchronise),
+//!   read back to the host (`draw`: 8 MB of pixels more), and the ship followed at the
+//!   default zoom with the radar, gliding 1/60 s per frame (`follow`); `paper` also
+//!   without its explosions (`paper-no-effects`).
 //! - `displayed_frame_1080p`: a whole displayed frame with GL (no window: an EGL device),
 //!   `glFinish` included, for each renderer: `kernel` (render, read back, one texture
 //!   upload, one textured draw; `kernel-pbo` on the GPU: drawn into a GL pixel buffer
@@ -20,10 +24,10 @@ use gpuwars::BackendKind;
 use gpuwars::game::scene::built_in;
 use gpuwars::game::{Game, looks};
 use gpuwars::graphics::bodies::BodyRenderer;
+use gpuwars::graphics::camera::Camera;
 use gpuwars::graphics::headless::{Headless, Target};
 use gpuwars::graphics::picture::{Blit, DeviceImage, Upload};
 use gpuwars::graphics::unpack;
-use gpuwars::sim::layout::kind_table;
 
 mod common;
 use common::device;
@@ -32,22 +36,44 @@ fn frame(c: &mut Criterion) {
     let device = device();
     let mut group = c.benchmark_group("kernel_frame_1080p");
     group.sample_size(10);
-    for (scene, steps) in [("paper", 900), ("scale-1m", 2)] {
-        let scene = built_in(scene).unwrap().unwrap();
+    // `paper` without its explosions too: what the camera, silhouettes, radar and backdrop
+    // cost by themselves, the particles' cost being the difference.
+    let scenes = [
+        ("paper", 900, true),
+        ("paper", 900, false),
+        ("scale-1m", 2, true),
+        ("scale-16m", 2, true),
+    ];
+    for (scene, steps, effects) in scenes {
+        let mut scene = built_in(scene).unwrap().unwrap();
+        if !effects {
+            scene.game.effects = None;
+            scene.name += "-no-effects";
+        }
         let mut game = Game::new(&device, &scene, 1).unwrap();
         for _ in 0..steps {
             game.submit(None).unwrap();
         }
-        let alive = game.draw(16, 16).map(|_| game.status().enemies_alive);
+        let field = Camera::field();
+        let alive = game
+            .draw(16, 16, &field)
+            .map(|_| game.status().enemies_alive);
         group.throughput(Throughput::Elements(u64::from(alive.unwrap())));
         group.bench_function(format!("{}/{}/render", device.kind(), scene.name), |b| {
             b.iter(|| {
-                game.render(1920, 1080).unwrap();
+                game.render(1920, 1080, &field, 0.0).unwrap();
                 device.synchronize().unwrap();
             })
         });
         group.bench_function(format!("{}/{}/draw", device.kind(), scene.name), |b| {
-            b.iter(|| game.draw(1920, 1080).unwrap())
+            b.iter(|| game.draw(1920, 1080, &field).unwrap())
+        });
+        let follow = Camera::default();
+        group.bench_function(format!("{}/{}/follow", device.kind(), scene.name), |b| {
+            b.iter(|| {
+                game.render(1920, 1080, &follow, 1.0 / 60.0).unwrap();
+                device.synchronize().unwrap();
+            })
         });
     }
     group.finish();
@@ -68,12 +94,13 @@ fn displayed(c: &mut Criterion) {
         for _ in 0..steps {
             game.submit(None).unwrap();
         }
-        let alive = game.draw(16, 16).map(|_| game.status().enemies_alive);
+        let camera = Camera::field();
+        let alive = game
+            .draw(16, 16, &camera)
+            .map(|_| game.status().enemies_alive);
         group.throughput(Throughput::Elements(u64::from(alive.unwrap())));
-        let view = looks::whole_field(&scene, width, height);
-        let kinds = kind_table(&scene.world);
-        let mut bodies =
-            BodyRenderer::new(facade, game.pipeline(), &kinds, &looks::looks(&scene)).unwrap();
+        let lens = game.lens(&camera, width, height, 0.0);
+        let mut bodies = BodyRenderer::new(facade, game.pipeline(), &looks::looks(&scene)).unwrap();
         let feed = if bodies.is_interop() {
             "interop"
         } else {
@@ -81,7 +108,7 @@ fn displayed(c: &mut Criterion) {
         };
         let mut upload = Upload::default();
         let mut kernel_frame = |game: &mut Game| {
-            let frame = game.draw(width, height).unwrap();
+            let frame = game.draw(width, height, &camera).unwrap();
             upload.set(facade, &frame).unwrap();
             let mut surface = target.surface(facade).unwrap();
             let texture = upload.texture().unwrap();
@@ -96,7 +123,7 @@ fn displayed(c: &mut Criterion) {
             let mut pbo_frame = |game: &mut Game| {
                 // SAFETY: the mapped buffer holds the frame; only these launches touch it.
                 let texture = image
-                    .set(|pixels| unsafe { game.render_into(width, height, pixels) })
+                    .set(|pixels| unsafe { game.render_into(width, height, &camera, 0.0, pixels) })
                     .unwrap();
                 let mut surface = target.surface(facade).unwrap();
                 blit.draw(&mut surface, texture, true, (0, 0), height, false)
@@ -119,9 +146,9 @@ fn displayed(c: &mut Criterion) {
         });
         let mut gl_frame = |game: &mut Game| {
             let mut surface = target.surface(facade).unwrap();
-            surface.clear_color_and_depth(unpack(view.background), 0.0);
-            bodies.update(game.pipeline()).unwrap();
-            bodies.draw(&mut surface, &view).unwrap();
+            surface.clear_color_and_depth(unpack(lens.background), 0.0);
+            bodies.update(facade, game.pipeline_mut(), &lens).unwrap();
+            bodies.draw(&mut surface, &lens).unwrap();
             facade.finish();
         };
         group.bench_function(label(feed), |b| b.iter(|| gl_frame(&mut game)));

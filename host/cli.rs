@@ -15,6 +15,7 @@ use crate::game::demo::{Frames, Pilot, RunOptions};
 use crate::game::replay::MAX_STEPS;
 use crate::game::{highscore, scene};
 use crate::graphics::Renderer;
+use crate::graphics::camera::{Camera, CameraMode, DEFAULT_ZOOM, MAX_ZOOM, MIN_ZOOM};
 use crate::pipeline::draw::MAX_SIDE;
 use crate::play::Pilot as PlayPilot;
 
@@ -54,7 +55,10 @@ pub enum Command {
     Scenes,
     /// The autopilot plays a scene without a window and prints its figures (the default).
     Demo(DemoArgs),
-    /// Plays a scene in a window, at the keyboard (the default when a display is present).
+    /// Plays a scene in a window with the keyboard, the mouse or a gamepad (the default when
+    /// a display is present). WASD, the left stick or the D-pad move; the arrow keys, the
+    /// mouse (left button fires) or the right stick aim and fire; P, Space or Start pause;
+    /// F1 shows every key. The game starts at the first key, click or button.
     Play(PlayArgs),
     /// Measures: the paper's experiment, how the game scales, and the change between runs.
     Bench {
@@ -78,13 +82,26 @@ pub enum Command {
         #[command(flatten)]
         out: BenchOut,
     },
-    /// Plays a recorded game again and checks that it ends in the recorded state.
+    /// Plays a recorded game again and checks that it ends in the recorded state: headless,
+    /// or in a window to watch (Space or P pauses, `.` or N steps, 1 2 3 4 set the speed).
     Replay {
-        /// The replay file (written by `demo --record`).
+        /// The replay file (written by `demo --record` or `play --record`).
         file: PathBuf,
         /// Print JSON instead of text.
         #[arg(long)]
         json: bool,
+        /// Watch it in a window; the end state is checked when it reaches its end.
+        #[arg(long)]
+        window: bool,
+        /// With --window: which renderer draws the world.
+        #[arg(long, value_enum, default_value_t, requires = "window")]
+        render: Renderer,
+        /// With --window: the window's size, WIDTHxHEIGHT in pixels.
+        #[arg(long, default_value = "1280x720", value_parser = parse_size, requires = "window")]
+        size: (u32, u32),
+        /// With --window: start with the sound off (M toggles it).
+        #[arg(long, requires = "window")]
+        mute: bool,
         /// How the game runs on its device.
         #[command(flatten)]
         run: RunArgs,
@@ -201,11 +218,14 @@ pub struct BenchOut {
 }
 
 /// A value parser for a number from `low` to `high`, whose errors say so.
-pub fn decimal(low: f64, high: f64) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync {
+pub fn decimal<T>(low: T, high: T) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync
+where
+    T: std::str::FromStr + PartialOrd + std::fmt::Display + Copy + Send + Sync + 'static,
+{
     move |text| {
         let allowed = format!("allowed a number from {low} to {high}");
-        match text.trim().parse::<f64>() {
-            Ok(v) if (low..=high).contains(&v) => Ok(v),
+        match text.trim().parse::<T>() {
+            Ok(v) if low <= v && v <= high => Ok(v),
             Ok(_) => Err(format!("out of range ({allowed})")),
             Err(_) => Err(format!("not a number ({allowed})")),
         }
@@ -275,12 +295,30 @@ pub struct DemoArgs {
     /// window from a CUDA–GL interop vertex buffer (an EGL device).
     #[arg(long, value_enum, default_value_t)]
     pub render: Renderer,
+    /// What the screenshot and the frames show: the ship, centred, with the radar in a
+    /// corner (follow), or the whole field (field).
+    #[arg(long, env = "GPUWARS_CAMERA", value_enum, default_value_t)]
+    pub camera: CameraMode,
+    /// How close the camera follows the ship: pixels per field unit are zoom × height /
+    /// 1080 (at least the whole field, at most 8 times zoom 1's).
+    #[arg(
+        long,
+        env = "GPUWARS_ZOOM",
+        default_value_t = DEFAULT_ZOOM,
+        value_parser = decimal(MIN_ZOOM, MAX_ZOOM)
+    )]
+    pub zoom: f32,
     /// How the game runs on its device.
     #[command(flatten)]
     pub run: RunArgs,
 }
 
 impl DemoArgs {
+    /// The camera of `--camera` and `--zoom`.
+    pub fn camera(&self) -> Camera {
+        Camera::new(self.camera, self.zoom)
+    }
+
     /// `--frames-every N DIR`, checked: N from 1, DIR an existing folder.
     pub fn frames(&self, size: (u32, u32)) -> anyhow::Result<Option<Frames>> {
         let Some([every, dir]) = self.frames_every.as_deref() else {
@@ -312,7 +350,7 @@ pub struct PlayArgs {
     /// Seed of the random number generators.
     #[arg(long, default_value_t = 1, value_parser = whole(0, u32::MAX))]
     pub seed: u32,
-    /// Who flies the ship: you (WASD moves, the arrow keys fire), the autopilot, or nobody.
+    /// Who flies the ship: you (keyboard, mouse or gamepad), the autopilot, or nobody.
     #[arg(long, value_enum, default_value_t)]
     pub pilot: PlayPilot,
     /// Start with the sound off (M toggles it).

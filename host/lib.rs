@@ -12,6 +12,7 @@ pub mod files;
 pub mod game;
 pub mod graphics;
 pub mod info;
+pub mod meter;
 pub mod pipeline;
 pub mod play;
 pub mod primitives;

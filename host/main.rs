@@ -20,7 +20,7 @@ use gpuwars::game::engine::footprint;
 use gpuwars::game::replay::Replay;
 use gpuwars::game::scene;
 use gpuwars::info::Info;
-use gpuwars::play::{self, PlayOptions};
+use gpuwars::play::{self, PlayOptions, PlayReport};
 use gpuwars::{BackendKind, Device};
 
 fn main() -> ExitCode {
@@ -163,6 +163,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 frame: args.screenshot.as_ref().map(|_| args.size),
                 frames: args.frames(args.size)?,
                 renderer: args.render,
+                camera: args.camera(),
                 ..args.run.options()
             };
             let (report, replay) = demo::demo(&device, &scene, args.seed, args.steps, options)?;
@@ -188,18 +189,37 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 lag: usize::from(args.lag),
             };
             let report = play::play(&device, &scene, options)?;
-            if args.json {
-                println!("{}", serde_json::to_string_pretty(&report)?);
-            } else {
-                print!("{}", report.to_text());
-            }
+            print_summary(&report, args.json, PlayReport::to_text)?;
         }
-        Command::Replay { file, json, run } => {
+        Command::Replay {
+            file,
+            json,
+            window,
+            render,
+            size,
+            mute,
+            run,
+        } => {
             let replay = Replay::load(&file)?;
             let origin = format!("{} (scene `{}`)", file.display(), replay.scene);
             let scene = Scene::from_toml(&replay.scene_toml, &origin)?;
+            let progress = announce(&device, &scene) && !json;
+            if window {
+                let options = PlayOptions {
+                    seed: replay.seed,
+                    pilot: play::Pilot::default(),
+                    muted: mute,
+                    vsync: true,
+                    renderer: render,
+                    record: None,
+                    size,
+                    lag: usize::from(run.lag),
+                };
+                let report = play::watch(&device, &scene, replay, &file, options)?;
+                return print_summary(&report, json, PlayReport::to_text);
+            }
             let options = RunOptions {
-                progress: announce(&device, &scene) && !json,
+                progress,
                 ..run.options()
             };
             let report = demo::replay(&device, &scene, &replay, options)?;

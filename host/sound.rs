@@ -38,16 +38,22 @@ pub enum Effect {
     ShipHurt,
     /// The game ends: a falling minor jingle (1.6 s).
     GameOver,
+    /// A wave of enemies arrives: a filtered noise swell rising to a low horn (750 ms).
+    Wave,
+    /// A new game starts: a rising major arpeggio of soft bells (600 ms).
+    Start,
 }
 
 impl Effect {
     /// Every effect, in declaration order.
-    pub const ALL: [Effect; 5] = [
+    pub const ALL: [Effect; 7] = [
         Effect::Shot,
         Effect::Hit,
         Effect::Kill,
         Effect::ShipHurt,
         Effect::GameOver,
+        Effect::Wave,
+        Effect::Start,
     ];
 
     /// How long the effect lasts.
@@ -59,6 +65,8 @@ impl Effect {
             Effect::Kill => 400,
             Effect::ShipHurt => 250,
             Effect::GameOver => 1600,
+            Effect::Wave => 750,
+            Effect::Start => 600,
         })
     }
 
@@ -83,6 +91,8 @@ pub fn synthesize(effect: Effect) -> Vec<f32> {
         Effect::Kill => kill(&mut out),
         Effect::ShipHurt => ship_hurt(&mut out),
         Effect::GameOver => game_over(&mut out),
+        Effect::Wave => wave(&mut out),
+        Effect::Start => start(&mut out),
     }
     fade_out(&mut out);
     // Levels under 1 leave room for several effects and the music at once.
@@ -92,6 +102,8 @@ pub fn synthesize(effect: Effect) -> Vec<f32> {
         Effect::Kill => 0.6,
         Effect::ShipHurt => 0.5,
         Effect::GameOver => 0.55,
+        Effect::Wave => 0.45,
+        Effect::Start => 0.45,
     };
     normalize(&mut out, peak);
     out
@@ -136,10 +148,10 @@ pub fn music() -> Vec<f32> {
     out
 }
 
-/// Decides which effects each step sounds: those of its [`Status::events`] (shots, kills, hits
-/// on the ship), each at most once per [`MIN_GAP`], and [`Effect::GameOver`] once when the game
-/// ends. The events do not count shots striking enemies, so [`Effect::Hit`] plays only when
-/// cued directly ([`Sound::cue`]).
+/// Decides which effects each step sounds: [`Effect::Start`] on a game's first step, those of
+/// its [`Status::events`] (shots, shots striking enemies, kills, hits on the ship, waves
+/// arriving), each at most once per [`MIN_GAP`], and [`Effect::GameOver`] once when the game
+/// ends.
 #[derive(Clone, Debug, Default)]
 pub struct Cues {
     /// When each effect (indexed as [`Effect::ALL`]) last started.
@@ -167,9 +179,12 @@ impl Cues {
         self.step = Some(status.step);
         let events = &status.events;
         let wanted = [
+            (Effect::Start, u32::from(status.step == 1)),
             (Effect::Shot, events.shots_fired),
+            (Effect::Hit, events.shot_hits),
             (Effect::Kill, events.kills),
             (Effect::ShipHurt, events.ship_hits),
+            (Effect::Wave, events.waves),
         ];
         let mut due: Vec<Effect> = wanted
             .into_iter()
@@ -258,13 +273,6 @@ impl Sound {
     /// plays but the cues still advance, so that unmuting does not replay a game over.
     pub fn play(&mut self, status: &Status) {
         for effect in self.cues.due(status, Instant::now()) {
-            self.start(effect);
-        }
-    }
-
-    /// Plays one effect now, unless it started less than [`MIN_GAP`] ago.
-    pub fn cue(&mut self, effect: Effect) {
-        if self.cues.allow(effect, Instant::now()) {
             self.start(effect);
         }
     }
@@ -486,6 +494,48 @@ fn game_over(out: &mut [f32]) {
             let decay = if long { 0.35 } else { 0.12 };
             // Each note closes inside its slot, so the next starts from silence.
             *s += tone * envelope(t, 0.004, decay) * close(i, end - start);
+        }
+    }
+}
+
+/// Noise through a band-pass (a low-pass minus a lower one) sweeping up from 200 Hz to
+/// 2 kHz as it swells, then a low horn (two detuned saws on A2) taking over: something is
+/// coming.
+fn wave(out: &mut [f32]) {
+    let mut noise = Noise(0x2545_f491);
+    let (mut high, mut low) = (LowPass::default(), LowPass::default());
+    let (mut a, mut b) = (Osc::default(), Osc::default());
+    let mut horn_filter = LowPass::default();
+    let len = out.len() as f32;
+    let horn_at = 0.25;
+    for (i, s) in out.iter_mut().enumerate() {
+        let (t, x) = (seconds(i), i as f32 / len);
+        let centre = sweep(200.0, 2000.0, x);
+        let n = noise.next();
+        let band = high.run(n, centre * 1.5) - low.run(n, centre * 0.67);
+        let swell = (x / 0.4).min(1.0) * (1.0 - x);
+        let horn = if t < horn_at {
+            0.0
+        } else {
+            let raw = a.saw(110.0) + b.saw(110.0 * 1.01);
+            horn_filter.run(raw, 900.0) * envelope(t - horn_at, 0.04, 0.2)
+        };
+        *s = 2.0 * band * swell + 0.5 * horn;
+    }
+}
+
+/// G5, B5, D6 then G6, each a sine with a quieter octave above: ready, go.
+fn start(out: &mut [f32]) {
+    let notes: [(u64, u64, u8); 4] = [(0, 100, 79), (100, 100, 83), (200, 100, 86), (300, 300, 91)];
+    for (start, length, note) in notes {
+        let start = samples_in(Duration::from_millis(start));
+        let end = (start + samples_in(Duration::from_millis(length))).min(out.len());
+        let (mut base, mut octave) = (Osc::default(), Osc::default());
+        for (i, s) in out[start..end].iter_mut().enumerate() {
+            let t = seconds(i);
+            let freq = midi(note);
+            let tone = base.sine(freq) + 0.3 * octave.sine(freq * 2.0);
+            *s += tone * envelope(t, 0.003, 0.08) * close(i, end - start);
         }
     }
 }

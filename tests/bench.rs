@@ -6,8 +6,9 @@ use std::path::Path;
 use std::process::Command;
 
 use gpuwars::benchmark::Spread;
-use gpuwars::benchmark::paper::{PaperSummary, Second};
+use gpuwars::benchmark::paper::PaperSummary;
 use gpuwars::benchmark::scale::{self, ScaleRow, ScaleSummary};
+use gpuwars::meter::Second;
 use proptest::prelude::*;
 
 fn gpuwars(args: &[&str]) -> std::process::Output {

@@ -163,6 +163,27 @@ fn with_no_display_the_default_command_is_the_headless_demo() {
         "{stdout}"
     );
     assert_eq!(image::open(&shot).unwrap().width(), 1920);
+    // The environment picks its camera: the whole field is another picture of the game.
+    let field = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
+        .args(["--backend", "cpu"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env("GPUWARS_SCENE", "kamikaze")
+        .env("GPUWARS_STEPS", "30")
+        .env("GPUWARS_SCREENSHOT", &shot)
+        .env("GPUWARS_CAMERA", "field")
+        .output()
+        .unwrap();
+    let line = |out: &[u8], key: &str| {
+        let text = String::from_utf8_lossy(out).into_owned();
+        text.lines().find(|l| l.starts_with(key)).map(str::to_owned)
+    };
+    let field_out = &field.stdout;
+    assert_eq!(
+        line(field_out, "state_hash:"),
+        line(&out.stdout, "state_hash:")
+    );
+    assert_ne!(line(field_out, "frame:"), line(&out.stdout, "frame:"));
 }
 
 #[test]
@@ -309,6 +330,24 @@ fn a_recorded_demo_replays_to_the_same_hash_and_a_tampered_one_fails() {
         "{stderr}"
     );
 
+    // Watching needs a display; without one, the error says how to check it headless.
+    let out = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
+        .args(["--backend", "cpu", "replay", path, "--window"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("no display")
+            && stderr.contains(&format!("`gpuwars replay {path}` (without --window)")),
+        "{stderr}"
+    );
+    // The window's options need --window.
+    let out = gpuwars(&["replay", path, "--render", "interop"]);
+    assert_eq!(out.status.code(), Some(2));
+
     std::fs::write(&file, &text[..text.len() / 2]).unwrap();
     let out = gpuwars(&["replay", path, "--backend", "cpu"]);
     assert_eq!(out.status.code(), Some(1));
@@ -333,6 +372,13 @@ fn demo_writes_a_screenshot_of_the_final_state() {
     assert_eq!(again["frame_hash"], report["frame_hash"]);
     // Only the temporary file's rename leaves a file: nothing else in the folder.
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    // Another camera draws another frame of the same game.
+    let sized = [&args[..], &["--size", "64x48"]].concat();
+    for camera in [&["--camera", "field"][..], &["--zoom", "8"]] {
+        let other = demo_json(&[&sized[..], camera].concat());
+        assert_eq!(other["state_hash"], report["state_hash"], "{camera:?}");
+        assert_ne!(other["frame_hash"], report["frame_hash"], "{camera:?}");
+    }
     for bad in ["0x48", "64", "64x99999", "ax3"] {
         let out = gpuwars(&[
             "demo",
@@ -506,7 +552,7 @@ fn inputs_that_would_hang_are_refused_at_once() {
 
 #[test]
 fn flag_values_are_checked_in_words() {
-    let cases: [(&[&str], &str); 8] = [
+    let cases: [(&[&str], &str); 11] = [
         (
             &["demo", "--steps", "0"],
             "allowed a whole number from 1 to 1,000,000",
@@ -521,6 +567,9 @@ fn flag_values_are_checked_in_words() {
         (&["demo", "--lag", "0"], "from 1 to 1,024"),
         (&["replay", "x.json", "--lag", "2000"], "from 1 to 1,024"),
         (&["demo", "--size", "0x10"], "WIDTHxHEIGHT"),
+        (&["demo", "--zoom", "9"], "allowed a number from 0.001 to 8"),
+        (&["demo", "--zoom", "near"], "not a number"),
+        (&["demo", "--camera", "sky"], "follow, field"),
     ];
     for (args, says) in cases {
         let stderr = refused(args, 2, &[says]);

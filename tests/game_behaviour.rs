@@ -136,9 +136,13 @@ fn share_of_shots_that_hit(device: &Device, avoid: &'static str) -> f64 {
         |status, snap| {
             fired += u64::from(status.events.shots_fired);
             // A shot touching anything this step is a hit (it dies of it).
-            hits += (0..snap.slots())
+            let struck = (0..snap.slots())
                 .filter(|&s| snap.kind[s] == 1 && snap.contacts[s] > 0)
                 .count() as u64;
+            // The status counts the same hits, and says where the ship is.
+            assert_eq!(u64::from(status.events.shot_hits), struck);
+            assert_eq!(status.ship, snap.pos[SHIP]);
+            hits += struck;
         },
     );
     assert!(fired > 100, "only {fired} shots were fired");

@@ -276,3 +276,17 @@ fn a_ship_with_no_pilot_loses_the_paper_scene_and_the_autopilot_does_better() {
         );
     }
 }
+
+#[test]
+fn a_wave_is_counted_in_the_step_it_arrives() {
+    // `paper`: seven waves (one per enemy type, 512 + 6 × 256 enemies) at 0 s, then every 4 s.
+    let cpu = common::cpu();
+    let mut game = Game::new(cpu, &scene("paper"), 1).unwrap();
+    let first = game.step(None).unwrap();
+    assert_eq!(first.events.waves, 7);
+    assert_eq!(first.events.spawned, 512 + 6 * 256);
+    for _ in 1..120 {
+        let status = game.step(None).unwrap();
+        assert_eq!(status.events.waves, 0, "step {}", status.step);
+    }
+}

@@ -55,7 +55,18 @@ const EVERYTHING: Events = Events {
     kills: 5000,
     ship_hits: 3,
     spawned: 100,
+    waves: 2,
+    shot_hits: 4,
 };
+
+/// What [`EVERYTHING`] sounds, in the order cued.
+const ALL_EVENTS: [Effect; 5] = [
+    Effect::Shot,
+    Effect::Hit,
+    Effect::Kill,
+    Effect::ShipHurt,
+    Effect::Wave,
+];
 
 #[test]
 fn effects_are_audible_in_range_and_end_quietly() {
@@ -132,7 +143,7 @@ fn music_is_a_quiet_loop_of_whole_bars() {
 fn each_event_cues_its_effect() {
     let now = Instant::now();
     let mut cues = Cues::new();
-    assert_eq!(cues.due(&status(1, PLAYING, Events::default()), now), []);
+    assert_eq!(cues.due(&status(7, PLAYING, Events::default()), now), []);
     let shot = Events {
         shots_fired: 1,
         ..Events::default()
@@ -143,14 +154,46 @@ fn each_event_cues_its_effect() {
         ..Events::default()
     };
     assert_eq!(cues.due(&status(3, PLAYING, hurt), now), [Effect::ShipHurt]);
+    // Enemies trickling in are no wave; a wave arriving is.
     let spawned = Events {
         spawned: 7,
         ..Events::default()
     };
     assert_eq!(cues.due(&status(4, PLAYING, spawned), now), []);
+    let wave = Events {
+        spawned: 7,
+        waves: 1,
+        ..Events::default()
+    };
+    assert_eq!(cues.due(&status(5, PLAYING, wave), now), [Effect::Wave]);
+    let struck = Events {
+        shot_hits: 1,
+        ..Events::default()
+    };
+    assert_eq!(cues.due(&status(6, PLAYING, struck), now), [Effect::Hit]);
     assert_eq!(
-        cues.due(&status(5, PLAYING, EVERYTHING), now + MIN_GAP),
-        [Effect::Shot, Effect::Kill, Effect::ShipHurt]
+        cues.due(&status(8, PLAYING, EVERYTHING), now + MIN_GAP),
+        ALL_EVENTS
+    );
+}
+
+#[test]
+fn a_game_starting_sounds_once() {
+    let t0 = Instant::now();
+    let mut cues = Cues::new();
+    let quiet = Events::default();
+    // The first step's status: the game has started.
+    assert_eq!(cues.due(&status(1, PLAYING, quiet), t0), [Effect::Start]);
+    assert_eq!(cues.due(&status(1, PLAYING, quiet), t0 + MIN_GAP), []);
+    assert_eq!(cues.due(&status(2, PLAYING, quiet), t0 + MIN_GAP), []);
+    assert_eq!(
+        cues.due(&status(3, DESTROYED, quiet), t0 + 2 * MIN_GAP),
+        [Effect::GameOver]
+    );
+    // A new game's first step, after the last one ended.
+    assert_eq!(
+        cues.due(&status(1, PLAYING, quiet), t0 + 3 * MIN_GAP),
+        [Effect::Start]
     );
 }
 
@@ -158,10 +201,10 @@ fn each_event_cues_its_effect() {
 fn an_effect_starts_at_most_once_per_gap() {
     let t0 = Instant::now();
     let mut cues = Cues::new();
-    let all = [Effect::Shot, Effect::Kill, Effect::ShipHurt];
-    assert_eq!(cues.due(&status(1, PLAYING, EVERYTHING), t0), all);
+    let all = ALL_EVENTS;
+    assert_eq!(cues.due(&status(11, PLAYING, EVERYTHING), t0), all);
     // The same step shown again plays nothing, whenever.
-    assert_eq!(cues.due(&status(1, PLAYING, EVERYTHING), t0 + MIN_GAP), []);
+    assert_eq!(cues.due(&status(11, PLAYING, EVERYTHING), t0 + MIN_GAP), []);
     for step in 2..10 {
         let t = t0 + Duration::from_millis(5 * u64::from(step));
         assert_eq!(cues.due(&status(step, PLAYING, EVERYTHING), t), []);
@@ -170,10 +213,10 @@ fn an_effect_starts_at_most_once_per_gap() {
         cues.due(&status(10, PLAYING, EVERYTHING), t0 + MIN_GAP),
         all
     );
-    // A direct cue shares the gap; other effects are not held up by it.
+    // `allow` shares the gap; other effects are not held up by it.
     assert!(!cues.allow(Effect::Kill, t0 + MIN_GAP));
-    assert!(cues.allow(Effect::Hit, t0 + MIN_GAP));
-    assert!(!cues.allow(Effect::Hit, t0 + MIN_GAP + MIN_GAP / 2));
+    assert!(cues.allow(Effect::Start, t0 + MIN_GAP));
+    assert!(!cues.allow(Effect::Start, t0 + MIN_GAP + MIN_GAP / 2));
     // A clock read out of order waits like a repeat.
     assert!(!cues.allow(Effect::Kill, t0));
 }
@@ -185,15 +228,9 @@ fn game_over_plays_once_per_game() {
     cues.due(&status(1, PLAYING, EVERYTHING), t0);
     // The last step's events sound with the jingle.
     let later = t0 + 2 * MIN_GAP;
-    assert_eq!(
-        cues.due(&status(2, DESTROYED, EVERYTHING), later),
-        [
-            Effect::Shot,
-            Effect::Kill,
-            Effect::ShipHurt,
-            Effect::GameOver
-        ]
-    );
+    let mut last = ALL_EVENTS.to_vec();
+    last.push(Effect::GameOver);
+    assert_eq!(cues.due(&status(2, DESTROYED, EVERYTHING), later), last);
     // The frozen status repeats; nothing more plays.
     for i in 3..6 {
         assert_eq!(
@@ -203,7 +240,10 @@ fn game_over_plays_once_per_game() {
     }
     // A new game re-arms the jingle.
     let quiet = Events::default();
-    assert_eq!(cues.due(&status(1, PLAYING, quiet), t0 + 10 * MIN_GAP), []);
+    assert_eq!(
+        cues.due(&status(1, PLAYING, quiet), t0 + 10 * MIN_GAP),
+        [Effect::Start]
+    );
     assert_eq!(
         cues.due(&status(40, DESTROYED, quiet), t0 + 11 * MIN_GAP),
         [Effect::GameOver]
@@ -219,9 +259,6 @@ fn sound_without_a_device_plays_silently() {
     for step in 1..200 {
         let over = if step < 150 { PLAYING } else { DESTROYED };
         sound.play(&status(step, over, EVERYTHING));
-    }
-    for effect in Effect::ALL {
-        sound.cue(effect);
     }
     if sound.is_silent() {
         // Unmuted, a silent output still plays nothing and stays silent.

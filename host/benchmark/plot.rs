@@ -11,10 +11,11 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::{FontStyle, register_font};
 
-use super::paper::{PAPER_BANDS, PaperSummary, Second};
+use super::paper::{PAPER_BANDS, PaperSummary};
 use super::scale::{ScaleRow, ScaleSummary};
 use super::tradeoff::{PhysicsRow as TradeoffRow, TradeoffSummary};
 use crate::files::write_atomically;
+use crate::meter::Second;
 
 /// Width and height of every plot.
 const SIZE: (u32, u32) = (1280, 720);

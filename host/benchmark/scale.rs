@@ -13,6 +13,7 @@ use super::{Machine, Outputs, plot, progress, write_csv, write_json};
 use crate::files::thousands;
 use crate::game::scene::built_in;
 use crate::game::{Game, Options, Scene};
+use crate::graphics::camera::Camera;
 use crate::pipeline::Profile;
 use crate::{Device, Error};
 
@@ -227,7 +228,7 @@ fn measure(
     let (width, height) = options.size;
     let frames_per_s = rate(&mut game, options.time, |game| {
         game.submit(None)?;
-        game.render(width, height)
+        game.render(width, height, &Camera::field(), 0.0)
     })?;
     let step_s = profile.step_seconds();
     let bytes: u64 = profile.stages.iter().map(|s| s.bytes).sum();

@@ -7,13 +7,14 @@ use std::time::Instant;
 use gpuwars_kernels::game::control::{DESTROYED, Input, Status, TOO_SLOW};
 use serde::Serialize;
 
+use super::Game;
 use super::engine::Options;
 use super::replay::Replay;
 use super::spec::Scene;
-use super::{Game, looks};
 use crate::benchmark::progress;
 use crate::graphics::Renderer;
 use crate::graphics::bodies::BodyRenderer;
+use crate::graphics::camera::Camera;
 use crate::graphics::headless::Headless;
 use crate::pipeline::{Frame, Profile};
 use crate::{BackendKind, Device, Error};
@@ -191,7 +192,7 @@ impl Frames {
 }
 
 /// How `demo` and `replay` run a game.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct RunOptions {
     /// Who flies the ship (`demo` only; a replay flies its recorded inputs).
     pub pilot: Pilot,
@@ -207,6 +208,8 @@ pub struct RunOptions {
     pub renderer: Renderer,
     /// Show the steps played in a progress bar on stderr, when it is a terminal.
     pub progress: bool,
+    /// What the frames show.
+    pub camera: Camera,
 }
 
 /// What draws a demo's frames: the kernel renderer, or GL with no window (the interop
@@ -241,14 +244,20 @@ impl Painter {
         }
     }
 
-    /// The whole field after every queued step, in a `width × height` frame.
-    fn draw(&mut self, game: &mut Game, width: u32, height: u32) -> Result<Frame, Error> {
+    /// The world after every queued step as `camera` shows it (snapped to the ship), in a
+    /// `width × height` frame.
+    fn draw(
+        &mut self,
+        game: &mut Game,
+        (width, height): (u32, u32),
+        camera: &Camera,
+    ) -> Result<Frame, Error> {
         match self {
-            Painter::Kernel => game.draw(width, height),
+            Painter::Kernel => game.draw(width, height, camera),
             Painter::Gl(gl) => {
                 let (gl, bodies) = &mut **gl;
-                let view = looks::whole_field(game.scene(), width, height);
-                gl.draw(bodies, game.pipeline(), &view)
+                let lens = game.lens(camera, width, height, 0.0);
+                gl.draw(bodies, game.pipeline_mut(), &lens)
             }
         }
     }
@@ -318,10 +327,11 @@ fn play(
             while let Some(status) = game.next_status()? {
                 record.take(status);
             }
-            let (width, height) = frames.size;
             let path = frames.dir.join(Frames::file_name(i + 1));
             let painter = painter.as_mut().expect("made when frames are asked for");
-            painter.draw(game, width, height)?.save_png(&path)?;
+            painter
+                .draw(game, frames.size, &options.camera)?
+                .save_png(&path)?;
         }
         if record.over {
             break;
@@ -334,7 +344,7 @@ fn play(
     let seconds = start.elapsed().as_secs_f64();
     let hash = game.state_hash()?;
     let frame = match (options.frame, &mut painter) {
-        (Some((width, height)), Some(painter)) => Some(painter.draw(game, width, height)?),
+        (Some(size), Some(painter)) => Some(painter.draw(game, size, &options.camera)?),
         _ => None,
     };
     let pipeline = game.pipeline();

@@ -7,11 +7,13 @@ use bytemuck::Zeroable;
 use gpuwars_kernels::game::control::{Command, Input, Status};
 use gpuwars_kernels::game::effects::Burst;
 use gpuwars_kernels::game::rules::{Brain, Rules, Wave};
+use gpuwars_kernels::render::camera::Lens;
 use xxhash_rust::xxh3::Xxh3;
 
 use super::looks;
 use super::spec::{Behaviour, EffectsSpec, GameSpec, Machine, Scene};
 use crate::backend::Ring;
+use crate::graphics::camera::Camera;
 use crate::pipeline::{Frame, GameConfig, PARTICLE_BYTES, Pipeline, Profile, mind_slots};
 use crate::sim::layout::{self, Layout, steps};
 use crate::sim::{Snapshot, WorldSpec, state};
@@ -228,6 +230,11 @@ impl<'d> Game<'d> {
         &self.pipeline
     }
 
+    /// The pipeline, for drawing (its renderers keep their buffers in it).
+    pub fn pipeline_mut(&mut self) -> &mut Pipeline<'d> {
+        &mut self.pipeline
+    }
+
     /// The latest status read back.
     pub fn status(&self) -> Status {
         self.last
@@ -317,19 +324,33 @@ impl<'d> Game<'d> {
         self.pipeline.snapshot_at(u64::from(self.last.step))
     }
 
-    /// The whole field after every queued step, drawn by the kernel renderer in a
-    /// `width × height` frame.
-    pub fn draw(&mut self, width: u32, height: u32) -> Result<Frame, Error> {
+    /// What the device is asked for a `width × height` frame through `camera`, `dt`
+    /// seconds after the previous frame (0 snaps the view to the ship).
+    pub fn lens(&self, camera: &Camera, width: u32, height: u32, dt: f32) -> Lens {
+        let (field, ship) = (self.scene.world.size, self.pipeline.ship());
+        camera.lens(field, (width, height), ship, dt, looks::BACKGROUND)
+    }
+
+    /// The world after every queued step as `camera` shows it (snapped to the ship), drawn
+    /// by the kernel renderer in a `width × height` frame.
+    pub fn draw(&mut self, width: u32, height: u32, camera: &Camera) -> Result<Frame, Error> {
         self.settle()?;
-        self.render(width, height)?;
+        self.render(width, height, camera, 0.0)?;
         self.pipeline.frame()
     }
 
-    /// Queues the drawing of the whole field after the queued steps, left in device memory
-    /// (see [`Pipeline::render`]).
-    pub fn render(&mut self, width: u32, height: u32) -> Result<(), Error> {
-        let view = looks::whole_field(&self.scene, width, height);
-        self.pipeline.render(&view, &looks::looks(&self.scene))
+    /// Queues the drawing of the world after the queued steps, as `camera` shows it
+    /// `frame_dt` seconds after the previous frame (0 snaps the view), left in device
+    /// memory (see [`Pipeline::render`]).
+    pub fn render(
+        &mut self,
+        width: u32,
+        height: u32,
+        camera: &Camera,
+        frame_dt: f32,
+    ) -> Result<(), Error> {
+        let lens = self.lens(camera, width, height, frame_dt);
+        self.pipeline.render(&lens, &looks::looks(&self.scene))
     }
 
     /// As [`Game::render`], the pixels written into `image` (see [`Pipeline::render_into`]).
@@ -340,13 +361,15 @@ impl<'d> Game<'d> {
         &mut self,
         width: u32,
         height: u32,
+        camera: &Camera,
+        frame_dt: f32,
         image: gpuwars_kernels::DevSlice<u32>,
     ) -> Result<(), Error> {
-        let view = looks::whole_field(&self.scene, width, height);
+        let lens = self.lens(camera, width, height, frame_dt);
         // SAFETY: forwarded.
         unsafe {
             self.pipeline
-                .render_into(&view, &looks::looks(&self.scene), image)
+                .render_into(&lens, &looks::looks(&self.scene), image)
         }
     }
 

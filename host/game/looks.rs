@@ -1,8 +1,12 @@
-//! How a scene's kinds look in a frame: the ship and its shots on top, each enemy type in a
-//! colour of its machine's family (kamikazes red, groups green, tricky ones violet), other
-//! bodies (obstacles) grey underneath.
+//! How a scene's kinds look in a frame: the ship (a chevron) and its shots (streaks) on
+//! top, each enemy type in a colour of its machine's family (kamikazes red, groups green,
+//! tricky ones violet) and a silhouette of its own, other bodies (obstacles) grey
+//! underneath. The radar shows the enemies and the obstacles.
 
-use gpuwars_kernels::render::{Look, View};
+use gpuwars_kernels::render::Look;
+use gpuwars_kernels::render::shapes::{
+    BOWTIE, CHEVRON, CROSS, DIAMOND, DISC, HEXAGON, RING, SQUARE, STREAK, TRIANGLE,
+};
 
 use super::spec::{Machine, Scene};
 
@@ -21,6 +25,12 @@ const TRICKY: [u32; 3] = [rgb(150, 110, 255), rgb(230, 90, 230), rgb(90, 140, 25
 const SHIP: u32 = rgb(235, 245, 255);
 const SHOT: u32 = rgb(255, 235, 90);
 const OTHER: u32 = rgb(140, 145, 160);
+
+/// Silhouettes of each machine's enemy types, in the order of their colours: the seven
+/// types of the paper's three families are seven different shapes.
+const KAMIKAZE_SHAPES: [u32; 3] = [TRIANGLE, DIAMOND, DISC];
+const GROUP_SHAPES: [u32; 3] = [SQUARE, RING, HEXAGON];
+const TRICKY_SHAPES: [u32; 3] = [CROSS, BOWTIE, DISC];
 
 /// The ship while it has lost energy (its FPS meter is down).
 const SHIP_HURT: u32 = rgb(255, 110, 100);
@@ -47,22 +57,23 @@ pub fn looks(scene: &Scene) -> Vec<Look> {
     (0..world.kinds.len())
         .map(|k| {
             let machine = scene.game.behaviours[k].map(|b| b.machine);
-            let (colour, layer) = if Some(k) == ship {
-                (SHIP, 250)
+            // (colour, layer, silhouette, on the radar)
+            let (colour, layer, silhouette, radar) = if Some(k) == ship {
+                (SHIP, 250, CHEVRON, false)
             } else if Some(k) == shot {
-                (SHOT, 240)
+                (SHOT, 240, STREAK, false)
             } else if let Some(family) = match machine {
-                Some(Machine::Kamikaze) => Some((0, &KAMIKAZE)),
-                Some(Machine::Group) => Some((1, &GROUP)),
-                Some(Machine::Tricky) => Some((2, &TRICKY)),
+                Some(Machine::Kamikaze) => Some((0, &KAMIKAZE, &KAMIKAZE_SHAPES)),
+                Some(Machine::Group) => Some((1, &GROUP, &GROUP_SHAPES)),
+                Some(Machine::Tricky) => Some((2, &TRICKY, &TRICKY_SHAPES)),
                 _ => None,
             } {
-                let (i, colours) = family;
-                let colour = colours[taken[i] % colours.len()];
+                let (i, colours, shapes) = family;
+                let n = taken[i] % colours.len();
                 taken[i] += 1;
-                (colour, 100 + k as u32)
+                (colours[n], 100 + k as u32, shapes[n], true)
             } else {
-                (OTHER, 10)
+                (OTHER, 10, DISC, true)
             };
             Look {
                 colour,
@@ -73,12 +84,9 @@ pub fn looks(scene: &Scene) -> Vec<Look> {
                 } else {
                     darker(colour)
                 },
+                silhouette,
+                radar: u32::from(radar),
             }
         })
         .collect()
-}
-
-/// The whole field of `scene` in a `width × height` frame.
-pub fn whole_field(scene: &Scene, width: u32, height: u32) -> View {
-    View::whole(scene.world.size, width, height, BACKGROUND)
 }

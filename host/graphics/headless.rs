@@ -15,7 +15,7 @@ use glutin::context::{ContextApi, ContextAttributesBuilder, Version};
 use glutin::prelude::*;
 
 use glium::Surface;
-use gpuwars_kernels::render::View;
+use gpuwars_kernels::render::camera::Lens;
 
 use super::bodies::BodyRenderer;
 use super::{gl_error, unpack};
@@ -124,19 +124,19 @@ impl Headless {
         Ok((gl, bodies))
     }
 
-    /// `pipeline`'s bodies after the steps queued, drawn by `renderer` as `view` shows the
-    /// world, offscreen, and read back.
+    /// `pipeline`'s bodies after the steps queued, drawn by `renderer` as the camera of
+    /// `lens` shows the world, offscreen, and read back.
     pub fn draw(
         &self,
         renderer: &mut BodyRenderer,
-        pipeline: &Pipeline,
-        view: &View,
+        pipeline: &mut Pipeline,
+        lens: &Lens,
     ) -> Result<Frame, Error> {
-        let target = Target::new(&self.context, view.width, view.height)?;
+        let target = Target::new(&self.context, lens.width, lens.height)?;
+        renderer.update(&self.context, pipeline, lens)?;
         let mut surface = target.surface(&self.context)?;
-        surface.clear_color_and_depth(unpack(view.background), 0.0);
-        renderer.update(pipeline)?;
-        renderer.draw(&mut surface, view)?;
+        surface.clear_color_and_depth(unpack(lens.background), 0.0);
+        renderer.draw(&mut surface, lens)?;
         Ok(target.read())
     }
 }

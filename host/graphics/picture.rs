@@ -87,6 +87,11 @@ impl DeviceImage {
         (self.texture.width(), self.texture.height())
     }
 
+    /// The texture, as the last [`DeviceImage::set`] left it.
+    pub fn texture(&self) -> &Texture2d {
+        &self.texture
+    }
+
     /// Lets `write` fill the pixel buffer (row 0 the image's top) with launches on the
     /// device, then copies it into the texture on the GPU.
     pub fn set(

@@ -747,6 +747,13 @@ impl Pipeline<'_> {
         self.device.download(&self.game()?.spawned)
     }
 
+    /// The kernels' view of the explosions' particles and their lifetime in steps, if the
+    /// world has any particles.
+    fn particle_view(&self) -> Option<(Particles, u32)> {
+        let (p, burst) = self.game.as_ref()?.effects.as_ref()?;
+        (burst.particles() > 0).then(|| (p.view(), burst.lifetime))
+    }
+
     /// The explosions' particles, read back (waits for the queued steps); `None` for a
     /// world without explosions.
     pub fn particles(&self) -> Result<Option<ParticleSnapshot>, Error> {

@@ -1,47 +1,59 @@
 //! `gpuwars play`: the game in a window. A fixed-step loop submits the steps that real time
-//! has made due, each with the keyboard's input of the moment, draws the world with the
-//! renderer asked for, and puts the HUD, the help and the game-over banner over it; sound
-//! effects follow each step's events.
+//! has made due, each with the input of the moment (keyboard, mouse and gamepad merged by
+//! [`controls::Controls`]), draws the world with the renderer asked for, and puts the HUD,
+//! the start screen, the help and the game-over banner over it; sound effects follow each
+//! step's events. The game waits for a first key, click or button, and pauses while the help
+//! shows or the window is left.
 //!
 //! A slow frame never changes the outcome: the simulation's dt is the scene's, and a frame
 //! that falls behind plays its due steps late (at most [`MAX_CATCH_UP`] per frame, after
 //! which the game slows down rather than skipping). The inputs of every step are recorded,
-//! so `--record` writes a replay that `gpuwars replay` plays headless to the same state.
+//! so `--record` writes a replay that `gpuwars replay` plays headless to the same state, and
+//! [`watch`] plays in the same window loop (`gpuwars replay --window`).
 
+pub mod controls;
+mod gamepad;
 mod guard;
 pub mod keys;
 mod window;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use anyhow::{Context as _, anyhow};
+use anyhow::{Context as _, anyhow, bail};
+use glam::Vec2;
 use glium::{Display, Rect, Surface};
 use glutin::surface::WindowSurface;
 use gpuwars_kernels::game::control::{DESTROYED, Input, Status};
+use gpuwars_kernels::render::View;
+use gpuwars_kernels::render::camera::CameraState;
 use serde::Serialize;
 use winit::application::ApplicationHandler;
-use winit::event::{ElementState, WindowEvent};
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::PhysicalKey;
 use winit::window::{Fullscreen, Window, WindowId};
 
-use crate::benchmark::paper::Seconds;
 use crate::game::demo::{Record, device_name};
 use crate::game::highscore::{self, HighScores};
 use crate::game::replay::Replay;
-use crate::game::{Game, Options, Scene, looks};
+use crate::game::{Game, Options, Scene};
 use crate::graphics::bodies::BodyRenderer;
+use crate::graphics::camera::{self, Camera};
 use crate::graphics::headless::Target;
 use crate::graphics::hud::text_image;
 use crate::graphics::picture::{Blit, DeviceImage, Upload};
 use crate::graphics::{Renderer, unpack};
+use crate::meter::Seconds;
 use crate::pipeline::Profile;
 use crate::sound::Sound;
 use crate::{BackendKind, Device};
-use keys::{Action, HELP, Held};
+use controls::Controls;
+use gamepad::Gamepads;
+use keys::{Action, HELP, REPLAY_HELP, ZOOM_STEP};
 
-/// The most steps one frame plays; beyond it the game slows down instead.
+/// The most steps one frame plays (times a replay's speed); beyond it the game slows down
+/// instead.
 pub const MAX_CATCH_UP: u64 = 8;
 /// How often the HUD's figures are redrawn.
 const HUD_EVERY: Duration = Duration::from_millis(250);
@@ -118,6 +130,9 @@ pub struct PlayReport {
     pub frames: u64,
     /// Frames per second over the session.
     pub frame_rate: f64,
+    /// For a replay: whether its end state matched the recording, or where it stopped.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub replay: Option<String>,
 }
 
 impl PlayReport {
@@ -146,7 +161,9 @@ impl PlayReport {
                 format!("{} ({:.1} per second)", self.frames, self.frame_rate),
             ),
         ];
-        rows.iter().map(|(k, v)| format!("{k:<18}{v}\n")).collect()
+        let replay = self.replay.iter().map(|r| ("replay:", r.clone()));
+        let rows = rows.into_iter().chain(replay);
+        rows.map(|(k, v)| format!("{k:<18}{v}\n")).collect()
     }
 }
 
@@ -164,7 +181,50 @@ pub fn play(device: &Device, scene: &Scene, options: PlayOptions) -> anyhow::Res
     let event_loop = EventLoop::new()
         .map_err(|_| anyhow!("no display to open a window on; `gpuwars demo` plays without one"))?;
     event_loop.set_control_flow(ControlFlow::Poll);
-    let mut app = App::new(device, scene, options)?;
+    let mut app = App::new(device, scene, options, None)?;
+    if let Some(ran) = guard::surviving_winit(|| event_loop.run_app(&mut app)) {
+        ran.context("running the window")?;
+    }
+    app.finish()
+}
+
+/// Plays `replay` (read from `file`, its scene already read from it) in a window, with
+/// pause, single steps and speeds, until Esc or the window is closed; at its end, checks the
+/// state against the recording's hash (a mismatch is an error). `options.seed` is ignored
+/// for the replay's own.
+pub fn watch(
+    device: &Device,
+    scene: &Scene,
+    replay: Replay,
+    file: &Path,
+    options: PlayOptions,
+) -> anyhow::Result<PlayReport> {
+    let headless = format!(
+        "`gpuwars replay {}` (without --window) checks it headless",
+        file.display()
+    );
+    if !display_present() {
+        bail!(
+            "no display to open a window on (neither DISPLAY nor WAYLAND_DISPLAY is set): {headless}"
+        );
+    }
+    // winit's error quotes its own source file: the user is told what to do instead.
+    let event_loop =
+        EventLoop::new().map_err(|_| anyhow!("no display to open a window on: {headless}"))?;
+    event_loop.set_control_flow(ControlFlow::Poll);
+    let options = PlayOptions {
+        seed: replay.seed,
+        record: None,
+        ..options
+    };
+    let watch = Watch {
+        replay,
+        file: file.display().to_string(),
+        speed: 1,
+        single: 0,
+        checked: false,
+    };
+    let mut app = App::new(device, scene, options, Some(watch))?;
     if let Some(ran) = guard::surviving_winit(|| event_loop.run_app(&mut app)) {
         ran.context("running the window")?;
     }
@@ -184,7 +244,10 @@ pub fn measure(
         anyhow!("no display to open a window on; leave out --window to render offscreen")
     })?;
     event_loop.set_control_flow(ControlFlow::Poll);
-    let mut app = App::new(device, scene, options)?;
+    let mut app = App::new(device, scene, options, None)?;
+    app.begun = true;
+    // The paper's experiment draws the whole field (see `benchmark::paper`).
+    app.camera = Camera::field();
     app.bench = Some(Bench {
         seconds: Seconds::new(Instant::now()),
         duration,
@@ -207,14 +270,16 @@ struct Bench {
     until: Option<Instant>,
 }
 
-/// Game time: runs while the game is neither paused nor over, and tells how many steps are
-/// due.
+/// Game time: runs while the game is neither paused nor over, `rate` times as fast as real
+/// time, and tells how many steps are due.
 struct Clock {
     dt: f64,
     /// Game time banked before `since`.
     banked: f64,
     /// When it last started running, if it runs.
     since: Option<Instant>,
+    /// Game seconds per real second.
+    rate: u32,
 }
 
 impl Clock {
@@ -223,6 +288,7 @@ impl Clock {
             dt: f64::from(dt),
             banked: 0.0,
             since: None,
+            rate: 1,
         }
     }
 
@@ -230,23 +296,52 @@ impl Clock {
         match (running, self.since) {
             (true, None) => self.since = Some(now),
             (false, Some(since)) => {
-                self.banked += (now - since).as_secs_f64();
+                self.banked += (now - since).as_secs_f64() * f64::from(self.rate);
                 self.since = None;
             }
             _ => {}
         }
     }
 
-    /// Steps due at `now` when `played` have been played; the time of the steps beyond
-    /// [`MAX_CATCH_UP`] is given up (the game slows down, it does not skip).
-    fn due(&mut self, played: u64, now: Instant) -> u64 {
-        let elapsed = self.banked + self.since.map_or(0.0, |s| (now - s).as_secs_f64());
-        let due = ((elapsed / self.dt) as u64).saturating_sub(played);
-        if due > MAX_CATCH_UP {
-            self.banked -= (due - MAX_CATCH_UP) as f64 * self.dt;
-        }
-        due.min(MAX_CATCH_UP)
+    /// Runs `rate` times as fast as real time from `now` on.
+    fn set_rate(&mut self, rate: u32, now: Instant) {
+        let running = self.since.is_some();
+        self.run(false, now);
+        self.rate = rate;
+        self.run(running, now);
     }
+
+    /// Counts one step played out of time (a single step while paused), so that the steps
+    /// due later do not wait for it.
+    fn bank_step(&mut self) {
+        self.banked += self.dt;
+    }
+
+    /// Steps due at `now` when `played` have been played; the time of the steps beyond
+    /// [`MAX_CATCH_UP`] (times the rate) is given up (the game slows down, it does not skip).
+    fn due(&mut self, played: u64, now: Instant) -> u64 {
+        let rate = f64::from(self.rate);
+        let elapsed = self.banked + self.since.map_or(0.0, |s| (now - s).as_secs_f64() * rate);
+        let due = ((elapsed / self.dt) as u64).saturating_sub(played);
+        let most = MAX_CATCH_UP * u64::from(self.rate);
+        if due > most {
+            self.banked -= (due - most) as f64 * self.dt;
+        }
+        due.min(most)
+    }
+}
+
+/// A replay playing in the window: the pilot is the recording.
+struct Watch {
+    replay: Replay,
+    /// The file it came from, for messages.
+    file: String,
+    /// Times real time.
+    speed: u32,
+    /// Steps asked for one at a time while paused, not yet played.
+    single: u64,
+    /// The end state has been checked against the recording.
+    checked: bool,
 }
 
 /// The window and what draws into it.
@@ -268,13 +363,14 @@ struct Screen {
 }
 
 /// Draws the kernel renderer's frame of `game` after the queued steps, `width × height`,
-/// onto `frame`: written on the GPU into a GL pixel buffer where CUDA–GL interop works, else
-/// read back and uploaded.
+/// through `camera` `dt` seconds after the previous frame, onto `frame`: written on the GPU
+/// into a GL pixel buffer where CUDA–GL interop works, else read back and uploaded.
 fn show_kernel_frame(
     screen: &mut Screen,
     game: &mut Game,
     frame: &mut glium::Frame,
-    (width, height): (u32, u32),
+    camera: &Camera,
+    ((width, height), dt): ((u32, u32), f32),
 ) -> anyhow::Result<()> {
     if let Ok(image) = &mut screen.device_image
         && image.as_ref().is_none_or(|i| i.size() != (width, height))
@@ -291,13 +387,14 @@ fn show_kernel_frame(
     if let Ok(Some(image)) = &mut screen.device_image {
         // SAFETY: the mapped pixel buffer holds `width × height` pixels and only these
         // launches touch it until the unmap.
-        let texture = image.set(|pixels| unsafe { game.render_into(width, height, pixels) })?;
+        let texture =
+            image.set(|pixels| unsafe { game.render_into(width, height, camera, dt, pixels) })?;
         screen
             .blit
             .draw(frame, texture, true, (0, 0), height, false)?;
         return Ok(());
     }
-    game.render(width, height)?;
+    game.render(width, height, camera, dt)?;
     let image = game.pipeline().frame()?;
     screen.picture.set(&screen.display, &image)?;
     let texture = screen.picture.texture().expect("set above");
@@ -322,8 +419,13 @@ struct App<'d> {
     options: PlayOptions,
     screen: Option<Screen>,
     round: Round<'d>,
-    held: Held,
-    last_aim: u32,
+    controls: Controls,
+    /// The gamepads, when a player flies the ship.
+    gamepads: Option<Gamepads>,
+    /// A replay playing instead of a game.
+    watch: Option<Watch>,
+    /// The first key, click or button has come (the start screen is gone).
+    begun: bool,
     paused: bool,
     help: bool,
     sound: Sound,
@@ -340,10 +442,24 @@ struct App<'d> {
     failure: Option<anyhow::Error>,
     /// The benchmark's loop, when `measure` runs the window.
     bench: Option<Bench>,
+    /// What the frames show.
+    camera: Camera,
+    /// When the last frame was drawn: the camera glides by the time since.
+    drawn_at: Option<Instant>,
+    /// The camera as the host follows it, from the statuses read back, with the device's
+    /// own functions: the view the mouse aims through (the device's, a few steps late).
+    aim_camera: CameraState,
+    /// The last frame's view by [`App::aim_camera`].
+    aim_view: Option<View>,
 }
 
 impl<'d> App<'d> {
-    fn new(device: &'d Device, scene: &Scene, options: PlayOptions) -> anyhow::Result<Self> {
+    fn new(
+        device: &'d Device,
+        scene: &Scene,
+        options: PlayOptions,
+        watch: Option<Watch>,
+    ) -> anyhow::Result<Self> {
         let round = Round::new(device, scene, &options)?;
         let scores = match highscore::default_path() {
             Some(path) => {
@@ -361,11 +477,13 @@ impl<'d> App<'d> {
             scene: scene.clone(),
             sound: Sound::open(options.muted),
             scores,
-            options,
             screen: None,
             round,
-            held: Held::default(),
-            last_aim: 0,
+            controls: Controls::new(),
+            gamepads: (options.pilot == Pilot::Human && watch.is_none()).then(Gamepads::open),
+            // A replay plays at once: nobody is there to start it.
+            begun: watch.is_some(),
+            watch,
             paused: false,
             help: false,
             flash: 0,
@@ -377,6 +495,11 @@ impl<'d> App<'d> {
             renderer: String::new(),
             failure: None,
             bench: None,
+            camera: Camera::default(),
+            drawn_at: None,
+            aim_camera: CameraState::default(),
+            aim_view: None,
+            options,
         })
     }
 
@@ -426,28 +549,63 @@ impl<'d> App<'d> {
         Ok(())
     }
 
-    /// The input of the next step, by the pilot.
+    /// The input of the next step, by the pilot (or the recording).
     fn input(&mut self) -> Option<Input> {
+        if let Some(watch) = &self.watch {
+            return Some(watch.replay.inputs[self.round.submitted as usize]);
+        }
         match self.options.pilot {
             Pilot::Human => {
-                let input = self.held.input(self.last_aim);
-                self.last_aim = input.aim;
-                Some(input)
+                let ship = self.aim_view.as_ref().map_or(Vec2::ZERO, |view| {
+                    ship_on_screen(&self.scene, &self.round.record.last, view)
+                });
+                Some(self.controls.input(ship))
             }
             Pilot::Auto => None,
             Pilot::None => Some(Input::default()),
         }
     }
 
+    /// Whether game time runs: the game has started and is neither paused, nor behind the
+    /// help, nor over; a replay has steps left.
+    fn running(&self) -> bool {
+        self.begun && !self.paused && !self.help && !self.round.record.over && !self.at_end()
+    }
+
+    /// Whether a replay has submitted its every step.
+    fn at_end(&self) -> bool {
+        self.watch
+            .as_ref()
+            .is_some_and(|w| self.round.submitted >= w.replay.inputs.len() as u64)
+    }
+
+    /// Whether a person flies the ship (not the autopilot, nobody, a recording or the
+    /// benchmark).
+    fn player(&self) -> bool {
+        self.options.pilot == Pilot::Human && self.watch.is_none() && self.bench.is_none()
+    }
+
+    /// Leaves the start screen; returns whether this call did.
+    fn begin(&mut self) -> bool {
+        !std::mem::replace(&mut self.begun, true)
+    }
+
     /// Plays the due steps (the benchmark's one step, profiled when `profiled`) and takes
     /// the statuses that came back; returns the profile of a profiled step.
     fn advance(&mut self, now: Instant, profiled: bool) -> anyhow::Result<Option<Profile>> {
-        let running = !self.paused && !self.round.record.over;
+        let running = self.running();
         self.round.clock.run(running, now);
         let due = match (running, &self.bench) {
             (false, _) => 0,
             (true, Some(_)) => 1,
             (true, None) => self.round.clock.due(self.round.submitted, now),
+        };
+        let due = match &mut self.watch {
+            Some(watch) => {
+                let left = watch.replay.inputs.len() as u64 - self.round.submitted;
+                (due + std::mem::take(&mut watch.single)).min(left)
+            }
+            None => due,
         };
         let mut profile = None;
         for _ in 0..due {
@@ -465,11 +623,50 @@ impl<'d> App<'d> {
         while let Some(status) = self.round.game.ready_status() {
             self.take(status);
         }
+        if self.at_end() || (self.watch.is_some() && self.round.record.over) {
+            self.check_replay()?;
+        }
         Ok(profile)
+    }
+
+    /// At a replay's end (once): every status taken, the state's hash compared with the
+    /// recording's; a mismatch is an error.
+    fn check_replay(&mut self) -> anyhow::Result<()> {
+        let Some(watch) = self.watch.as_mut().filter(|w| !w.checked) else {
+            return Ok(());
+        };
+        watch.checked = true;
+        while let Some(status) = self.round.game.next_status()? {
+            self.take(status);
+        }
+        let hash = self.round.game.state_hash()?;
+        let watch = self.watch.as_ref().expect("checked above");
+        let recorded = watch.replay.state_hash;
+        if hash != recorded {
+            bail!(
+                "{}: the replay ended in state {hash:#018x} but was recorded ending in {recorded:#018x}",
+                watch.file
+            );
+        }
+        eprintln!(
+            "gpuwars: the replay ended after {} steps in the recorded state {hash:#018x}",
+            self.round.submitted
+        );
+        self.hud_at = None;
+        Ok(())
     }
 
     /// One frame: the due steps, then the drawing; in the benchmark's loop, counted.
     fn frame(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
+        if let Some(gamepads) = &mut self.gamepads {
+            for action in gamepads.poll(&mut self.controls) {
+                if !self.begin()
+                    && let Some(action) = action
+                {
+                    self.act(action, event_loop)?;
+                }
+            }
+        }
         let now = Instant::now();
         let sample = self
             .bench
@@ -507,9 +704,9 @@ impl<'d> App<'d> {
     }
 
     /// Records the game's score as the scene's best if it is, once per game: at game over,
-    /// or when the window closes mid-game.
+    /// or when the window closes mid-game. A replay's is not the player's.
     fn keep_score(&mut self) {
-        if std::mem::replace(&mut self.round.scored, true) {
+        if std::mem::replace(&mut self.round.scored, true) || self.watch.is_some() {
             return;
         }
         let score = self.round.record.last.score;
@@ -533,11 +730,19 @@ impl<'d> App<'d> {
         }
         let device = self.device;
         let start = timed.then(|| device.mark()).transpose()?;
-        let view = looks::whole_field(&self.scene, width, height);
+        let now = Instant::now();
+        let frame_dt = self
+            .drawn_at
+            .replace(now)
+            .map_or(0.0, |then| (now - then).as_secs_f32());
+        let lens = self.round.game.lens(&self.camera, width, height, frame_dt);
+        let ship = ship_position(&self.scene, &self.round.record.last);
+        self.aim_view = Some(camera::view(&lens, Some(ship), &mut self.aim_camera));
         let mut frame = screen.display.draw();
         match &mut screen.bodies {
             None => {
-                show_kernel_frame(screen, &mut self.round.game, &mut frame, (width, height))?;
+                let (game, at) = (&mut self.round.game, ((width, height), frame_dt));
+                show_kernel_frame(screen, game, &mut frame, &self.camera, at)?;
             }
             Some(bodies) => {
                 let fits = screen
@@ -549,9 +754,10 @@ impl<'d> App<'d> {
                 }
                 let target = screen.target.as_ref().expect("made above");
                 let mut surface = target.surface(&screen.display)?;
-                surface.clear_color_and_depth(unpack(view.background), 0.0);
-                bodies.update(self.round.game.pipeline())?;
-                bodies.draw(&mut surface, &view)?;
+                surface.clear_color_and_depth(unpack(lens.background), 0.0);
+                let pipeline = self.round.game.pipeline_mut();
+                bodies.update(&screen.display, pipeline, &lens)?;
+                bodies.draw(&mut surface, &lens)?;
                 screen
                     .blit
                     .draw(&mut frame, target.colour(), false, (0, 0), height, false)?;
@@ -624,12 +830,32 @@ impl<'d> App<'d> {
                 .blit
                 .draw(frame, texture, true, (8, 8), height, true)?;
         }
-        let overlay: Option<Vec<String>> = if self.help {
-            Some(HELP.iter().map(|l| l.to_string()).collect())
-        } else if self.round.record.over {
+        let help: &[&str] = match self.watch {
+            Some(_) => &REPLAY_HELP,
+            None => &HELP,
+        };
+        let overlay: Option<Vec<String>> = if !self.begun {
+            let mut lines = vec![
+                format!("GpuWars: {}", self.scene.name),
+                "press a key, click, or press a gamepad button to start".into(),
+                String::new(),
+            ];
+            lines.extend(help.iter().map(|l| l.to_string()));
+            Some(lines)
+        } else if self.help {
+            Some(help.iter().map(|l| l.to_string()).collect())
+        } else if let Some(watch) = self.watch.as_ref().filter(|w| w.checked) {
+            Some(vec![
+                "end of the replay: the state matches the recording".into(),
+                format!("{:#018x}", watch.replay.state_hash),
+                "Esc quit".into(),
+            ])
+        } else if self.round.record.over && self.watch.is_none() {
             Some(game_over_lines(self))
+        } else if self.paused && self.watch.is_some() {
+            Some(vec!["paused: P or Space to go on, . or N one step".into()])
         } else if self.paused {
-            Some(vec!["paused: P to go on".into()])
+            Some(vec!["paused: P, Space or Start to go on".into()])
         } else {
             None
         };
@@ -657,11 +883,23 @@ impl<'d> App<'d> {
     fn act(&mut self, action: Action, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
         match action {
             Action::Pause => self.paused = !self.paused,
+            Action::Step => {
+                if let Some(watch) = self.watch.as_mut().filter(|_| self.paused) {
+                    watch.single += 1;
+                    self.round.clock.bank_step();
+                }
+            }
+            Action::Speed(speed) => {
+                if let Some(watch) = &mut self.watch {
+                    watch.speed = speed;
+                    self.round.clock.set_rate(speed, Instant::now());
+                }
+            }
             Action::Mute => {
                 self.sound.toggle_muted();
             }
             Action::Help => self.help = !self.help,
-            Action::Restart if self.round.record.over => {
+            Action::Restart if self.round.record.over && self.watch.is_none() => {
                 self.round = Round::new(self.device, &self.scene, &self.options)?;
                 self.hud_at = None;
             }
@@ -674,9 +912,20 @@ impl<'d> App<'d> {
                 }
             }
             Action::Quit => event_loop.exit(),
+            Action::ZoomIn => self.zoom(ZOOM_STEP),
+            Action::ZoomOut => self.zoom(1.0 / ZOOM_STEP),
+            Action::Overview => self.camera.toggle_overview(),
         }
         self.hud_at = None;
         Ok(())
+    }
+
+    /// Zooms the camera by `factor`, no farther out than the whole field in the window.
+    fn zoom(&mut self, factor: f32) {
+        if let Some(screen) = &self.screen {
+            let size = screen.window.inner_size().into();
+            self.camera.zoom_within(factor, self.scene.world.size, size);
+        }
     }
 
     /// Notes a failure and closes the window.
@@ -695,6 +944,9 @@ impl<'d> App<'d> {
         }
         while let Some(status) = self.round.game.next_status()? {
             self.take(status);
+        }
+        if self.at_end() {
+            self.check_replay()?;
         }
         self.keep_score();
         let hash = self.round.game.state_hash()?;
@@ -728,6 +980,14 @@ impl<'d> App<'d> {
             game_over: status.is_over(),
             frames: self.frames,
             frame_rate: self.frames as f64 / seconds,
+            replay: self.watch.as_ref().map(|w| match w.checked {
+                true => "the end state matches the recording".into(),
+                false => format!(
+                    "stopped at step {} of {}: the end state was not checked",
+                    played,
+                    w.replay.inputs.len()
+                ),
+            }),
         })
     }
 }
@@ -753,6 +1013,22 @@ impl<'d> Round<'d> {
     }
 }
 
+/// Where the ship of `status` is on the screen shown through `view`, in pixels (x right, y
+/// down): the mouse aims from there. Before the first status, where it is born: the world's
+/// middle.
+fn ship_on_screen(scene: &Scene, status: &Status, view: &View) -> Vec2 {
+    view.to_image(ship_position(scene, status))
+}
+
+/// The ship's position by `status`; before the first status, where it is born: the world's
+/// middle.
+fn ship_position(scene: &Scene, status: &Status) -> Vec2 {
+    match status.step {
+        0 => scene.world.size * 0.5,
+        _ => status.ship,
+    }
+}
+
 /// The HUD's lines.
 fn hud_lines(app: &App, status: &Status) -> Vec<String> {
     let best = best_score(app).max(status.score);
@@ -767,28 +1043,40 @@ fn hud_lines(app: &App, status: &Status) -> Vec<String> {
         flags.push("muted");
     }
     flags.push("F1 help");
-    vec![
-        format!("score {}   best {best}", status.score),
+    let replay = app.watch.as_ref().map(|w| {
         format!(
-            "FPS meter {:.1} (over below {})",
-            status.fps_meter, app.scene.game.fps.min
-        ),
-        format!("frame rate {frame_rate:.0}/s   steps {step_rate:.0}/s"),
-        format!(
-            "enemies {} alive, {} processed",
-            status.enemies_alive, status.enemies_killed
-        ),
-        format!(
-            "game time {:.1} s",
-            f64::from(status.step) * f64::from(app.scene.world.dt)
-        ),
-        format!("{}: {}", app.device.kind(), device_name(app.device)),
-        format!(
-            "{} renderer   {}",
-            app.options.renderer.name(),
-            flags.join("   ")
-        ),
-    ]
+            "REPLAY of {}   step {} of {}   speed x{}",
+            w.file,
+            app.round.submitted,
+            w.replay.inputs.len(),
+            w.speed
+        )
+    });
+    replay
+        .into_iter()
+        .chain([
+            format!("score {}   best {best}", status.score),
+            format!(
+                "FPS meter {:.1} (over below {})",
+                status.fps_meter, app.scene.game.fps.min
+            ),
+            format!("frame rate {frame_rate:.0}/s   steps {step_rate:.0}/s"),
+            format!(
+                "enemies {} alive, {} processed",
+                status.enemies_alive, status.enemies_killed
+            ),
+            format!(
+                "game time {:.1} s",
+                f64::from(status.step) * f64::from(app.scene.world.dt)
+            ),
+            format!("{}: {}", app.device.kind(), device_name(app.device)),
+            format!(
+                "{} renderer   {}",
+                app.options.renderer.name(),
+                flags.join("   ")
+            ),
+        ])
+        .collect()
 }
 
 /// The scene's high score (0 when none is kept).
@@ -810,7 +1098,7 @@ fn game_over_lines(app: &App) -> Vec<String> {
         "GAME OVER".into(),
         why.into(),
         format!("score {}   best {best}", status.score),
-        "R new game   Esc quit".into(),
+        "R (A on a gamepad) new game   Esc quit".into(),
     ]
 }
 
@@ -836,7 +1124,38 @@ impl ApplicationHandler for App<'_> {
                 Ok(())
             }
             WindowEvent::Focused(false) => {
-                self.held.release_all();
+                // The releases go to another window; a game in play waits for its player.
+                self.controls.release_all();
+                if self.player() && self.begun && !self.round.record.over {
+                    self.paused = true;
+                    self.hud_at = None;
+                }
+                Ok(())
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                self.controls
+                    .cursor(Vec2::new(position.x as f32, position.y as f32));
+                Ok(())
+            }
+            WindowEvent::MouseWheel { delta, .. } => {
+                // Lines from a wheel, pixels from a touchpad (about 40 to a notch).
+                let notches = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+                };
+                self.zoom(ZOOM_STEP.powf(notches));
+                Ok(())
+            }
+            WindowEvent::MouseInput {
+                state,
+                button: MouseButton::Left,
+                ..
+            } => {
+                let down = state == ElementState::Pressed;
+                if down {
+                    self.begin();
+                }
+                self.controls.click(down);
                 Ok(())
             }
             WindowEvent::KeyboardInput { event, .. } => {
@@ -844,12 +1163,17 @@ impl ApplicationHandler for App<'_> {
                     return;
                 };
                 let pressed = event.state == ElementState::Pressed;
-                if self.held.set(key, pressed) || !pressed || event.repeat {
-                    Ok(())
-                } else if let Some(action) = Action::of(key) {
-                    self.act(action, event_loop)
-                } else {
-                    Ok(())
+                let action = Action::of(key);
+                // Esc quits from the start screen without starting; the key that starts the
+                // game does nothing else (but move or aim).
+                let quit = action == Some(Action::Quit);
+                let starting = pressed && !event.repeat && !quit && self.begin();
+                let moving = self.controls.key(key, pressed);
+                match action {
+                    Some(action) if pressed && !event.repeat && !moving && !starting => {
+                        self.act(action, event_loop)
+                    }
+                    _ => Ok(()),
                 }
             }
             WindowEvent::RedrawRequested => self.frame(event_loop),
@@ -864,5 +1188,49 @@ impl ApplicationHandler for App<'_> {
         if let Some(screen) = &self.screen {
             screen.window.request_redraw();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A clock of 10 ms steps, started at `t0`.
+    fn running(t0: Instant) -> Clock {
+        let mut clock = Clock::new(0.01);
+        clock.run(true, t0);
+        clock
+    }
+
+    #[test]
+    fn a_faster_clock_makes_steps_due_faster_from_the_change_on() {
+        let t0 = Instant::now();
+        let ms = Duration::from_millis;
+        let mut clock = running(t0);
+        assert_eq!(clock.due(0, t0 + ms(45)), 4);
+        // Four times real time from 50 ms on: 50 ms at x1 and 10 ms at x4 make 9 steps of
+        // game time, 4 of them played.
+        clock.set_rate(4, t0 + ms(50));
+        assert_eq!(clock.due(4, t0 + ms(60)), 5);
+        // Catching up is capped at MAX_CATCH_UP times the rate, the rest given up.
+        assert_eq!(clock.due(9, t0 + ms(1050)), MAX_CATCH_UP * 4);
+        assert_eq!(clock.due(9 + MAX_CATCH_UP * 4, t0 + ms(1050)), 0);
+    }
+
+    #[test]
+    fn single_steps_while_paused_do_not_delay_the_steps_after() {
+        let t0 = Instant::now();
+        let ms = Duration::from_millis;
+        let mut clock = running(t0);
+        assert_eq!(clock.due(0, t0 + ms(30)), 3);
+        clock.run(false, t0 + ms(30));
+        // Paused for a second: nothing due; three single steps are banked.
+        assert_eq!(clock.due(3, t0 + ms(1030)), 0);
+        for _ in 0..3 {
+            clock.bank_step();
+        }
+        clock.run(true, t0 + ms(1030));
+        // 10 ms after going on: one step due after the six played.
+        assert_eq!(clock.due(6, t0 + ms(1040)), 1);
     }
 }

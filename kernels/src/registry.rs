@@ -6,7 +6,7 @@
 
 use crate::game::{ai, autopilot, effects, master};
 use crate::primitives::{histogram, scan, sort};
-use crate::render;
+use crate::render::{self, camera, particles, radar};
 use crate::rng::streams;
 use crate::sim::{broad, free_list, integrate, narrow, scatter};
 use crate::{Kernel, KernelInfo};
@@ -86,12 +86,23 @@ kernels! {
     THINK = think(ai::ThinkArgs) => ai::think;
     /// Sets up every slot's generator from its seed and the parameter table.
     SEED_STREAMS = seed_streams(streams::SeedArgs) => streams::seed_streams;
+    /// Points the camera: the frame's view from the ship's position (one thread).
+    CAMERA = camera(camera::CameraArgs) => camera::camera;
+    /// Counts sampled bodies per radar pixel (atomic adds and maxima: order-free).
+    RADAR_BODIES = radar_bodies(radar::RadarArgs) => radar::radar_bodies;
+    /// Writes the radar's pixels into an image of their own, and clears its counts.
+    RADAR_IMAGE = radar_image(radar::RadarImageArgs) => radar::radar_image;
     /// Draws every live body's shape into the pixel keys (atomic maximum: order-free).
     SPLAT_BODIES = splat_bodies(render::SplatArgs) => render::splat_bodies;
-    /// Turns each pixel's key into its colour and clears the key.
+    /// Draws every shown particle's disc into the pixel keys, under the bodies (atomic
+    /// maximum: order-free).
+    SPLAT_PARTICLES = splat_particles(particles::ParticleSplatArgs) => particles::splat_particles;
+    /// Turns each pixel's key into its colour (or the backdrop's) and clears the key.
     RESOLVE_PIXELS = resolve_pixels(render::ResolveArgs) => render::resolve_pixels;
     /// Writes every slot's vertex for the GL renderer (into its mapped vertex buffer).
     WRITE_VERTICES = write_vertices(render::VertexArgs) => render::write_vertices;
+    /// Writes every particle's vertex for the GL renderer, after the bodies'.
+    WRITE_PARTICLE_VERTICES = write_particle_vertices(particles::ParticleVertexArgs) => particles::write_particle_vertices;
     /// The autopilot: the ship's input from what lies around it (one thread).
     AUTOPILOT = autopilot(autopilot::AutopilotArgs) => autopilot::autopilot;
 }

@@ -113,7 +113,7 @@ impl Command {
     }
 }
 
-/// Things that happened in one step, for the sound effects.
+/// Things that happened in one step, for the sound effects and the HUD.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct Events {
@@ -125,6 +125,10 @@ pub struct Events {
     pub ship_hits: u32,
     /// Enemies spawned.
     pub spawned: u32,
+    /// Waves of the spawn schedule that brought enemies this step.
+    pub waves: u32,
+    /// Shots that struck an enemy this step (took damage from a contact; obstacles do none).
+    pub shot_hits: u32,
 }
 
 /// [`Status::game_over`]: still playing.
@@ -159,6 +163,8 @@ pub struct Status {
     pub events: Events,
     /// The input this step applied (what a replay records).
     pub input: Input,
+    /// Where the ship is after the step (where it was last, once it is destroyed).
+    pub ship: Vec2,
 }
 
 impl Status {

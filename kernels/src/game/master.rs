@@ -110,6 +110,7 @@ pub fn master(t: Thread, args: &MasterArgs) {
             let room = args.free.count.get(k) - asked;
             args.births.set(k, asked + wave.count.min(room));
             args.birth_speed.set(k, wave.speed);
+            st.events.waves += u32::from(wave.count.min(room) > 0);
         }
     }
     for k in 0..args.births.len() {
@@ -127,7 +128,8 @@ pub fn master(t: Thread, args: &MasterArgs) {
 /// 1. counts and score: an enemy kind's dead are those spawned minus those alive, each
 ///    worth its birth energy; the kills and the score saturate at `u32::MAX` instead of
 ///    wrapping, and never go back (a saturated spawn count would undercount the dead);
-/// 2. the ship's hits this step;
+/// 2. the ship's hits this step, the shots that struck an enemy (those that took damage:
+///    obstacles such as crates do none), and where the ship is;
 /// 3. the FPS meter from the ship's energy; game over below the minimum, or without a ship,
 ///    and then the world is frozen (see [`Bodies::frozen`]).
 #[inline(always)]
@@ -159,8 +161,13 @@ pub fn tally(t: Thread, args: &MasterArgs) {
     st.enemies_alive = alive;
     st.enemies_killed = killed;
     st.score = score.max(st.score);
-    let shots = args.ranges.get(rules.shot_kind).capacity;
-    st.shots_alive = shots - args.free.count.get(rules.shot_kind);
+    let shots = args.ranges.get(rules.shot_kind);
+    st.shots_alive = shots.capacity - args.free.count.get(rules.shot_kind);
+    // Summed in slot order over the kind's range (a few dozen slots): the same on every
+    // schedule.
+    st.events.shot_hits = (shots.start..shots.start + shots.capacity)
+        .map(|slot| u32::from(args.contacts.damage.get(slot) > 0))
+        .sum();
     let ship = rules.ship.start;
     let ship_alive = b.is_alive(ship);
     st.events.ship_hits = if ship_alive {
@@ -168,6 +175,9 @@ pub fn tally(t: Thread, args: &MasterArgs) {
     } else {
         0
     };
+    if ship_alive {
+        st.ship = b.pos.get(ship);
+    }
     let energy = if ship_alive { b.energy.get(ship) } else { 0 };
     st.fps_meter = rules.fps_meter(energy);
     st.game_over = if !ship_alive {
