@@ -2,17 +2,18 @@
 //! name what is allowed in words (`a whole number from 1 to 1,024`). The binary runs what
 //! it parses; tests parse command lines here without starting it.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use anyhow::{Context, bail};
+use anyhow::{anyhow, bail};
 use clap::{Args, Parser, Subcommand};
 
 use crate::BackendRequest;
-use crate::benchmark::scale;
-use crate::files::thousands;
+use crate::benchmark::{Outputs, scale};
+use crate::files::{RunFiles, shown, thousands};
 use crate::game::Options;
 use crate::game::demo::{Frames, Pilot, RunOptions};
 use crate::game::replay::MAX_STEPS;
+use crate::game::{highscore, scene};
 use crate::graphics::Renderer;
 use crate::graphics::camera::{Camera, CameraMode, DEFAULT_ZOOM, MAX_ZOOM, MIN_ZOOM};
 use crate::pipeline::draw::MAX_SIDE;
@@ -32,7 +33,8 @@ pub struct Cli {
         default_value_t
     )]
     pub backend: BackendRequest,
-    /// Worker threads of the CPU emulation (default: one per logical CPU).
+    /// Worker threads of the CPU emulation (default: one per logical CPU; at most 8 per
+    /// logical CPU are used, more only wait on each other).
     #[arg(long, global = true, env = "GPUWARS_CPU_THREADS", value_parser = whole(1u16, 1024))]
     pub cpu_threads: Option<u16>,
     /// What to do; none plays in a window when a display is there, else runs the demo.
@@ -106,6 +108,53 @@ pub enum Command {
     },
 }
 
+impl Command {
+    /// Every file this command reads and writes, with the flag that names it: the one place
+    /// a new file flag is declared, so that [`RunFiles::check`] keeps its outputs off its
+    /// inputs and each other before the run.
+    pub fn files(&self) -> RunFiles {
+        let scene = |name: &str| {
+            let is_file = !scene::BUILT_IN.iter().any(|b| b.name == name);
+            is_file.then(|| Path::new(name).to_owned())
+        };
+        let benchmark = |files: RunFiles, out: &BenchOut, name: &str| {
+            let outputs = Outputs::at(&out.out, name);
+            [&outputs.csv, &outputs.png, &outputs.json]
+                .into_iter()
+                .fold(files, |files, path| files.writes_into("--out", path))
+        };
+        match self {
+            Command::Info { .. } | Command::Scenes => RunFiles::new(),
+            Command::Demo(args) => RunFiles::new()
+                .reads("--scene", scene(&args.scene).as_deref())
+                .writes("--record", args.record.as_deref())
+                .writes("--screenshot", args.screenshot.as_deref())
+                .writes_many("--frames-every", frames_dir(args), Frames::is_file_name),
+            // The high scores are read, and rewritten only when a game beats them: an
+            // output on them is refused, a problem with them only warned of (as before).
+            Command::Play(args) => RunFiles::new()
+                .reads("--scene", scene(&args.scene).as_deref())
+                .reads("the high scores", highscore::default_path().as_deref())
+                .writes("--record", args.record.as_deref()),
+            Command::Replay { file, .. } => RunFiles::new().reads("FILE", Some(file)),
+            Command::Tradeoff {
+                scene: name, out, ..
+            } => {
+                let files = RunFiles::new().reads("--scene", scene(name).as_deref());
+                let markdown = Outputs::at(&out.out, "tradeoff").markdown();
+                benchmark(files, out, "tradeoff").writes_into("--out", &markdown)
+            }
+            Command::Bench { which } => match which {
+                BenchCommand::Paper { out, .. } => benchmark(RunFiles::new(), out, "paper"),
+                BenchCommand::Scale { out, .. } => benchmark(RunFiles::new(), out, "scale"),
+                BenchCommand::Compare { a, b } => {
+                    RunFiles::new().reads("A", Some(a)).reads("B", Some(b))
+                }
+            },
+        }
+    }
+}
+
 /// The measurements of `gpuwars bench`.
 #[derive(Subcommand)]
 pub enum BenchCommand {
@@ -122,7 +171,7 @@ pub enum BenchCommand {
         #[arg(long, value_enum, default_value_t)]
         render: Renderer,
         /// Seed of the game.
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, default_value_t = 1, value_parser = whole(0, u32::MAX))]
         seed: u32,
         /// Draw the frames in `play`'s window (vsync off) instead of offscreen.
         #[arg(long)]
@@ -134,8 +183,9 @@ pub enum BenchCommand {
     /// The paper's mix and density from 1,024 enemies up, doubling, to --max or the largest
     /// world that fits (CSV, log-log PNG plot, JSON summary).
     Scale {
-        /// The most enemies (the last size if not a power of two).
-        #[arg(long, default_value_t = scale::MAX_ENEMIES, value_parser = whole(scale::MIN_ENEMIES, scale::MAX_ENEMIES))]
+        /// The most enemies, a multiple of 8 from 1,024 to 16,760,000 (the last size if not a
+        /// power of two).
+        #[arg(long, default_value_t = scale::MAX_ENEMIES, value_parser = enemies)]
         max: u64,
         /// Seconds spent on each measurement of a size.
         #[arg(long, default_value_t = 2.0, value_parser = decimal(0.01, 3600.0))]
@@ -274,19 +324,21 @@ impl DemoArgs {
         let Some([every, dir]) = self.frames_every.as_deref() else {
             return Ok(None);
         };
-        let every = every
-            .parse::<u64>()
-            .ok()
-            .filter(|&n| n >= 1)
-            .with_context(|| {
-                format!("--frames-every: `{every}` is not a step count (1 or more)")
-            })?;
+        let every = whole(1, MAX_STEPS)(every).map_err(|e| anyhow!("--frames-every: N: {e}"))?;
         let dir = PathBuf::from(dir);
         if !dir.is_dir() {
-            bail!("--frames-every: {} is not a folder", dir.display());
+            bail!("--frames-every: {} is not a folder", shown(&dir));
         }
         Ok(Some(Frames { every, dir, size }))
     }
+}
+
+/// The folder of `--frames-every N DIR`.
+fn frames_dir(args: &DemoArgs) -> Option<&Path> {
+    args.frames_every
+        .as_deref()
+        .and_then(|values| values.get(1))
+        .map(Path::new)
 }
 
 /// What `gpuwars play` plays, and how.
@@ -359,6 +411,32 @@ pub fn default_demo() -> DemoArgs {
         .get_or_insert_with(|| std::env::temp_dir().join("gpuwars-demo.png"));
     demo
 }
+
+/// Enemies of `bench scale`: a multiple of 8 (the kinds' shares of the mix are whole) from
+/// [`scale::MIN_ENEMIES`] to [`scale::MAX_ENEMIES`].
+pub fn enemies(text: &str) -> Result<u64, String> {
+    let n = whole(scale::MIN_ENEMIES, scale::MAX_ENEMIES)(text)?;
+    match n.is_multiple_of(8) {
+        true => Ok(n),
+        false => Err(format!(
+            "not a multiple of 8 (allowed a multiple of 8 from {} to {})",
+            thousands(scale::MIN_ENEMIES),
+            thousands(scale::MAX_ENEMIES)
+        )),
+    }
+}
+
+/// Threads of the CPU emulation for `asked` on a machine of `cpus` logical CPUs: at most
+/// [`THREADS_PER_CPU`] per CPU (beyond that they only wait on each other: 1,024 threads on
+/// 2 CPUs made a step over 100 times slower than 128 did), and whether that capped it.
+pub fn cpu_threads(asked: u16, cpus: usize) -> (usize, bool) {
+    let most = cpus.max(1).saturating_mul(THREADS_PER_CPU);
+    let asked = usize::from(asked);
+    (asked.min(most), asked > most)
+}
+
+/// Most CPU emulation threads per logical CPU.
+pub const THREADS_PER_CPU: usize = 8;
 
 /// A value parser for a whole number from `low` to `high`, whose errors say so.
 pub fn whole<T>(low: T, high: T) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync

@@ -16,6 +16,10 @@ const EXCERPT_CHARS: usize = 40;
 /// more of a huge input than it should.
 const MAX_FIELD_CHARS: usize = 120;
 const MAX_PROBLEM_CHARS: usize = 600;
+/// Most characters of a file's name an error shows from its start, and from its end (where
+/// the file's own name is): a long path is shown as both, `…` between.
+const NAME_HEAD: usize = 30;
+const NAME_TAIL: usize = 50;
 
 /// What is wrong with a file the program reads (a scene, a replay) or writes, and where.
 ///
@@ -35,7 +39,8 @@ pub struct FileError {
 }
 
 impl FileError {
-    /// An error in `file` (field and problem cut short if some input made them huge).
+    /// An error in `file` (a long name shortened, field and problem cut short if some
+    /// input made them huge).
     pub fn new(
         file: &str,
         line: Option<usize>,
@@ -43,7 +48,7 @@ impl FileError {
         problem: impl fmt::Display,
     ) -> Self {
         FileError {
-            file: file.to_owned(),
+            file: short_name(file),
             line,
             field: cap(&field.to_string(), MAX_FIELD_CHARS),
             problem: cap(&problem.to_string(), MAX_PROBLEM_CHARS),
@@ -79,17 +84,76 @@ pub fn line_of(text: &[u8], at: usize) -> usize {
 pub fn excerpt(text: &str) -> String {
     let mut lines = text.lines();
     let (first, cut) = shorten(lines.next().unwrap_or_default(), EXCERPT_CHARS);
-    let mut out = String::with_capacity(first.len() + 3);
-    for c in first.chars() {
-        match c.is_control() {
-            true => out.extend(c.escape_default()),
-            false => out.push(c),
-        }
-    }
+    let mut out = escaped(&first);
     if cut || lines.next().is_some() {
         out.push('…');
     }
     out
+}
+
+/// `text` with its control characters escaped as JSON and TOML write them (`\n`,
+/// `\u001b`).
+fn escaped(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '\n' => out.push_str("\\n"),
+            '\r' => out.push_str("\\r"),
+            '\t' => out.push_str("\\t"),
+            c if c.is_control() => out.push_str(&format!("\\u{:04x}", u32::from(c))),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// What a JSON parse error means, in words (without serde_json's position, which the
+/// error gives as its line).
+pub fn json_problem(e: &serde_json::Error) -> String {
+    let message = e.to_string();
+    let position = format!(" at line {} column {}", e.line(), e.column());
+    let message = message.strip_suffix(&position).unwrap_or(&message);
+    let said = match message {
+        "EOF while parsing a list" => "the text ends inside a list (a `]` is missing)",
+        "EOF while parsing an object" => "the text ends inside an object (a `}` is missing)",
+        "EOF while parsing a string" => "the text ends inside a string (a `\"` is missing)",
+        "EOF while parsing a value" => "the text ends where a value should be",
+        "expected ident" | "expected value" => {
+            "not a JSON value (a number, a \"string\", true, false, null, a list or an object)"
+        }
+        "expected `:`" => "a `:` should follow the key",
+        "expected `,` or `]`" => "a `,` or `]` should follow the list's item",
+        "expected `,` or `}`" => "a `,` or `}` should follow the object's value",
+        "key must be a string" => "a key must be a \"string\" in double quotes",
+        "invalid escape" => "a backslash that starts no escape of JSON (\\n, \\\", \\uXXXX, …)",
+        "invalid number" => "not a number",
+        "number out of range" => "a number too large to read",
+        "invalid unicode code point" | "lone leading surrogate in hex escape" => {
+            "a \\u escape that is not a character"
+        }
+        "unexpected end of hex escape" => "a \\u escape needs 4 hexadecimal digits",
+        "trailing comma" => "a `,` before the closing bracket",
+        "trailing characters" => "more text after the end of the JSON value",
+        "recursion limit exceeded" => "lists or objects nested too deeply",
+        m if m.starts_with("control character") => {
+            "a control character inside a string (write it as an escape, such as \\n)"
+        }
+        // The readers' own errors (already in words) and anything new.
+        m => return m.to_owned(),
+    };
+    said.to_owned()
+}
+
+/// A file's name as an error shows it: control characters escaped, and a long one cut to
+/// its start and its end.
+pub fn short_name(name: &str) -> String {
+    let chars = name.chars().count();
+    if chars <= NAME_HEAD + NAME_TAIL + 1 {
+        return escaped(name);
+    }
+    let head: String = name.chars().take(NAME_HEAD).collect();
+    let tail: String = name.chars().skip(chars - NAME_TAIL).collect();
+    format!("{}…{}", escaped(&head), escaped(&tail))
 }
 
 /// The first `max` characters of `text`, and whether there were more.
@@ -163,7 +227,7 @@ fn kind_of(file_type: FileType) -> &'static str {
 }
 
 /// An I/O error in words, without the system's error number.
-fn io_words(e: &std::io::Error) -> String {
+pub fn io_words(e: &std::io::Error) -> String {
     match e.kind() {
         ErrorKind::NotFound => "no such file".to_owned(),
         ErrorKind::PermissionDenied => "permission denied".to_owned(),
@@ -176,6 +240,11 @@ fn io_words(e: &std::io::Error) -> String {
             })
         }
     }
+}
+
+/// `path` as a message shows it: see [`short_name`].
+pub fn shown(path: &Path) -> String {
+    short_name(&origin(path))
 }
 
 /// How errors name `path`: as given, and `""` for the empty path.
@@ -264,8 +333,8 @@ pub fn check_output(path: &Path) -> Result<(), FileError> {
         Ok(meta) if meta.file_type().is_symlink() => {
             // A relative target is relative to the link's folder.
             let target = match (std::fs::read_link(path), path.parent()) {
-                (Ok(target), Some(dir)) => dir.join(target).display().to_string(),
-                (Ok(target), None) => target.display().to_string(),
+                (Ok(target), Some(dir)) => shown(&dir.join(target)),
+                (Ok(target), None) => shown(&target),
                 (Err(_), _) => "its target".to_owned(),
             };
             return Err(fail(format!(
@@ -287,13 +356,13 @@ pub fn check_output(path: &Path) -> Result<(), FileError> {
         Ok(meta) if meta.is_dir() => Ok(()),
         Ok(meta) => Err(fail(format!(
             "{} is {}, not a folder",
-            dir.display(),
+            shown(&dir),
             kind_of(meta.file_type())
         ))),
         Err(e) if e.kind() == ErrorKind::NotFound => {
-            Err(fail(format!("the folder {} does not exist", dir.display())))
+            Err(fail(format!("the folder {} does not exist", shown(&dir))))
         }
-        Err(e) => Err(fail(format!("{}: {}", dir.display(), io_words(&e)))),
+        Err(e) => Err(fail(format!("{}: {}", shown(&dir), io_words(&e)))),
     }
 }
 
@@ -333,4 +402,205 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
     file.as_file().sync_all().map_err(fail)?;
     file.persist(path).map_err(|e| fail(e.error))?;
     Ok(())
+}
+
+/// The files one run reads and writes, each with the flag that names it: declared in one
+/// place per command ([`crate::cli::Command::files`]) and checked before the run starts, so
+/// that no output replaces an input or another output of the same run.
+#[derive(Debug, Default)]
+pub struct RunFiles {
+    uses: Vec<Use>,
+}
+
+/// One file of a run.
+#[derive(Debug)]
+struct Use {
+    /// The flag or argument that names it (`--record`, `FILE`, `--out`).
+    flag: String,
+    path: PathBuf,
+    how: How,
+    /// For [`How::Many`]: the names of the files written in the folder `path`.
+    named: fn(&str) -> bool,
+}
+
+/// What a run does with a file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum How {
+    Reads,
+    Writes,
+    /// Writes, in a folder that the run makes if it is missing.
+    WritesInto,
+    /// Writes files of some names (`frame-000060.png`) into this folder.
+    Many,
+}
+
+/// Which file a path is: by device and inode where it exists (links followed, so a link
+/// and its target, or two hard links, are one file), else by its folder's real path and
+/// its name.
+#[derive(Debug, PartialEq, Eq)]
+enum Identity {
+    Inode(u64, u64),
+    Named(PathBuf),
+}
+
+impl RunFiles {
+    /// No files.
+    pub fn new() -> Self {
+        RunFiles::default()
+    }
+
+    /// The run reads `path`, named by `flag` (nothing when `None`).
+    pub fn reads(self, flag: &str, path: Option<&Path>) -> Self {
+        self.with(flag, path, How::Reads, |_| false)
+    }
+
+    /// The run writes `path`, named by `flag` (nothing when `None`).
+    pub fn writes(self, flag: &str, path: Option<&Path>) -> Self {
+        self.with(flag, path, How::Writes, |_| false)
+    }
+
+    /// The run writes `path` into a folder it makes if missing, named by `flag`.
+    pub fn writes_into(self, flag: &str, path: &Path) -> Self {
+        self.with(flag, Some(path), How::WritesInto, |_| false)
+    }
+
+    /// The run writes files whose names `named` accepts into the folder `dir`, named by
+    /// `flag` (nothing when `None`).
+    pub fn writes_many(self, flag: &str, dir: Option<&Path>, named: fn(&str) -> bool) -> Self {
+        self.with(flag, dir, How::Many, named)
+    }
+
+    fn with(mut self, flag: &str, path: Option<&Path>, how: How, named: fn(&str) -> bool) -> Self {
+        if let Some(path) = path {
+            self.uses.push(Use {
+                flag: flag.to_owned(),
+                path: path.to_path_buf(),
+                how,
+                named,
+            });
+        }
+        self
+    }
+
+    /// The files read, with their flags.
+    pub fn inputs(&self) -> impl Iterator<Item = (&str, &Path)> {
+        self.uses_where(|how| how == How::Reads)
+    }
+
+    /// The files written, with their flags (not the folders of [`RunFiles::writes_many`]).
+    pub fn outputs(&self) -> impl Iterator<Item = (&str, &Path)> {
+        self.uses_where(|how| matches!(how, How::Writes | How::WritesInto))
+    }
+
+    fn uses_where(&self, keep: impl Fn(How) -> bool) -> impl Iterator<Item = (&str, &Path)> {
+        self.uses
+            .iter()
+            .filter(move |u| keep(u.how))
+            .map(|u| (u.flag.as_str(), u.path.as_path()))
+    }
+
+    /// Checks, before the run, that every output may be written (see [`check_output`]) and
+    /// that no two uses are one file but where both only read it: an output that is an
+    /// input or another output is refused, naming both.
+    pub fn check(&self) -> Result<(), FileError> {
+        let files = |how: How| matches!(how, How::Writes | How::WritesInto);
+        for out in self.uses.iter().filter(|u| files(u.how)) {
+            if out.how == How::Writes || std::fs::metadata(folder(&out.path)).is_ok() {
+                check_output(&out.path).map_err(|e| FileError {
+                    problem: format!("{} ({})", e.problem, out.flag),
+                    ..e
+                })?;
+            }
+        }
+        // A folder's files may land on any other file of the run named like one of them.
+        for many in self.uses.iter().filter(|u| u.how == How::Many) {
+            let Ok(dir) = std::fs::canonicalize(&many.path) else {
+                continue;
+            };
+            let mut others = self.uses.iter().filter(|u| u.how != How::Many);
+            let landed = others.find(|u| {
+                (u.how != How::Reads || u.path.exists())
+                    && real_path(&u.path).is_some_and(|real| {
+                        real.parent() == Some(dir.as_path())
+                            && real
+                                .file_name()
+                                .and_then(|name| name.to_str())
+                                .is_some_and(many.named)
+                    })
+            });
+            if let Some(other) = landed {
+                return Err(FileError::new(
+                    &origin(&other.path),
+                    None,
+                    "",
+                    format!(
+                        "cannot write ({}): a file it writes would replace {}, named like one \
+                         in that folder (give {} another folder)",
+                        many.flag, other.flag, many.flag
+                    ),
+                ));
+            }
+        }
+        // An input that is not there is not read over (reading it fails in its own words).
+        let ids: Vec<_> = self
+            .uses
+            .iter()
+            .map(|u| identity(&u.path).filter(|id| u.how != How::Reads || id.exists()))
+            .collect();
+        for (j, later) in self.uses.iter().enumerate() {
+            for (i, earlier) in self.uses[..j].iter().enumerate() {
+                let both_read = earlier.how == How::Reads && later.how == How::Reads;
+                // A folder of many files is checked above.
+                let many = earlier.how == How::Many || later.how == How::Many;
+                if both_read || many || ids[i].is_none() || ids[i] != ids[j] {
+                    continue;
+                }
+                let (out, other) = match later.how {
+                    How::Reads => (earlier, later),
+                    _ => (later, earlier),
+                };
+                let verb = match other.how {
+                    How::Reads => "reads",
+                    _ => "writes",
+                };
+                return Err(FileError::new(
+                    &origin(&out.path),
+                    None,
+                    "",
+                    format!(
+                        "cannot write ({}): it is the same file as {}, which this run {verb} \
+                         (give {} another path)",
+                        out.flag, other.flag, out.flag
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Identity {
+    /// Whether the file is there.
+    fn exists(&self) -> bool {
+        matches!(self, Identity::Inode(..))
+    }
+}
+
+/// `path` with its folder's real path (links followed), and itself resolved where it is a
+/// link to a file that exists.
+fn real_path(path: &Path) -> Option<PathBuf> {
+    std::fs::canonicalize(path).ok().or_else(|| {
+        let dir = std::fs::canonicalize(folder(path)).ok()?;
+        Some(dir.join(path.file_name()?))
+    })
+}
+
+/// Which file `path` is, when it can be told (a missing folder cannot be resolved).
+fn identity(path: &Path) -> Option<Identity> {
+    #[cfg(unix)]
+    if let Ok(meta) = std::fs::metadata(path) {
+        use std::os::unix::fs::MetadataExt;
+        return Some(Identity::Inode(meta.dev(), meta.ino()));
+    }
+    real_path(path).map(Identity::Named)
 }

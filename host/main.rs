@@ -10,8 +10,10 @@ use gpuwars::benchmark::compare;
 use gpuwars::benchmark::paper::{self, PaperOptions, PaperSummary};
 use gpuwars::benchmark::scale::{self, ScaleOptions, ScaleSummary};
 use gpuwars::benchmark::tradeoff::{self, TradeoffOptions, TradeoffSummary};
-use gpuwars::cli::{BenchCommand, Cli, Command, default_demo, defaults};
-use gpuwars::files::{check_output, excerpt, thousands};
+use gpuwars::cli::{
+    BenchCommand, Cli, Command, THREADS_PER_CPU, cpu_threads, default_demo, defaults,
+};
+use gpuwars::files::{excerpt, shown, thousands};
 use gpuwars::game::Scene;
 use gpuwars::game::demo::{self, Report, RunOptions};
 use gpuwars::game::engine::footprint;
@@ -43,12 +45,17 @@ fn default_command() -> Command {
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     let command = cli.command.unwrap_or_else(default_command);
+    // Before a run that could take hours: outputs it could not write, or that would replace
+    // one of its inputs, are errors now.
+    command.files().check()?;
     if let Command::Bench {
         which: BenchCommand::Compare { a, b },
     } = &command
     {
+        let (a_name, b_name) = (shown(a), shown(b));
         let (a, b) = (compare::load(a)?, compare::load(b)?);
-        print!("{}", compare::to_text(&compare::compare(&a, &b)?, &a, &b));
+        let changes = compare::compare(&a, &a_name, &b, &b_name)?;
+        print!("{}", compare::to_text(&changes, &a, &b));
         return Ok(());
     }
     if let Command::Scenes = command {
@@ -58,7 +65,18 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         return Ok(());
     }
-    let device = Device::select(cli.backend, cli.cpu_threads.map(usize::from))?;
+    let cpus = std::thread::available_parallelism().map_or(1, usize::from);
+    let threads = cli.cpu_threads.map(|asked| {
+        let (threads, capped) = cpu_threads(asked, cpus);
+        if capped {
+            eprintln!(
+                "gpuwars: --cpu-threads {asked}: using {threads}, {THREADS_PER_CPU} for each of \
+                 this machine's {cpus} logical CPUs (more only wait on each other)"
+            );
+        }
+        threads
+    });
+    let device = Device::select(cli.backend, threads)?;
     match command {
         Command::Scenes
         | Command::Bench {
@@ -115,8 +133,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             seed,
             out,
         } => {
+            let scene = Scene::load(&scene)?;
+            // Its game tables play the scene many times: a large one is said first.
+            announce(&device, &scene);
             let options = TradeoffOptions {
-                scene: Scene::load(&scene)?,
+                scene,
                 quick,
                 seed,
                 out: out.out,
@@ -134,13 +155,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Command::Demo(args) => {
-            // Before a game that could take hours: outputs it could not write are errors now.
-            for path in args.record.iter().chain(&args.screenshot) {
-                check_output(path)?;
-            }
             let scene = Scene::load(&args.scene)?;
-            announce(&device, &scene);
+            let slow = announce(&device, &scene);
             let options = RunOptions {
+                progress: slow && !args.json,
                 pilot: args.pilot,
                 frame: args.screenshot.as_ref().map(|_| args.size),
                 frames: args.frames(args.size)?,
@@ -158,9 +176,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             print_report(&report, args.json, args.screenshot.as_deref())?;
         }
         Command::Play(args) => {
-            if let Some(path) = &args.record {
-                check_output(path)?;
-            }
             let scene = Scene::load(&args.scene)?;
             announce(&device, &scene);
             let options = PlayOptions {
@@ -188,7 +203,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let replay = Replay::load(&file)?;
             let origin = format!("{} (scene `{}`)", file.display(), replay.scene);
             let scene = Scene::from_toml(&replay.scene_toml, &origin)?;
-            announce(&device, &scene);
+            let progress = announce(&device, &scene) && !json;
             if window {
                 let options = PlayOptions {
                     seed: replay.seed,
@@ -203,13 +218,17 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 let report = play::watch(&device, &scene, replay, &file, options)?;
                 return print_summary(&report, json, PlayReport::to_text);
             }
-            let report = demo::replay(&device, &scene, &replay, run.options())?;
+            let options = RunOptions {
+                progress,
+                ..run.options()
+            };
+            let report = demo::replay(&device, &scene, &replay, options)?;
             print_report(&report, json, None)?;
             let recorded = format!("{:#018x}", replay.state_hash);
             if report.state_hash != recorded {
                 bail!(
                     "{}: the replay ended in state {} but was recorded ending in {recorded}",
-                    file.display(),
+                    shown(&file),
                     report.state_hash
                 );
             }
@@ -222,10 +241,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
 const LARGE_WORLD_BYTES: u64 = 1 << 30;
 
 /// Says on stderr, before a large world is allocated on the CPU emulation, how large it is
-/// and that it plays slowly there (the device's free memory is checked next).
-fn announce(device: &Device, scene: &Scene) {
+/// and that it plays slowly there (the device's free memory is checked next); returns
+/// whether it did, so that the run shows its progress.
+fn announce(device: &Device, scene: &Scene) -> bool {
     let (slots, bytes) = footprint(scene);
-    if device.kind() == BackendKind::Cpu && bytes >= LARGE_WORLD_BYTES {
+    let large = device.kind() == BackendKind::Cpu && bytes >= LARGE_WORLD_BYTES;
+    if large {
         eprintln!(
             "gpuwars: scene `{}` has {} slots, which take {:.1} GB of host memory; the CPU \
              emulation may take seconds per step",
@@ -234,6 +255,7 @@ fn announce(device: &Device, scene: &Scene) {
             bytes as f64 / 1e9
         );
     }
+    large
 }
 
 /// The report, and where the screenshot went if one was written.

@@ -219,3 +219,96 @@ proptest! {
         prop_assert!((s.mean - mean).abs() <= 1e-9 * mean.abs().max(1.0));
     }
 }
+
+/// Runs `bench compare A B` on two summaries written from `a` and `b`.
+fn compare(a: &str, b: &str) -> std::process::Output {
+    let dir = tempfile::tempdir().unwrap();
+    let (pa, pb) = (dir.path().join("a.json"), dir.path().join("b.json"));
+    std::fs::write(&pa, a).unwrap();
+    std::fs::write(&pb, b).unwrap();
+    gpuwars(&[
+        "bench",
+        "compare",
+        pa.to_str().unwrap(),
+        pb.to_str().unwrap(),
+    ])
+}
+
+fn compare_error(a: &str, b: &str) -> String {
+    let out = compare(a, b);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    for jargon in ["EOF", "os error", "column", "panicked"] {
+        assert!(!stderr.contains(jargon), "{stderr}");
+    }
+    stderr
+}
+
+#[test]
+fn compare_refuses_figures_that_are_not_numbers_and_prints_what_means_something() {
+    let summary = |median: &str| {
+        format!(r#"{{"benchmark": "paper", "frames_per_s": {{"median": {median}, "p5": 2}}}}"#)
+    };
+    let stderr = compare_error(&summary("60"), &summary("\"abc\""));
+    assert!(
+        stderr.contains("b.json: frames_per_s.median: not a number (found \"abc\")"),
+        "{stderr}"
+    );
+    let stderr = compare_error(&summary("null"), &summary("60"));
+    assert!(
+        stderr.contains("a.json: frames_per_s.median: not a number"),
+        "{stderr}"
+    );
+    let stderr = compare_error(&summary("1e400"), &summary("60"));
+    assert!(stderr.contains("a number too large to read"), "{stderr}");
+    let stderr = compare_error("{\"benchmark\": ", &summary("60"));
+    assert!(
+        stderr.contains("a.json:1: not a benchmark summary: the text ends"),
+        "{stderr}"
+    );
+    // A vanishing or zero figure has no change in percent; huge ones are readable.
+    for (a, b) in [("5e-324", "1"), ("0", "1"), ("-1e308", "1e308")] {
+        let out = compare(&summary(a), &summary(b));
+        let text = String::from_utf8_lossy(&out.stdout);
+        let line = text
+            .lines()
+            .find(|l| l.starts_with("frames_per_s.median"))
+            .unwrap_or_else(|| panic!("{text}"));
+        assert!(line.len() < 80, "{line}");
+        assert!(!line.contains("inf"), "{line}");
+        if a != "-1e308" {
+            assert!(line.ends_with("n/a"), "{line}");
+        } else {
+            assert!(
+                line.contains("-1.000e308") && line.ends_with("+200.0%"),
+                "{line}"
+            );
+        }
+    }
+}
+
+#[test]
+fn compare_reads_only_regular_files_of_a_bounded_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.json");
+    std::fs::write(&a, r#"{"benchmark": "paper"}"#).unwrap();
+    let a = a.to_str().unwrap();
+    let refused = |other: &str, says: &str| {
+        let out = gpuwars(&["bench", "compare", a, other]);
+        assert_eq!(out.status.code(), Some(1));
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains(says), "{stderr}");
+        assert!(!stderr.contains("os error"), "{stderr}");
+    };
+    refused("/dev/zero", "it is a device");
+    refused(dir.path().to_str().unwrap(), "it is a folder");
+    refused("/no/such.json", "no such file");
+    let pipe = dir.path().join("pipe");
+    if Command::new("mkfifo")
+        .arg(&pipe)
+        .status()
+        .is_ok_and(|s| s.success())
+    {
+        refused(pipe.to_str().unwrap(), "it is a named pipe");
+    }
+}

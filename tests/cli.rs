@@ -424,7 +424,7 @@ fn demo_writes_numbered_frames_and_plays_the_same_game() {
     let frame = image::open(dir.path().join("frame-000020.png")).unwrap();
     assert_eq!((frame.width(), frame.height()), (32, 24));
     for (every, folder, says) in [
-        ("0", folder, "not a step count"),
+        ("0", folder, "--frames-every: N: out of range"),
         ("5", "/no/such/folder", "is not a folder"),
     ] {
         let out = gpuwars(&["demo", "--backend", "cpu", "--frames-every", every, folder]);
@@ -582,7 +582,7 @@ fn flag_values_are_checked_in_words() {
     refused(
         &["demo", "--frames-every", "0", dir],
         1,
-        &["is not a step count"],
+        &["--frames-every: N: out of range (allowed a whole number from 1 to 1,000,000)"],
     );
     refused(
         &["demo", "--frames-every", "1", "/dev/null"],
@@ -593,17 +593,23 @@ fn flag_values_are_checked_in_words() {
 
 #[test]
 fn a_large_world_on_the_cpu_says_its_size_before_it_is_allocated() {
+    let out = tempfile::tempdir().unwrap();
+    let out = out.path().to_str().unwrap();
+    for command in [
+        &["demo", "--scene", "scale-16m", "--steps", "1"][..],
+        &["tradeoff", "--quick", "--scene", "scale-16m", "--out", out],
+    ] {
+        says_its_size_first(command);
+    }
+}
+
+/// Starts `gpuwars --backend cpu ARGS`, whose first line on stderr must say the size of
+/// `scale-16m`'s world, and stops it there.
+fn says_its_size_first(args: &[&str]) {
     use std::io::BufRead;
     let mut child = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
-        .args([
-            "--backend",
-            "cpu",
-            "demo",
-            "--scene",
-            "scale-16m",
-            "--steps",
-            "1",
-        ])
+        .args(["--backend", "cpu"])
+        .args(args)
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::piped())
         .spawn()
@@ -621,4 +627,214 @@ fn a_large_world_on_the_cpu_says_its_size_before_it_is_allocated() {
         "{first}"
     );
     assert!(first.contains("GB of host memory"), "{first}");
+}
+
+#[test]
+fn an_output_never_replaces_an_input_or_another_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let scene = path("k.toml");
+    let source = gpuwars::game::scene::BUILT_IN[1].source;
+    std::fs::write(&scene, source).unwrap();
+    std::os::unix::fs::symlink(&scene, path("link.toml")).unwrap();
+    std::fs::hard_link(&scene, path("hard.toml")).unwrap();
+    let long = ["demo", "--steps", "1000000", "--scene"];
+    let cases: [(&[&str], &str, &str); 6] = [
+        (&[&scene, "--record", &scene], "--record", "--scene"),
+        (&[&scene, "--screenshot", &scene], "--screenshot", "--scene"),
+        (
+            &[&path("link.toml"), "--record", &scene],
+            "--record",
+            "--scene",
+        ),
+        (
+            &[&scene, "--record", &path("hard.toml")],
+            "--record",
+            "--scene",
+        ),
+        (
+            &["paper", "--record", &path("x"), "--screenshot", &path("x")],
+            "--screenshot",
+            "--record",
+        ),
+        (
+            &[
+                "paper",
+                "--record",
+                &path("x"),
+                "--screenshot",
+                &format!("{}/./x", dir.path().display()),
+            ],
+            "--screenshot",
+            "--record",
+        ),
+    ];
+    for (args, output, input) in cases {
+        let args = [&long[..], args].concat();
+        let says = format!("cannot write ({output}): it is the same file as {input}");
+        refused(&args, 1, &[&says, &format!("give {output} another path")]);
+    }
+    // A frame lands on a file of the run named like one.
+    let frames = dir.path().join("frames");
+    std::fs::create_dir(&frames).unwrap();
+    let frame = frames.join("frame-000060.png");
+    std::fs::write(&frame, source).unwrap();
+    let (frames, frame) = (frames.to_str().unwrap(), frame.to_str().unwrap());
+    for args in [
+        &["--scene", frame, "--frames-every", "60", frames][..],
+        &["--record", frame, "--frames-every", "60", frames],
+    ] {
+        let args = [&long[..3], args].concat();
+        refused(
+            &args,
+            1,
+            &["cannot write (--frames-every): a file it writes would replace"],
+        );
+    }
+    assert_eq!(std::fs::read_to_string(frame).unwrap(), source);
+    std::fs::remove_dir_all(frames).unwrap();
+    // Play's high scores are read, and rewritten after a game.
+    let scores = dir.path().join(gpuwars::game::highscore::FILE_NAME);
+    std::fs::write(&scores, "").unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
+        .args([
+            "--backend",
+            "cpu",
+            "play",
+            "--record",
+            scores.to_str().unwrap(),
+        ])
+        .env("GPUWARS_DATA_DIR", dir.path())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("cannot write (--record): it is the same file as the high scores"),
+        "{stderr}"
+    );
+    std::fs::remove_file(&scores).unwrap();
+    // Tradeoff's tables go into --out, where its scene may be.
+    let table = path("bench-tradeoff.csv");
+    std::fs::write(&table, source).unwrap();
+    let out = dir.path().to_str().unwrap();
+    refused(
+        &["tradeoff", "--scene", &table, "--out", out],
+        1,
+        &["cannot write (--out): it is the same file as --scene"],
+    );
+    assert_eq!(std::fs::read_to_string(&scene).unwrap(), source);
+    assert_eq!(std::fs::read_to_string(&table).unwrap(), source);
+    let mut left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    left.sort();
+    assert_eq!(
+        left,
+        ["bench-tradeoff.csv", "hard.toml", "k.toml", "link.toml"]
+    );
+}
+
+#[test]
+fn a_long_path_is_shown_shortened() {
+    let long = format!("/no/such/{}/scene.toml", "a".repeat(6000));
+    let stderr = refused(&["demo", "--scene", &long], 1, &["scene.toml", "…"]);
+    assert!(stderr.len() < 400, "{stderr}");
+    let record = format!("/no/such/{}/game.json", "b".repeat(6000));
+    let stderr = refused(
+        &["demo", "--record", &record],
+        1,
+        &["cannot write", "game.json"],
+    );
+    assert!(stderr.len() < 400, "{stderr}");
+}
+
+#[test]
+fn every_command_checks_its_flags_in_the_same_words() {
+    let seeds = [
+        vec!["demo"],
+        vec!["play"],
+        vec!["tradeoff"],
+        vec!["bench", "paper"],
+    ];
+    for command in seeds {
+        for (seed, says) in [
+            (
+                "abc",
+                "not a whole number (allowed a whole number from 0 to 4,294,967,295)",
+            ),
+            (
+                "4294967296",
+                "out of range (allowed a whole number from 0 to 4,294,967,295)",
+            ),
+        ] {
+            let args = [&command[..], &["--seed", seed]].concat();
+            let stderr = refused(&args, 2, &[says]);
+            for rust in ["..=", "invalid digit", "u32"] {
+                assert!(!stderr.contains(rust), "{stderr} speaks of `{rust}`");
+            }
+        }
+    }
+    // A constraint is said in the help and checked with the flag, not after it.
+    let stderr = refused(
+        &["bench", "scale", "--max", "1025"],
+        2,
+        &["not a multiple of 8"],
+    );
+    assert!(stderr.contains("from 1,024 to 16,760,000"), "{stderr}");
+    assert!(!stderr.contains("1025 enemies"), "{stderr}");
+    let help = gpuwars(&["bench", "scale", "--help"]);
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(
+        help.contains("a multiple of 8 from 1,024 to 16,760,000"),
+        "{help}"
+    );
+}
+
+#[test]
+fn more_cpu_threads_than_the_machine_can_use_are_capped_with_a_note() {
+    let cpus = std::thread::available_parallelism().unwrap().get();
+    let most = cpus * gpuwars::cli::THREADS_PER_CPU;
+    let out = gpuwars(&[
+        "info",
+        "--json",
+        "--backend",
+        "cpu",
+        "--cpu-threads",
+        "1024",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let info: Value = serde_json::from_slice(&out.stdout).unwrap();
+    if most < 1024 {
+        assert_eq!(info["cpu_threads"], most, "{stderr}");
+        assert!(
+            stderr.contains(&format!("--cpu-threads 1024: using {most}")),
+            "{stderr}"
+        );
+    } else {
+        assert_eq!(info["cpu_threads"], 1024);
+    }
+    let info = info_json(&["info", "--json", "--backend", "cpu", "--cpu-threads", "2"]);
+    assert_eq!(info["cpu_threads"], 2);
+}
+
+#[test]
+fn play_without_a_display_says_what_to_do_in_words() {
+    for display in [None, Some(":987")] {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_gpuwars"));
+        command
+            .args(["--backend", "cpu", "play"])
+            .env_remove("WAYLAND_DISPLAY")
+            .env_remove("DISPLAY");
+        if let Some(display) = display {
+            command.env("DISPLAY", display);
+        }
+        let out = command.output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{stderr}");
+        assert_eq!(
+            stderr.trim_end(),
+            "gpuwars: error: no display to open a window on; `gpuwars demo` plays without one"
+        );
+    }
 }

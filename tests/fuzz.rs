@@ -8,12 +8,14 @@
 //! plays scenes a tenth of that; `PROPTEST_RNG_SEED=N` repeats a run. The long run:
 //! `GPUWARS_FUZZ_CASES=200000 cargo test --release --test fuzz` (see docs/robustness.md).
 
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 use clap::Parser;
 use gpuwars::Device;
-use gpuwars::cli::{Cli, Command};
-use gpuwars::files::{FileError, check_output};
+use gpuwars::benchmark::compare;
+use gpuwars::cli::{BenchCommand, Cli, Command};
+use gpuwars::files::FileError;
 use gpuwars::game::engine::footprint;
 use gpuwars::game::replay::{MAX_STEPS, Replay};
 use gpuwars::game::scene::BUILT_IN;
@@ -316,6 +318,8 @@ fn number_text() -> impl Strategy<Value = String> {
         "1e-40",
         "1e-38",
         "1.1754944e-38",
+        "1.1754943e-38",
+        "1.17549435e-38",
         "3.4028235e38",
         "3.4028236e38",
         "1e400",
@@ -438,7 +442,7 @@ fn follows(rule: Rule, value: &str) -> bool {
             let inside = if closed { x >= low } else { x > low } && x <= high;
             let stored = x as f32;
             let storable = !(x.is_finite() && stored.is_infinite())
-                && (x == 0.0 || stored.abs() >= f32::MIN_POSITIVE);
+                && (x == 0.0 || x.abs() >= f64::from(f32::MIN_POSITIVE));
             inside && storable
         }
         Rule::Mass => {
@@ -875,6 +879,126 @@ proptest! {
 }
 
 // ---------------------------------------------------------------------------------------
+// Benchmark summaries
+
+/// A figure of a summary: ordinary, at the edges of a float, or not a number at all.
+fn summary_figure() -> impl Strategy<Value = String> {
+    let edges = prop::sample::select(vec![
+        "0",
+        "-0",
+        "1",
+        "60",
+        "5e-324",
+        "-5e-324",
+        "2.2250738585072014e-308",
+        "1e-300",
+        "1e300",
+        "1e308",
+        "-1e308",
+        "1.7976931348623157e308",
+        "1e400",
+        "-1e400",
+        "18446744073709551616",
+        "\"abc\"",
+        "\"60\"",
+        "null",
+        "true",
+        "[]",
+        "{}",
+    ]);
+    prop_oneof![
+        3 => edges.prop_map(str::to_owned),
+        1 => any::<f64>().prop_filter("finite", |x| x.is_finite()).prop_map(|x| format!("{x:e}")),
+    ]
+}
+
+/// A summary of `bench scale`'s shape with these figures.
+fn summary(figures: &[String; 4]) -> String {
+    let [median, p5, rate, bytes] = figures;
+    format!(
+        r#"{{
+  "benchmark": "scale",
+  "machine": {{ "backend": "cpu", "device": "CPU emulation", "commit": "abc" }},
+  "copy_bandwidth": {median},
+  "frames_per_s": {{ "median": {median}, "p5": {p5} }},
+  "rows": [
+    {{ "enemies": 1024, "steps_per_s": {rate}, "bytes_per_step": {bytes} }},
+    {{ "enemies": 2048, "steps_per_s": {p5}, "bytes_per_step": {bytes} }}
+  ]
+}}
+"#
+    )
+}
+
+/// Edits to a summary's JSON.
+fn summary_edit() -> impl Strategy<Value = Edit> {
+    let tokens = prop::sample::select(vec![
+        "{",
+        "}",
+        "[",
+        "]",
+        ",",
+        ":",
+        "\"",
+        "null",
+        "1e400",
+        "-1e308",
+        "5e-324",
+        "\"x\"",
+        "\"benchmark\": \"paper\",",
+        "\u{feff}",
+        "\u{1b}[2J",
+        "\n",
+        "[[[[[[[[",
+    ]);
+    edit(tokens.prop_map(str::to_owned))
+}
+
+proptest! {
+    #![proptest_config(config(cases()))]
+
+    /// Two summaries with edge figures, edited at random: compared, every change a finite
+    /// percent or n/a and every line of the table short; or refused in words, naming the
+    /// figure that is not a number.
+    #[test]
+    fn a_bench_summary_compares_or_is_refused_clearly(
+        a in prop::array::uniform4(summary_figure()),
+        b in prop::array::uniform4(summary_figure()),
+        edits in prop::collection::vec(summary_edit(), 0..3),
+    ) {
+        let mut b_text = summary(&b);
+        for edit in &edits {
+            edit.apply(&mut b_text);
+        }
+        let a_text = summary(&a);
+        let read = |text: &str, name: &str| timed("a summary", || compare::parse(text, name));
+        let (a_value, b_value) = match (read(&a_text, "a.json")?, read(&b_text, "b.json")?) {
+            (Ok(a), Ok(b)) => (a, b),
+            (Err(e), _) => return check_error(&e, &a_text),
+            (_, Err(e)) => return check_error(&e, &b_text),
+        };
+        match compare::compare(&a_value, "a.json", &b_value, "b.json") {
+            Ok(changes) => {
+                for change in &changes {
+                    prop_assert!(change.percent().is_none_or(f64::is_finite), "{change:?}");
+                }
+                for line in compare::to_text(&changes, &a_value, &b_value).lines() {
+                    prop_assert!(line.chars().count() < 120, "{line}");
+                    prop_assert!(!line.contains("inf") && !line.contains("NaN"), "{line}");
+                    prop_assert!(!line.contains('\u{1b}'), "{line:?}");
+                }
+            }
+            Err(e) => {
+                let shown = e.to_string();
+                prop_assert!(shown.chars().count() <= MAX_ERROR_CHARS, "{shown}");
+                let words = shown.contains("not a number (found") || shown.contains("cannot be compared");
+                prop_assert!(words, "{shown}");
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
 // Command lines
 
 /// A flag's value: valid ones, edges, and what a hand slips to.
@@ -927,15 +1051,65 @@ fn flag_value() -> impl Strategy<Value = String> {
     ]);
     prop_oneof![
         4 => words.prop_map(str::to_owned),
+        2 => prop::sample::select(fixture().paths.clone()),
         1 => any::<String>(),
         1 => any::<i64>().prop_map(|v| v.to_string()),
     ]
 }
 
+/// Files a command line may name, made once: a scene, a link to it and a second name of
+/// it, a replay, a summary, a file not there yet, and their folder. Outputs collide with
+/// inputs through them.
+struct Fixture {
+    _dir: tempfile::TempDir,
+    paths: Vec<String>,
+}
+
+fn fixture() -> &'static Fixture {
+    static FIXTURE: std::sync::OnceLock<Fixture> = std::sync::OnceLock::new();
+    FIXTURE.get_or_init(|| {
+        let dir = tempfile::tempdir().unwrap();
+        let path = |name: &str| dir.path().join(name);
+        std::fs::write(path("k.toml"), BUILT_IN[1].source).unwrap();
+        std::os::unix::fs::symlink(path("k.toml"), path("link.toml")).unwrap();
+        std::fs::hard_link(path("k.toml"), path("hard.toml")).unwrap();
+        std::fs::write(path("game.json"), sample_replay().to_json()).unwrap();
+        let figures = ["60", "50", "1000", "4096"].map(str::to_owned);
+        std::fs::write(path("bench-scale.json"), summary(&figures)).unwrap();
+        let mut paths: Vec<String> = [
+            "k.toml",
+            "link.toml",
+            "hard.toml",
+            "game.json",
+            "bench-scale.json",
+            "new.png",
+        ]
+        .iter()
+        .map(|name| path(name).to_str().unwrap().to_owned())
+        .collect();
+        paths.push(dir.path().to_str().unwrap().to_owned());
+        paths.push(format!("{}/./k.toml", dir.path().display()));
+        // Every file is made before the property's first case and kept until the end.
+        let before = std::fs::read_dir(dir.path()).unwrap().count();
+        assert_eq!(before, 5);
+        Fixture { _dir: dir, paths }
+    })
+}
+
 /// A command line: a command (or none), flags with and without values, stray words.
 fn command_line() -> impl Strategy<Value = Vec<String>> {
     let command = prop::sample::select(vec![
-        "demo", "play", "replay", "info", "scenes", "tradeoff", "", "x",
+        "demo",
+        "play",
+        "replay",
+        "info",
+        "scenes",
+        "tradeoff",
+        "bench paper",
+        "bench scale",
+        "bench compare",
+        "",
+        "x",
     ]);
     let flag = prop::sample::select(vec![
         "--backend",
@@ -957,6 +1131,10 @@ fn command_line() -> impl Strategy<Value = Vec<String>> {
         "--no-vsync",
         "--quick",
         "--out",
+        "--max",
+        "--seconds",
+        "--minutes",
+        "--window",
         "--help",
         "--version",
         "-x",
@@ -969,26 +1147,68 @@ fn command_line() -> impl Strategy<Value = Vec<String>> {
         1 => flag_value().prop_map(|v| vec![v]),
     ];
     (command, prop::collection::vec(word, 0..6)).prop_map(|(command, words)| {
-        let mut line: Vec<String> = Vec::new();
-        if !command.is_empty() {
-            line.push(command.to_owned());
-        }
+        let mut line: Vec<String> = command.split_whitespace().map(str::to_owned).collect();
         line.extend(words.into_iter().flatten());
         line
     })
 }
 
-/// What the binary checks before it starts a game, none of which may panic; the errors it
-/// gives are in words. Nothing is written.
+/// A command line that names only files, from the fixture's: where outputs collide with
+/// inputs most often.
+fn files_line() -> impl Strategy<Value = Vec<String>> {
+    let command = prop::sample::select(vec![
+        "demo",
+        "play",
+        "tradeoff",
+        "replay",
+        "bench compare",
+        "bench paper",
+        "bench scale",
+    ]);
+    let flag = prop::sample::select(vec!["--scene", "--record", "--screenshot", "--out", ""]);
+    let path = prop::sample::select(fixture().paths.clone());
+    let named = (flag, path).prop_map(|(flag, path)| match flag {
+        "" => vec![path],
+        flag => vec![flag.to_owned(), path],
+    });
+    (command, prop::collection::vec(named, 1..4)).prop_map(|(command, named)| {
+        let mut line: Vec<String> = command.split_whitespace().map(str::to_owned).collect();
+        line.extend(named.into_iter().flatten());
+        line
+    })
+}
+
+/// What the binary checks before it starts a run, none of which may panic; the errors it
+/// gives are in words. Nothing is written, and what passes keeps every output off every
+/// input and every other output.
 fn checks_before_a_game(command: &Command) -> Result<(), TestCaseError> {
-    let outputs = |paths: &[&Option<std::path::PathBuf>]| -> Result<(), TestCaseError> {
-        for path in paths.iter().copied().flatten() {
-            if let Err(e) = check_output(path) {
-                check_words(&e, "")?;
+    let files = command.files();
+    match timed("the files", || files.check())? {
+        Ok(()) => {
+            // The oracle: the real paths, links followed, are distinct.
+            let real = |path: &Path| {
+                let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
+                let dir = std::fs::canonicalize(dir.unwrap_or(Path::new("."))).ok()?;
+                let name = std::fs::canonicalize(path)
+                    .ok()
+                    .or_else(|| Some(dir.join(path.file_name()?)))?;
+                Some(name)
+            };
+            // An input that is not there is not read over.
+            let inputs: Vec<_> = files
+                .inputs()
+                .filter_map(|(_, p)| std::fs::canonicalize(p).ok())
+                .collect();
+            let outputs: Vec<_> = files.outputs().map(|(_, p)| real(p)).collect();
+            for (i, out) in outputs.iter().enumerate() {
+                let Some(out) = out else { continue };
+                prop_assert!(!inputs.contains(out), "{out:?} is read and written");
+                let again = outputs[..i].iter().flatten().any(|o| o == out);
+                prop_assert!(!again, "{out:?} is written twice");
             }
         }
-        Ok(())
-    };
+        Err(e) => check_words(&e, "")?,
+    }
     let scene = |name: &str| -> Result<(), TestCaseError> {
         // Only names and paths that are quick to read (no game is played).
         if let Err(e) = timed("a scene", || Scene::load(name))? {
@@ -998,23 +1218,28 @@ fn checks_before_a_game(command: &Command) -> Result<(), TestCaseError> {
     };
     match command {
         Command::Demo(args) => {
-            outputs(&[&args.record, &args.screenshot])?;
             if let Err(e) = args.frames(args.size) {
                 prop_assert!(e.to_string().starts_with("--frames-every: "), "{e}");
             }
             scene(&args.scene)?;
         }
-        Command::Play(args) => {
-            outputs(&[&args.record])?;
-            scene(&args.scene)?;
-        }
+        Command::Play(args) => scene(&args.scene)?,
         Command::Tradeoff { scene: name, .. } => scene(name)?,
         Command::Replay { file, .. } => {
             if let Err(e) = timed("a replay", || Replay::load(file))? {
                 check_words(&e, &file.display().to_string())?;
             }
         }
-        // Benchmarks run for minutes and check their output folder as they start.
+        Command::Bench {
+            which: BenchCommand::Compare { a, b },
+        } => {
+            for path in [a, b] {
+                if let Err(e) = timed("a summary", || compare::load(path))? {
+                    check_words(&e, &path.display().to_string())?;
+                }
+            }
+        }
+        // Benchmarks run for minutes: only their files are checked.
         Command::Info { .. } | Command::Scenes | Command::Bench { .. } => {}
     }
     Ok(())
@@ -1026,7 +1251,9 @@ proptest! {
     /// Command lines: parsed, or refused with clap's usage and an error in words; what
     /// parses passes or fails the checks before a game without a panic.
     #[test]
-    fn a_command_line_parses_or_is_refused_clearly(line in command_line()) {
+    fn a_command_line_parses_or_is_refused_clearly(
+        line in prop_oneof![3 => command_line(), 1 => files_line()],
+    ) {
         let argv = std::iter::once("gpuwars".to_owned()).chain(line.iter().cloned());
         match timed("a command line", || Cli::try_parse_from(argv))? {
             Ok(cli) => {

@@ -3,8 +3,11 @@
 
 use std::path::Path;
 
-use anyhow::{Context as _, bail};
+use anyhow::bail;
 use serde_json::Value;
+
+use crate::files::{FileError, excerpt, json_problem, read_text, shown};
+
 /// One figure of both runs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Change {
@@ -17,40 +20,44 @@ pub struct Change {
 }
 
 impl Change {
-    /// B relative to A, in percent (`None` when A is 0).
+    /// B relative to A, in percent; `None` where that means nothing: A is 0 or so close to
+    /// it (a subnormal number) that the change is out of all proportion.
     pub fn percent(&self) -> Option<f64> {
-        (self.a != 0.0).then(|| (self.b - self.a) / self.a.abs() * 100.0)
+        // Not `(b - a) / |a|`, whose difference overflows for figures of opposite signs
+        // near the largest number.
+        let p = (self.b / self.a.abs() - self.a.signum()) * 100.0;
+        (self.a.abs() >= f64::MIN_POSITIVE && p.is_finite()).then_some(p)
     }
 }
 
-/// Reads a summary written by `bench paper` or `bench scale`.
-pub fn load(path: &Path) -> anyhow::Result<Value> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let value: Value = serde_json::from_str(&text).map_err(|e| {
-        anyhow::anyhow!(
-            "{}:{}: not a benchmark summary: {e}",
-            path.display(),
-            e.line()
-        )
+/// Most bytes of a summary (the largest, of `tradeoff`, take tens of kilobytes).
+pub const MAX_SUMMARY_BYTES: u64 = 16 << 20;
+
+/// Reads a summary written by a benchmark: a regular file of at most
+/// [`MAX_SUMMARY_BYTES`] bytes (see [`read_text`]) holding a JSON object with a
+/// `benchmark` field.
+pub fn load(path: &Path) -> Result<Value, FileError> {
+    parse(&read_text(path, MAX_SUMMARY_BYTES)?, &shown(path))
+}
+
+/// Reads the summary `text`; `origin` names it in errors.
+pub fn parse(text: &str, origin: &str) -> Result<Value, FileError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let value: Value = serde_json::from_str(text).map_err(|e| {
+        let problem = format!("not a benchmark summary: {}", json_problem(&e));
+        FileError::new(origin, (e.line() > 0).then_some(e.line()), "", problem)
     })?;
     if value.get("benchmark").and_then(Value::as_str).is_none() {
-        bail!(
-            "{}: not a benchmark summary (it has no \"benchmark\" field)",
-            path.display()
-        );
+        let problem = "not a benchmark summary (it has no \"benchmark\" field)";
+        return Err(FileError::new(origin, None, "", problem));
     }
     Ok(value)
 }
 
-/// Every number in `value`, with its path; rows that have an `enemies` field are named by it.
-fn numbers(value: &Value, path: &str, out: &mut Vec<(String, f64)>) {
+/// Every value in `value` that is not a list or an object, with its path; rows that have
+/// an `enemies` field are named by it.
+fn leaves<'v>(value: &'v Value, path: &str, out: &mut Vec<(String, &'v Value)>) {
     match value {
-        Value::Number(n) => {
-            if let Some(x) = n.as_f64() {
-                out.push((path.to_string(), x));
-            }
-        }
         Value::Object(map) => {
             for (key, v) in map {
                 let path = if path.is_empty() {
@@ -58,7 +65,7 @@ fn numbers(value: &Value, path: &str, out: &mut Vec<(String, f64)>) {
                 } else {
                     format!("{path}.{key}")
                 };
-                numbers(v, &path, out);
+                leaves(v, &path, out);
             }
         }
         Value::Array(items) => {
@@ -67,16 +74,18 @@ fn numbers(value: &Value, path: &str, out: &mut Vec<(String, f64)>) {
                     Some(enemies) => format!("{path}[enemies={enemies}]"),
                     None => format!("{path}[{i}]"),
                 };
-                numbers(v, &name, out);
+                leaves(v, &name, out);
             }
         }
-        _ => {}
+        leaf => out.push((path.to_string(), leaf)),
     }
 }
 
-/// The figures `a` and `b` share, in `a`'s order. Two different benchmarks are an error.
-pub fn compare(a: &Value, b: &Value) -> anyhow::Result<Vec<Change>> {
-    let kind = |v: &Value| v["benchmark"].as_str().unwrap_or_default().to_string();
+/// The figures `a` and `b` share, in `a`'s order. Two different benchmarks are an error,
+/// and so is a figure that is a number in one summary and not in the other (the error names
+/// it, and the summary `a_name` or `b_name` where it is not a number).
+pub fn compare(a: &Value, a_name: &str, b: &Value, b_name: &str) -> anyhow::Result<Vec<Change>> {
+    let kind = |v: &Value| excerpt(v["benchmark"].as_str().unwrap_or_default());
     if kind(a) != kind(b) {
         bail!(
             "a `{}` summary cannot be compared with a `{}` one",
@@ -85,26 +94,39 @@ pub fn compare(a: &Value, b: &Value) -> anyhow::Result<Vec<Change>> {
         );
     }
     let (mut xs, mut ys) = (Vec::new(), Vec::new());
-    numbers(a, "", &mut xs);
-    numbers(b, "", &mut ys);
-    Ok(xs
-        .into_iter()
-        .filter_map(|(figure, a)| {
-            let b = ys.iter().find(|(f, _)| *f == figure)?.1;
-            Some(Change { figure, a, b })
-        })
-        .collect())
+    leaves(a, "", &mut xs);
+    leaves(b, "", &mut ys);
+    let mut changes = Vec::new();
+    for (figure, x) in xs {
+        let Some((_, y)) = ys.iter().find(|(f, _)| *f == figure) else {
+            continue;
+        };
+        let not_a_number = |name: &str, v: &Value| {
+            let found = excerpt(&v.to_string());
+            let problem = format!("not a number (found {found}), where the other summary has one");
+            FileError::new(name, None, &figure, problem)
+        };
+        match (x.as_f64(), y.as_f64()) {
+            (Some(a), Some(b)) => changes.push(Change { figure, a, b }),
+            (Some(_), None) => return Err(not_a_number(b_name, y).into()),
+            (None, Some(_)) => return Err(not_a_number(a_name, x).into()),
+            (None, None) => {}
+        }
+    }
+    Ok(changes)
 }
 
 /// The changes as an aligned table.
 pub fn to_text(changes: &[Change], a: &Value, b: &Value) -> String {
     let machine = |v: &Value| {
+        // Quoted shortened and escaped: a summary may come from anywhere.
+        let field = |name: &str| excerpt(v["machine"][name].as_str().unwrap_or("?"));
         format!(
             "{} ({}, {}, commit {})",
-            v["machine"]["device"].as_str().unwrap_or("?"),
-            v["machine"]["backend"].as_str().unwrap_or("?"),
-            v["machine"]["date"].as_str().unwrap_or("?"),
-            v["machine"]["commit"].as_str().unwrap_or("?")
+            field("device"),
+            field("backend"),
+            field("date"),
+            field("commit")
         )
     };
     let mut out = format!("A: {}\nB: {}\n", machine(a), machine(b));
@@ -119,11 +141,28 @@ pub fn to_text(changes: &[Change], a: &Value, b: &Value) -> String {
         "figure", "A", "B", "change"
     );
     for c in changes {
-        let percent = c.percent().map_or("-".to_string(), |p| format!("{p:+.1}%"));
+        let percent = c
+            .percent()
+            .map_or("n/a".to_string(), |p| match p.abs() < 1e5 {
+                true => format!("{p:+.1}%"),
+                false => format!("{p:+.1e}%"),
+            });
         out += &format!(
-            "{:<width$} {:>16.3} {:>16.3} {:>9}\n",
-            c.figure, c.a, c.b, percent
+            "{:<width$} {:>16} {:>16} {:>9}\n",
+            c.figure,
+            figure(c.a),
+            figure(c.b),
+            percent
         );
     }
     out
+}
+
+/// A figure in at most 16 characters: three decimals, or in scientific notation when it is
+/// too large or too small for them (`-1.000e308`, `5.000e-324`).
+fn figure(x: f64) -> String {
+    match x == 0.0 || (1e-3..1e12).contains(&x.abs()) {
+        true => format!("{x:.3}"),
+        false => format!("{x:.3e}"),
+    }
 }

@@ -22,7 +22,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
 
 use crate::Device;
-use crate::files::write_atomically;
+use crate::files::{FileError, io_words, shown, write_atomically};
 use crate::game::demo::device_name;
 
 /// Where and when a benchmark ran.
@@ -100,16 +100,28 @@ pub struct Outputs {
 }
 
 impl Outputs {
-    /// The files of benchmark `name` in `dir` (made if missing).
-    pub fn in_dir(dir: &Path, name: &str) -> anyhow::Result<Self> {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("making the output folder {}", dir.display()))?;
+    /// The files of benchmark `name` in `dir`.
+    pub fn at(dir: &Path, name: &str) -> Self {
         let file = |ext: &str| dir.join(format!("bench-{name}.{ext}"));
-        Ok(Outputs {
+        Outputs {
             csv: file("csv"),
             png: file("png"),
             json: file("json"),
-        })
+        }
+    }
+
+    /// The files of benchmark `name` in `dir`, made if missing.
+    pub fn in_dir(dir: &Path, name: &str) -> anyhow::Result<Self> {
+        std::fs::create_dir_all(dir).map_err(|e| {
+            let problem = format!("cannot make the output folder: {}", io_words(&e));
+            FileError::new(&shown(dir), None, "--out", problem)
+        })?;
+        Ok(Outputs::at(dir, name))
+    }
+
+    /// The tables in Markdown, beside the others (written by `tradeoff`).
+    pub fn markdown(&self) -> PathBuf {
+        self.png.with_extension("md")
     }
 }
 
@@ -120,18 +132,18 @@ fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> anyhow::Result<()> {
         writer.serialize(row)?;
     }
     let bytes = writer.into_inner().context("finishing the CSV")?;
-    write_atomically(path, &bytes).with_context(|| format!("writing {}", path.display()))
+    Ok(write_atomically(path, &bytes)?)
 }
 
 /// Writes `value` as pretty JSON, atomically.
 fn write_json<T: Serialize>(path: &Path, value: &T) -> anyhow::Result<()> {
     let text = serde_json::to_string_pretty(value)? + "\n";
-    write_atomically(path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))
+    Ok(write_atomically(path, text.as_bytes())?)
 }
 
 /// A progress bar over `len` units on stderr when `show` and stderr is a terminal; hidden
 /// otherwise.
-fn progress(len: u64, show: bool, what: &str) -> ProgressBar {
+pub(crate) fn progress(len: u64, show: bool, what: &str) -> ProgressBar {
     use std::io::IsTerminal;
     if !show || !std::io::stderr().is_terminal() {
         return ProgressBar::hidden();

@@ -10,6 +10,7 @@ use anyhow::{Context as _, bail};
 use serde::{Deserialize, Serialize};
 
 use super::{Machine, Outputs, plot, progress, write_csv, write_json};
+use crate::files::thousands;
 use crate::game::scene::built_in;
 use crate::game::{Game, Options, Scene};
 use crate::graphics::camera::Camera;
@@ -97,7 +98,12 @@ pub fn sizes(max: u64) -> Vec<u64> {
 /// capacity in the same proportions, the field keeping the paper's density.
 pub fn scene(enemies: u64) -> anyhow::Result<Scene> {
     if !enemies.is_multiple_of(8) || !(MIN_ENEMIES..=MAX_ENEMIES).contains(&enemies) {
-        bail!("{enemies} enemies (allowed: a multiple of 8 from {MIN_ENEMIES} to {MAX_ENEMIES})");
+        bail!(
+            "{} enemies (allowed a multiple of 8 from {} to {})",
+            thousands(enemies),
+            thousands(MIN_ENEMIES),
+            thousands(MAX_ENEMIES)
+        );
     }
     let base = built_in("scale-1m").expect("a built-in scene")?;
     let mut table: toml::Table = toml::from_str(&base.source)?;

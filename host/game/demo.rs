@@ -11,6 +11,7 @@ use super::Game;
 use super::engine::Options;
 use super::replay::Replay;
 use super::spec::Scene;
+use crate::benchmark::progress;
 use crate::graphics::Renderer;
 use crate::graphics::bodies::BodyRenderer;
 use crate::graphics::camera::Camera;
@@ -175,6 +176,21 @@ pub struct Frames {
     pub size: (u32, u32),
 }
 
+impl Frames {
+    /// The name of the frame after step `step`: `frame-000060.png`.
+    pub fn file_name(step: u64) -> String {
+        format!("frame-{step:06}.png")
+    }
+
+    /// Whether `name` is one that [`Frames::file_name`] gives.
+    pub fn is_file_name(name: &str) -> bool {
+        let digits = name
+            .strip_prefix("frame-")
+            .and_then(|rest| rest.strip_suffix(".png"));
+        digits.is_some_and(|d| d.len() >= 6 && d.bytes().all(|b| b.is_ascii_digit()))
+    }
+}
+
 /// How `demo` and `replay` run a game.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RunOptions {
@@ -190,6 +206,8 @@ pub struct RunOptions {
     pub frames: Option<Frames>,
     /// What draws the frames.
     pub renderer: Renderer,
+    /// Show the steps played in a progress bar on stderr, when it is a terminal.
+    pub progress: bool,
     /// What the frames show.
     pub camera: Camera,
 }
@@ -291,8 +309,10 @@ fn play(
         true => Some(Painter::new(options.renderer, game)?),
         false => None,
     };
+    let bar = progress(steps, options.progress, "steps");
     let start = Instant::now();
     for i in 0..steps {
+        bar.inc(1);
         match &mut profile {
             Some(profile) => game.submit_profiled(pilot(i), profile)?,
             None => game.submit(pilot(i))?,
@@ -307,7 +327,7 @@ fn play(
             while let Some(status) = game.next_status()? {
                 record.take(status);
             }
-            let path = frames.dir.join(format!("frame-{:06}.png", i + 1));
+            let path = frames.dir.join(Frames::file_name(i + 1));
             let painter = painter.as_mut().expect("made when frames are asked for");
             painter
                 .draw(game, frames.size, &options.camera)?
@@ -320,6 +340,7 @@ fn play(
     while let Some(status) = game.next_status()? {
         record.take(status);
     }
+    bar.finish_and_clear();
     let seconds = start.elapsed().as_secs_f64();
     let hash = game.state_hash()?;
     let frame = match (options.frame, &mut painter) {

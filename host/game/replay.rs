@@ -32,7 +32,7 @@ use std::path::Path;
 
 use gpuwars_kernels::game::control::Input;
 
-use crate::files::{MAX_SCENE_BYTES, excerpt, line_of, read_text, thousands};
+use crate::files::{MAX_SCENE_BYTES, excerpt, json_problem, line_of, read_text, thousands};
 use serde::de::{self, DeserializeSeed, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
 
 /// The `format` of every replay file.
@@ -316,12 +316,9 @@ fn read_fields(text: &str, origin: &str, header_only: bool) -> Result<Fields, Re
         Ok(fields)
     });
     fields.map_err(|e| {
-        // serde_json appends the position to the message; the line is reported on its own.
-        let message = e.to_string();
-        let position = format!(" at line {} column {}", e.line(), e.column());
-        let problem = message.strip_suffix(&position).unwrap_or(&message);
         let line = (e.line() > 0).then_some(e.line());
-        ReplayError::new(origin, line, blame.0.take().unwrap_or_default(), problem)
+        let field = blame.0.take().unwrap_or_default();
+        ReplayError::new(origin, line, field, json_problem(&e))
     })
 }
 

@@ -418,11 +418,12 @@ impl<'a> Node<'a> {
                 number(f32::MAX)
             )));
         }
-        if x != 0.0 && stored.abs() < f32::MIN_POSITIVE {
+        // As written, not as rounded: a value just under the bound would round up to it.
+        let smallest = f64::from(f32::MIN_POSITIVE);
+        if x != 0.0 && x.abs() < smallest {
             return Err(self.fail(format!(
                 "{written} is too close to 0 to store (allowed {range}, numbers other than 0 \
-                 at least {} in size)",
-                number(f32::MIN_POSITIVE)
+                 at least {smallest:e} in size)"
             )));
         }
         Ok(stored)

@@ -13,6 +13,7 @@
 
 pub mod controls;
 mod gamepad;
+mod guard;
 pub mod keys;
 mod window;
 
@@ -176,11 +177,14 @@ pub fn display_present() -> bool {
 /// Plays `scene` in a window until Esc or the window is closed; returns the last game's
 /// report (and writes its replay if asked).
 pub fn play(device: &Device, scene: &Scene, options: PlayOptions) -> anyhow::Result<PlayReport> {
+    // winit's error quotes its own source file: the user is told what to do instead.
     let event_loop = EventLoop::new()
-        .context("no display to open a window on (`gpuwars demo` plays without one)")?;
+        .map_err(|_| anyhow!("no display to open a window on; `gpuwars demo` plays without one"))?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App::new(device, scene, options, None)?;
-    event_loop.run_app(&mut app).context("running the window")?;
+    if let Some(ran) = guard::surviving_winit(|| event_loop.run_app(&mut app)) {
+        ran.context("running the window")?;
+    }
     app.finish()
 }
 
@@ -204,8 +208,9 @@ pub fn watch(
             "no display to open a window on (neither DISPLAY nor WAYLAND_DISPLAY is set): {headless}"
         );
     }
-    let event_loop = EventLoop::new()
-        .map_err(|e| anyhow!("no display to open a window on ({e}): {headless}"))?;
+    // winit's error quotes its own source file: the user is told what to do instead.
+    let event_loop =
+        EventLoop::new().map_err(|_| anyhow!("no display to open a window on: {headless}"))?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let options = PlayOptions {
         seed: replay.seed,
@@ -220,7 +225,9 @@ pub fn watch(
         checked: false,
     };
     let mut app = App::new(device, scene, options, Some(watch))?;
-    event_loop.run_app(&mut app).context("running the window")?;
+    if let Some(ran) = guard::surviving_winit(|| event_loop.run_app(&mut app)) {
+        ran.context("running the window")?;
+    }
     app.finish()
 }
 
@@ -233,8 +240,9 @@ pub fn measure(
     options: PlayOptions,
     duration: Duration,
 ) -> anyhow::Result<(Seconds, bool)> {
-    let event_loop = EventLoop::new()
-        .context("no display to open a window on (leave out --window to render offscreen)")?;
+    let event_loop = EventLoop::new().map_err(|_| {
+        anyhow!("no display to open a window on; leave out --window to render offscreen")
+    })?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App::new(device, scene, options, None)?;
     app.begun = true;

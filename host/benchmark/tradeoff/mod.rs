@@ -613,9 +613,7 @@ pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<Tradeof
     };
     write_csv(&outputs.csv, &summary.physics)?;
     write_json(&outputs.json, &summary)?;
-    let markdown = outputs.png.with_extension("md");
-    write_atomically(&markdown, summary.to_markdown().as_bytes())
-        .with_context(|| format!("writing {}", markdown.display()))?;
+    write_atomically(&outputs.markdown(), summary.to_markdown().as_bytes())?;
     plot::pareto(&outputs.png, &summary)
         .with_context(|| format!("plotting {}", outputs.png.display()))?;
     Ok(summary)
