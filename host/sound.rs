@@ -6,7 +6,6 @@
 //! output device, or plays nothing when there is none (servers, CI), so a game runs the same
 //! with or without a sound card. [`Cues`] decides which effects a step sounds.
 
-use std::error::Error;
 use std::f32::consts::TAU;
 use std::num::NonZero;
 use std::time::{Duration, Instant};
@@ -252,13 +251,7 @@ impl Sound {
                 })
             }
             Err(e) => {
-                let mut reason = e.to_string();
-                let mut source = e.source();
-                while let Some(cause) = source {
-                    reason = format!("{reason}: {cause}");
-                    source = cause.source();
-                }
-                eprintln!("gpuwars: no sound device ({reason}): playing silently");
+                eprintln!("gpuwars: {}: playing silently", why_silent(&e));
                 None
             }
         };
@@ -319,6 +312,22 @@ impl Sound {
 /// Opens the default output device. Without a sound card alsa-lib prints a dozen lines of
 /// configuration errors on the way to saying so; they are turned off for this call, as
 /// [`Sound::open`] says it in one line.
+/// Why the game plays without sound, in our words rather than the sound library's.
+pub fn why_silent(e: &DeviceSinkError) -> &'static str {
+    match e {
+        DeviceSinkError::NoDevice => "no sound device",
+        DeviceSinkError::DefaultSinkConfigError(_) | DeviceSinkError::SupportedConfigsError(_) => {
+            "the sound device is busy, gone or refuses a stereo stream"
+        }
+        DeviceSinkError::UnsupportedSampleFormat => {
+            "the sound device wants a sample format we do not make"
+        }
+        DeviceSinkError::PlayError(_) | DeviceSinkError::BuildError(_) => {
+            "the sound device would not start playing"
+        }
+    }
+}
+
 fn open_device() -> Result<MixerDeviceSink, DeviceSinkError> {
     #[cfg(any(
         target_os = "linux",

@@ -281,3 +281,21 @@ fn muting_toggles() {
     assert!(!sound.is_muted());
     assert!(!Sound::open(false).is_muted());
 }
+
+#[test]
+fn a_silent_game_says_why_in_its_own_words() {
+    use gpuwars::sound::why_silent;
+    use rodio::DeviceSinkError;
+    for (e, said) in [
+        (DeviceSinkError::NoDevice, "no sound device"),
+        (
+            DeviceSinkError::UnsupportedSampleFormat,
+            "the sound device wants a sample format we do not make",
+        ),
+    ] {
+        let why = why_silent(&e);
+        assert_eq!(why, said);
+        // Never the library's own sentence.
+        assert_ne!(why, e.to_string());
+    }
+}
