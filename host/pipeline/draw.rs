@@ -8,7 +8,9 @@ use std::path::Path;
 use gpuwars_kernels::render::camera::{self, CameraArgs, CameraState, Lens};
 use gpuwars_kernels::render::particles::{ParticleSplatArgs, ParticleVertexArgs};
 use gpuwars_kernels::render::radar::{self, RadarArgs, RadarBox, RadarCounts, RadarImageArgs};
-use gpuwars_kernels::render::{BodyVertex, Look, ResolveArgs, Shown, SplatArgs, VertexArgs};
+use gpuwars_kernels::render::{
+    BodyVertex, LARGE_LANES, Look, ResolveArgs, Shown, SplatArgs, VertexArgs,
+};
 use gpuwars_kernels::{DevSlice, registry};
 use xxhash_rust::xxh3::xxh3_64;
 
@@ -32,7 +34,15 @@ pub(super) struct Canvas {
     counts: Buffer<u32>,
     top: Buffer<u32>,
     radar_image: Buffer<u32>,
+    /// The slots of the bodies too large for one thread, and how many (see
+    /// `gpuwars_kernels::render::splat_large`).
+    large: Buffer<u32>,
+    large_count: Buffer<u32>,
 }
+
+/// Most threads the large bodies' launch has: a warp each for a thousand bodies at once,
+/// more than a frame shows close up.
+const LARGE_THREADS: u32 = 32 * 1024;
 
 /// Pixels of the largest radar's inside.
 const RADAR_CELLS: usize = (radar::MAX_SIDE * radar::MAX_SIDE) as usize;
@@ -255,6 +265,8 @@ impl Pipeline<'_> {
                     counts: device.alloc_zeroed(RADAR_CELLS)?,
                     top: device.alloc_zeroed(RADAR_CELLS)?,
                     radar_image: device.alloc_zeroed(RADAR_BOX)?,
+                    large: device.alloc_zeroed(self.layout.slots as usize)?,
+                    large_count: device.alloc_zeroed(1)?,
                 })
             }
         }
@@ -312,6 +324,8 @@ impl Pipeline<'_> {
             looks: canvas.looks.view(),
             shown: canvas.shown.view(),
             keys: canvas.keys.view(),
+            large: canvas.large.view(),
+            large_count: canvas.large_count.view(),
         };
         let resolve = ResolveArgs {
             looks: canvas.looks.view(),
@@ -327,7 +341,10 @@ impl Pipeline<'_> {
         // for the world's slots and the frame's pixels, and the ops run (and are dropped)
         // before this borrow ends.
         unsafe {
+            ops.push(Op::clear(canvas.large_count.view()));
             ops.push(op(registry::SPLAT_BODIES, self.layout.slots, splat, 64));
+            let large = (self.layout.slots * LARGE_LANES).min(LARGE_THREADS);
+            ops.push(op(registry::SPLAT_LARGE, large, splat, 0));
             if let Some((particles, lifetime)) = self.particle_view() {
                 let args = ParticleSplatArgs {
                     particles,

@@ -2,14 +2,17 @@
 //! source on the GPU and on the CPU emulation, so a frame is the same pixels on both (and
 //! can be hashed like a state).
 //!
-//! Four launches (five with explosions), barrier-free:
+//! Five launches (six with explosions) and a clear, barrier-free:
 //! 1. [`camera::camera`] (one thread): where the view is, from the ship's position and the
 //!    camera's state between frames, written as the frame's [`Shown`] for the others.
 //! 2. [`radar::radar_bodies`]: bodies counted per radar pixel (atomic adds and maxima).
 //! 3. [`splat_bodies`]: each body covers the pixels of its silhouette ([`shapes`]) with a
 //!    key that says who is drawn there (layer, kind, shade). Overlaps are settled by an
 //!    atomic maximum, which does not depend on the order threads arrive in: the highest
-//!    layer wins, then the highest kind, then the higher shade.
+//!    layer wins, then the highest kind, then the higher shade. A body spanning more than
+//!    [`LARGE_ROWS`] rows is listed instead and drawn by [`splat_large`], a warp of threads
+//!    to a body: a GPU thread's loop is bound by latency, so one thread walking the ship's
+//!    halo close up set the whole frame's time (about 0.6 ms at 1080p on an H200).
 //!    With explosions, [`particles::splat_particles`] then draws each shown particle's disc
 //!    the same way, in the lowest layer.
 //! 4. [`resolve_pixels`]: each pixel turns its key into a colour from the kinds' looks (the
@@ -324,7 +327,7 @@ pub fn shade_at(sprite: &Sprite, d: Vec2) -> Option<u32> {
     None
 }
 
-/// Arguments of [`splat_bodies`].
+/// Arguments of [`splat_bodies`] and [`splat_large`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct SplatArgs {
@@ -338,49 +341,123 @@ pub struct SplatArgs {
     pub shown: DevSlice<Shown>,
     /// One key per pixel, row-major; [`EMPTY`] before the first body draws there.
     pub keys: DevSlice<u32>,
+    /// The slots of the bodies too large for one thread, for [`splat_large`]; room for
+    /// every slot.
+    pub large: DevSlice<u32>,
+    /// How many of [`SplatArgs::large`] are filled (one element, 0 before the launch).
+    pub large_count: DevSlice<u32>,
 }
 // SAFETY: repr(C) plain data.
 unsafe impl KernelArgs for SplatArgs {}
 
-/// Thread `i` draws slot `i`'s body, if one lives there: every pixel whose centre lies in its
-/// silhouette (and at least the pixel under its centre), the facing side in its nose colour.
+/// A sprite spanning more rows than this on the image is drawn by [`splat_large`], a warp
+/// of threads a body, instead of by its own thread.
+pub const LARGE_ROWS: u32 = 8;
+/// Threads that draw one large body together, each every `LARGE_LANES`-th row.
+pub const LARGE_LANES: u32 = 32;
+
+/// A live body ready to draw: its sprite, the half extents of the pixels it may cover, its
+/// kind and its layer.
+struct Drawn {
+    sprite: Sprite,
+    reach: Vec2,
+    kind: u32,
+    layer: u32,
+}
+
+/// How the body in `slot` is drawn in this frame, or `None` if no body lives there or it is
+/// off the image by more than its size (checked before its heading and energy are read).
 #[inline(always)]
-pub fn splat_bodies(t: Thread, args: &SplatArgs) {
+fn drawn(args: &SplatArgs, shown: &Shown, slot: u32) -> Option<Drawn> {
     let b = &args.bodies;
-    let slot = t.global();
     if slot >= b.slots() || !b.is_alive(slot) {
-        return;
+        return None;
     }
-    let shown = args.shown.get(0);
-    let view = &shown.view;
     let kind = b.kind.get(slot);
     let look = args.looks.get(kind);
     let info = args.kinds.get(kind);
-    let sprite = outline(b, &info, &look, &shown, slot);
-    // Off the image by more than its size: nothing to draw (checked before the body's
-    // heading and energy are read).
-    if !near_image(view, sprite.centre, sprite.bound) {
-        return;
+    let sprite = outline(b, &info, &look, shown, slot);
+    if !near_image(&shown.view, sprite.centre, sprite.bound) {
+        return None;
     }
-    let sprite = sprite.dressed(b, &info, &shown, slot);
+    let sprite = sprite.dressed(b, &info, shown, slot);
     let reach = if sprite.silhouette == RECT {
         sprite.half
     } else {
         Vec2::splat(sprite.bound)
     };
-    cover(view, sprite.centre, reach, |pixel, d, under| {
-        let shade = match shade_at(&sprite, d) {
-            Some(shade) => shade,
-            None if under => sprite.shade,
-            None => return,
-        };
-        let layer = if shade == HALO {
-            HALO_LAYER
-        } else {
-            look.layer
-        };
-        args.keys.atomic_max(pixel, key(layer, kind, shade));
-    });
+    Some(Drawn {
+        sprite,
+        reach,
+        kind,
+        layer: look.layer,
+    })
+}
+
+/// Draws every `step`-th row of `body`'s pixels from its `first` (0-based) into the keys.
+#[inline(always)]
+fn plot(args: &SplatArgs, view: &View, body: &Drawn, first: u32, step: u32) {
+    let sprite = &body.sprite;
+    cover_rows(
+        view,
+        sprite.centre,
+        body.reach,
+        first,
+        step,
+        |pixel, d, under| {
+            let shade = match shade_at(sprite, d) {
+                Some(shade) => shade,
+                None if under => sprite.shade,
+                None => return,
+            };
+            let layer = if shade == HALO {
+                HALO_LAYER
+            } else {
+                body.layer
+            };
+            args.keys.atomic_max(pixel, key(layer, body.kind, shade));
+        },
+    );
+}
+
+/// Thread `i` draws slot `i`'s body, if one lives there: every pixel whose centre lies in its
+/// silhouette (and at least the pixel under its centre), the facing side in its nose colour.
+///
+/// A GPU thread's loop is bound by latency, so the frame takes as long as its longest
+/// thread: a body spanning more than [`LARGE_ROWS`] rows (close up, or the ship's halo) is
+/// not drawn here but listed for [`splat_large`]. The list's order depends on which thread
+/// arrives first; the picture does not, since every pixel keeps the maximum of its keys.
+#[inline(always)]
+pub fn splat_bodies(t: Thread, args: &SplatArgs) {
+    let shown = args.shown.get(0);
+    let slot = t.global();
+    let Some(body) = drawn(args, &shown, slot) else {
+        return;
+    };
+    if rows(&shown.view, body.sprite.centre, body.reach) > LARGE_ROWS {
+        let at = args.large_count.atomic_add(0, 1);
+        args.large.set(at, slot);
+        return;
+    }
+    plot(args, &shown.view, &body, 0, 1);
+}
+
+/// The bodies [`splat_bodies`] listed as large, each drawn by [`LARGE_LANES`] threads (a
+/// warp), thread `l` of them drawing rows `l`, `l + LARGE_LANES`, …; the warps take the
+/// list's bodies in turn, however many the launch has.
+#[inline(always)]
+pub fn splat_large(t: Thread, args: &SplatArgs) {
+    let shown = args.shown.get(0);
+    let (warp, lane) = (t.global() / LARGE_LANES, t.global() % LARGE_LANES);
+    let warps = (t.grid_dim * t.block_dim) / LARGE_LANES;
+    let listed = args.large_count.get(0).min(args.large.len());
+    let mut at = warp;
+    while at < listed {
+        if let Some(body) = drawn(args, &shown, args.large.get(at)) {
+            plot(args, &shown.view, &body, lane, LARGE_LANES);
+        }
+        at += warps;
+    }
 }
 
 /// Whether something centred at image position `centre` and `bound` pixels across (each
@@ -399,22 +476,54 @@ fn near_image(view: &View, centre: Vec2, bound: f32) -> bool {
 /// centre from `centre`, and whether it is the pixel under `centre` (which a drawing
 /// covers however small it is). Nothing for a `centre` far off the image.
 #[inline(always)]
-fn cover(view: &View, centre: Vec2, reach: Vec2, mut f: impl FnMut(u32, Vec2, bool)) {
+fn cover(view: &View, centre: Vec2, reach: Vec2, f: impl FnMut(u32, Vec2, bool)) {
+    cover_rows(view, centre, reach, 0, 1, f);
+}
+
+/// The rows of `view`'s image within `reach.y` of `centre` (see [`cover`]): first and last.
+#[inline(always)]
+fn row_span(view: &View, centre: Vec2, reach: Vec2) -> (u32, u32) {
+    let y0 = (centre.y - reach.y).max(0.0) as u32;
+    let y1 = ((centre.y + reach.y) as u32).min(view.height - 1);
+    (y0, y1)
+}
+
+/// How many rows [`cover`] walks for `centre` and `reach` (0 off the image).
+#[inline(always)]
+fn rows(view: &View, centre: Vec2, reach: Vec2) -> u32 {
+    if !near_image(view, centre, reach.max_element()) {
+        return 0;
+    }
+    let (y0, y1) = row_span(view, centre, reach);
+    (y1 + 1).saturating_sub(y0)
+}
+
+/// [`cover`] for every `step`-th of its rows from its `first` (0-based) only.
+#[inline(always)]
+fn cover_rows(
+    view: &View,
+    centre: Vec2,
+    reach: Vec2,
+    first: u32,
+    step: u32,
+    mut f: impl FnMut(u32, Vec2, bool),
+) {
     if !near_image(view, centre, reach.max_element()) {
         return;
     }
     let (w, h) = (view.width as f32, view.height as f32);
     let x0 = (centre.x - reach.x).max(0.0) as u32;
-    let y0 = (centre.y - reach.y).max(0.0) as u32;
     let x1 = ((centre.x + reach.x) as u32).min(view.width - 1);
-    let y1 = ((centre.y + reach.y) as u32).min(view.height - 1);
+    let (y0, y1) = row_span(view, centre, reach);
     let on_image = centre.x >= 0.0 && centre.x < w && centre.y >= 0.0 && centre.y < h;
     let under = on_image.then_some((centre.x as u32, centre.y as u32));
-    for y in y0..=y1 {
+    let mut y = y0 + first;
+    while y <= y1 {
         for x in x0..=x1 {
             let d = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) - centre;
             f(y * view.width + x, d, under == Some((x, y)));
         }
+        y += step;
     }
 }
 
