@@ -676,6 +676,84 @@ fn silhouettes_cover_the_pixels_of_their_shapes(device: &Device) {
     }
 }
 
+/// Big discs drawn row by row (more than `render::LARGE_ROWS` rows each) are the pixels a
+/// plain host reference computes: a pixel shows the top (layer, then kind) of the discs
+/// whose radius (at most `MAX_RADIUS_PX`) reaches its centre, or that lie over it.
+fn big_discs_are_the_pixels_of_a_host_reference(device: &Device) {
+    let size = Vec2::new(320.0, 200.0);
+    let spec = world(
+        size,
+        Boundary::Clamp,
+        vec![
+            kind("low", circle(30.0), 3, &[]),
+            kind("high", circle(21.5), 2, &[]),
+            // Wider than any sprite may be drawn: capped at `MAX_RADIUS_PX`.
+            kind("huge", circle(70.0), 1, &[]),
+            kind("dot", circle(1.2), 2, &[]),
+        ],
+    );
+    let looks = [
+        look(rgb(200, 30, 30), 2),
+        look(rgb(30, 200, 30), 7),
+        look(rgb(30, 30, 200), 4),
+        look(rgb(200, 200, 30), 9),
+    ];
+    let mut sim = Simulation::new(device, &spec, 1).unwrap();
+    let ranges = sim.layout().ranges.clone();
+    let bodies = [
+        (ranges[0].start, Vec2::new(100.3, 90.7)),
+        (ranges[0].start + 1, Vec2::new(130.0, 110.2)),
+        // Clipped by the frame's corner.
+        (ranges[0].start + 2, Vec2::new(4.0, 196.5)),
+        (ranges[1].start, Vec2::new(118.6, 100.1)),
+        (ranges[1].start + 1, Vec2::new(305.2, 12.9)),
+        (ranges[2].start, Vec2::new(210.4, 120.6)),
+        (ranges[3].start, Vec2::new(125.0, 100.0)),
+        (ranges[3].start + 1, Vec2::new(240.0, 40.0)),
+    ];
+    let placed: Vec<_> = bodies.iter().map(|&(s, p)| (s, p, Vec2::X)).collect();
+    sim.place(&placed).unwrap();
+    let (width, height) = (320, 200);
+    let lens = field_lens(size, width, height);
+    let frame = sim.draw(&lens, &looks).unwrap();
+    let view = sim.shown().unwrap().view;
+    assert_eq!(view.scale, 1.0, "one pixel per unit");
+    let radii = [30.0f32, 21.5, 48.0, 1.2];
+    let kind_of = |slot: u32| ranges.iter().rposition(|r| r.start <= slot).unwrap();
+    for y in 0..height {
+        for x in 0..width {
+            let mut top: Option<(u32, usize)> = None;
+            for &(slot, pos) in &bodies {
+                let k = kind_of(slot);
+                // Image position: x from the left, y down from the top.
+                let c = Vec2::new(
+                    pos.x - view.origin.x,
+                    height as f32 - (pos.y - view.origin.y),
+                );
+                let (dx, dy) = (x as f32 + 0.5 - c.x, y as f32 + 0.5 - c.y);
+                let under = (c.x as u32, c.y as u32) == (x, y);
+                if under || dx * dx + dy * dy <= radii[k] * radii[k] {
+                    top = top.max(Some((looks[k].layer, k)));
+                }
+            }
+            let expected = top.map_or(BACKGROUND, |(_, k)| looks[k].colour);
+            assert_eq!(frame.pixel(x, y), expected, "pixel ({x}, {y})");
+        }
+    }
+}
+
+#[test]
+fn frames_of_large_sprites_do_not_depend_on_the_schedule() {
+    let shuffled = Device::cpu_scheduled(Some(2), Schedule::Shuffled { seed: 3 }, "tests").unwrap();
+    let one = Device::cpu(Some(1), "tests").unwrap();
+    // Close enough that most bodies on the screen are drawn row by row.
+    let camera = Camera::new(CameraMode::Follow, 8.0);
+    assert_eq!(
+        paper_frames(&shuffled, 120, &camera),
+        paper_frames(&one, 120, &camera)
+    );
+}
+
 /// How many of `frame`'s pixels have one of `colours`, outside the radar's box.
 fn count_outside_radar(frame: &Frame, colours: &[u32], field: Vec2) -> usize {
     let radar = radar_box(frame.width, frame.height, field);
@@ -1169,6 +1247,7 @@ fn the_backdrop_grid_lies_on_the_worlds_multiples(device: &Device) {
 }
 
 on_both_backends!(
+    big_discs_are_the_pixels_of_a_host_reference,
     the_backdrop_grid_lies_on_the_worlds_multiples,
     particles_are_drawn_in_their_kinds_colour_faded_by_age,
     gl_draws_the_particles_as_the_kernel_does,
