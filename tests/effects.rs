@@ -13,37 +13,15 @@ use gpuwars::pipeline::ParticleSnapshot;
 use gpuwars::sim::Snapshot;
 use gpuwars::sim::layout::Layout;
 
+use common::game::{crashing, without_effects};
+
 fn scene(name: &str) -> Scene {
     built_in(name).unwrap().unwrap()
 }
 
 /// `name` with its `[effects]` table taken out.
-fn without_effects(name: &str) -> Scene {
-    without_effects_of(&scene(name))
-}
-
-/// `scene` with its `[effects]` table taken out.
-fn without_effects_of(scene: &Scene) -> Scene {
-    let (text, name) = (&scene.source, &scene.name);
-    let start = text.find("[effects]").expect("the scene has explosions");
-    let end = start + text[start..].find("\n\n").unwrap();
-    let text = format!("{}{}", &text[..start], &text[end..]);
-    let scene = Scene::from_toml(&text, name).unwrap();
-    assert!(scene.game.effects.is_none());
-    scene
-}
-
-/// Kamikazes born close to the ship that see the whole field: they crash into it and die
-/// from the first seconds, so there is a burst nearly every step.
-fn crashing() -> Scene {
-    let text = gpuwars::game::scene::BUILT_IN
-        .iter()
-        .find(|b| b.name == "kamikaze")
-        .unwrap()
-        .source
-        .replace("distance = 300.0", "distance = 60.0")
-        .replace("vision = 100.0", "vision = 700.0");
-    Scene::from_toml(&text, "crashing").unwrap()
+fn without_effects_named(name: &str) -> Scene {
+    without_effects(&scene(name))
 }
 
 /// Checks one step of every particle against the rules worked out here from the bodies
@@ -179,7 +157,7 @@ fn explosions_leave_the_game_untouched(device: &Device) {
         }
         game.state_hash().unwrap()
     };
-    assert_eq!(hash(&crashing()), hash(&without_effects_of(&crashing())));
+    assert_eq!(hash(&crashing()), hash(&without_effects(&crashing())));
 }
 
 /// Launches of the explosions' kernel, and of all kernels, in `steps` steps of `scene` on a
@@ -203,14 +181,14 @@ fn launches(scene: &Scene, steps: u32) -> (u64, u64) {
 #[test]
 fn a_scene_without_explosions_launches_nothing_for_them() {
     let (burst, all) = launches(&scene("kamikaze"), 5);
-    let (burst_without, all_without) = launches(&without_effects("kamikaze"), 5);
+    let (burst_without, all_without) = launches(&without_effects_named("kamikaze"), 5);
     assert_eq!(
         (burst, burst_without),
         (5, 0),
         "one launch a step, only with effects"
     );
     assert_eq!(all, all_without + 5);
-    let game = Game::new(common::cpu(), &without_effects("kamikaze"), 1).unwrap();
+    let game = Game::new(common::cpu(), &without_effects_named("kamikaze"), 1).unwrap();
     assert!(game.pipeline().particles().unwrap().is_none());
     // One kill's worth of particles per enemy slot, padding included.
     let game = Game::new(common::cpu(), &scene("kamikaze"), 1).unwrap();

@@ -791,16 +791,17 @@ fn sample_replay() -> Replay {
     }
 }
 
+/// JSON's punctuation: edits that break a file's structure.
+const JSON_PUNCTUATION: [&str; 7] = ["{", "}", "[", "]", ",", ":", "\""];
+
+/// Tokens for [`edit`] from JSON's punctuation and `more`.
+fn json_tokens(more: &[&'static str]) -> Vec<&'static str> {
+    JSON_PUNCTUATION.iter().chain(more).copied().collect()
+}
+
 /// Edits to a replay's JSON.
 fn replay_edit() -> impl Strategy<Value = Edit> {
-    let tokens = prop::sample::select(vec![
-        "{",
-        "}",
-        "[",
-        "]",
-        ",",
-        ":",
-        "\"",
+    let tokens = prop::sample::select(json_tokens(&[
         "\\",
         "\\u0000",
         "\\ud800",
@@ -829,7 +830,7 @@ fn replay_edit() -> impl Strategy<Value = Edit> {
         "[[[[[[[[[[",
         "\"0xffffffffffffffff\"",
         "\"gpuwars-replay\"",
-    ]);
+    ]));
     edit(tokens.prop_map(str::to_owned))
 }
 
@@ -932,14 +933,7 @@ fn summary(figures: &[String; 4]) -> String {
 
 /// Edits to a summary's JSON.
 fn summary_edit() -> impl Strategy<Value = Edit> {
-    let tokens = prop::sample::select(vec![
-        "{",
-        "}",
-        "[",
-        "]",
-        ",",
-        ":",
-        "\"",
+    let tokens = prop::sample::select(json_tokens(&[
         "null",
         "1e400",
         "-1e308",
@@ -950,7 +944,7 @@ fn summary_edit() -> impl Strategy<Value = Edit> {
         "\u{1b}[2J",
         "\n",
         "[[[[[[[[",
-    ]);
+    ]));
     edit(tokens.prop_map(str::to_owned))
 }
 

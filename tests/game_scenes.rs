@@ -122,13 +122,7 @@ fn the_game_hash_does_not_depend_on_the_emulators_schedule() {
 /// A scene that a still ship loses fast: kamikazes that see the whole field, are born close
 /// to it and outlive their hits.
 fn doomed() -> Scene {
-    let text = gpuwars::game::scene::BUILT_IN
-        .iter()
-        .find(|b| b.name == "kamikaze")
-        .unwrap()
-        .source
-        .replace("distance = 300.0", "distance = 60.0")
-        .replace("vision = 100.0", "vision = 700.0")
+    let text = common::game::crashing_text()
         .replace("energy = 1\ndamage = 10", "energy = 100000\ndamage = 10");
     Scene::from_toml(&text, "doomed").unwrap()
 }

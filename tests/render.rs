@@ -5,6 +5,7 @@
 
 mod common;
 
+use common::game::{crashing, without_effects};
 use common::sim::{circle, kind, rect, world};
 use glam::Vec2;
 use glium::texture::RawImage2d;
@@ -912,30 +913,6 @@ fn drawing_leaves_the_game_state_alone(device: &Device) {
         }
     }
     assert_eq!(drawn.state_hash().unwrap(), plain.state_hash().unwrap());
-}
-
-/// Kamikazes born close to the ship that see the whole field: they crash into it and die
-/// from the first seconds, so there is a burst nearly every step (as in `tests/effects.rs`).
-fn crashing() -> Scene {
-    let text = gpuwars::game::scene::BUILT_IN
-        .iter()
-        .find(|b| b.name == "kamikaze")
-        .unwrap()
-        .source
-        .replace("distance = 300.0", "distance = 60.0")
-        .replace("vision = 100.0", "vision = 700.0");
-    Scene::from_toml(&text, "crashing").unwrap()
-}
-
-/// `scene` with its `[effects]` table taken out.
-fn without_effects(scene: &Scene) -> Scene {
-    let text = &scene.source;
-    let start = text.find("[effects]").expect("the scene has explosions");
-    let end = start + text[start..].find("\n\n").unwrap();
-    let text = format!("{}{}", &text[..start], &text[end..]);
-    let scene = Scene::from_toml(&text, &scene.name).unwrap();
-    assert!(scene.game.effects.is_none());
-    scene
 }
 
 /// A close follow camera: particles 2 pixels in radius in a 640 × 360 frame.

@@ -101,6 +101,12 @@ void main() {
 }
 "#;
 
+/// GLSL: an RGBA8 colour packed little-endian as the floats GL writes.
+const RGBA: &str = "vec4 rgba(uint c) {
+    return vec4(float(c & 255u), float((c >> 8) & 255u), float((c >> 16) & 255u),
+        float(c >> 24)) / 255.0;
+}";
+
 /// The fragment shader: `gpuwars_kernels::render::shade_at` and `shapes::inside`, line for
 /// line, with the kernels' constants filled in.
 fn fragment_shader() -> String {
@@ -124,10 +130,7 @@ flat in uint v_kind;
 flat in uvec4 look;
 out vec4 colour;
 
-vec4 rgba(uint c) {{
-    return vec4(float(c & 255u), float((c >> 8) & 255u), float((c >> 16) & 255u),
-        float(c >> 24)) / 255.0;
-}}
+{RGBA}
 
 // The offset d in the body's frame: u along the heading, v across it.
 vec2 local(vec2 d, vec2 h) {{
@@ -256,10 +259,7 @@ flat in vec2 field;
 flat in float scale;
 out vec4 colour;
 
-vec4 rgba(uint c) {{
-    return vec4(float(c & 255u), float((c >> 8) & 255u), float((c >> 16) & 255u),
-        float(c >> 24)) / 255.0;
-}}
+{RGBA}
 
 // Along one axis: 0 outside the field, 1 inside on no line, 2 on a line, 3 the border.
 int mark(float origin, float scale, float field, bool lines, float p) {{

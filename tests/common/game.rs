@@ -154,3 +154,32 @@ pub fn mean_nearest(snapshot: &Snapshot, slots: &[usize], size: f32, wrap: bool)
         .sum();
     total / slots.len() as f32
 }
+
+/// The `kamikaze` scene's text with its enemies born close to the ship and seeing the whole
+/// field: they crash into it from the first seconds.
+pub fn crashing_text() -> String {
+    gpuwars::game::scene::BUILT_IN
+        .iter()
+        .find(|b| b.name == "kamikaze")
+        .unwrap()
+        .source
+        .replace("distance = 300.0", "distance = 60.0")
+        .replace("vision = 100.0", "vision = 700.0")
+}
+
+/// Kamikazes that crash into the ship and die from the first seconds (see
+/// [`crashing_text`]): a burst of particles nearly every step.
+pub fn crashing() -> Scene {
+    Scene::from_toml(&crashing_text(), "crashing").unwrap()
+}
+
+/// `scene` with its `[effects]` table taken out.
+pub fn without_effects(scene: &Scene) -> Scene {
+    let text = &scene.source;
+    let start = text.find("[effects]").expect("the scene has explosions");
+    let end = start + text[start..].find("\n\n").unwrap();
+    let text = format!("{}{}", &text[..start], &text[end..]);
+    let scene = Scene::from_toml(&text, &scene.name).unwrap();
+    assert!(scene.game.effects.is_none());
+    scene
+}
