@@ -296,15 +296,13 @@ impl Pipeline<'_> {
         // one camera state and one `Shown`, and the largest radar; the ops run (and are
         // dropped) before the caller's borrow ends.
         Ok(unsafe {
-            vec![
-                op(registry::CAMERA, 1, camera, 64),
-                op(
-                    registry::RADAR_BODIES,
-                    self.layout.slots.div_ceil(stride),
-                    radar,
-                    24,
-                ),
-            ]
+            let mut ops = vec![op(registry::CAMERA, 1, camera, 64)];
+            // A frame without a radar (the whole field) has nothing to count.
+            if lens.radar != 0 {
+                let samples = self.layout.slots.div_ceil(stride);
+                ops.push(op(registry::RADAR_BODIES, samples, radar, 24));
+            }
+            ops
         })
     }
 
