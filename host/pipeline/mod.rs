@@ -5,8 +5,8 @@
 //!
 //! | stage | launches | in |
 //! |---|---|---|
-//! | `pilot` | the autopilot, or the player's input passed through (one thread) | games |
-//! | `master` | the master thread before the physics (one thread) | games |
+//! | `pilot` | the autopilot, or the player's input passed through (one warp) | games |
+//! | `master` | the master before the physics (one warp) | games |
 //! | `births` | the enemies the master thread ordered come alive | games |
 //! | `broad` | the grid: bucket counts, their prefix sum, placement, canonical order | games, and worlds where something collides |
 //! | `narrow` | contacts and their response (`collide_circles` without rectangles) | worlds where something collides |
@@ -14,8 +14,8 @@
 //! | `integrate` | Euler, the boundary rule, deaths | always |
 //! | `substeps` | broad, narrow and integrate again for each further substep | worlds with substeps |
 //! | `effects` | kills burst into particles, the others move and fade (before `free` rebuilds the flags it reads) | games with explosions |
-//! | `free` | the free lists: flags, their prefix sum, gather | always |
-//! | `tally` | the master thread after the physics (one thread) | games |
+//! | `free` | the free lists: flags and their tile counts, the rest of their prefix sum, gather | always |
+//! | `tally` | the master after the physics (one warp) | games |
 //!
 //! The scene decides which stages exist and which kernels they launch; every step of a
 //! scene then launches the same sequence, since per-step choices (who flies, whether a wave
@@ -41,13 +41,14 @@ use gpuwars_kernels::game::control::{Command, Input, Status};
 use gpuwars_kernels::game::effects::{Burst, EffectsArgs, Particles};
 use gpuwars_kernels::game::master::{BirthArgs, MasterArgs};
 use gpuwars_kernels::game::rules::{Brain, Rules, Wave};
+use gpuwars_kernels::primitives::scan;
 use gpuwars_kernels::sim::Space;
 use gpuwars_kernels::sim::broad::{self, CountArgs, MergeArgs, OrderArgs, PlaceArgs};
 use gpuwars_kernels::sim::free_list::{GatherArgs, MarkArgs};
 use gpuwars_kernels::sim::integrate::IntegrateArgs;
 use gpuwars_kernels::sim::narrow::{CollideArgs, Relaxation};
 use gpuwars_kernels::sim::scatter::ScatterArgs;
-use gpuwars_kernels::{Kernel, KernelArgs, registry};
+use gpuwars_kernels::{Kernel, KernelArgs, registry, warp};
 
 use crate::primitives::BLOCK;
 use crate::sim::layout::{self, Layout};
@@ -364,11 +365,11 @@ impl<'d> Pipeline<'d> {
                             rules: g.config.rules,
                             reserved: 0,
                         };
-                        vec![op(registry::AUTOPILOT, 1, args, 64)]
+                        vec![op(registry::AUTOPILOT, warp::WARP, args, 64)]
                     })
                     .unwrap_or_default(),
                 "master" => master
-                    .map(|m| vec![op(registry::MASTER, 1, m, 128)])
+                    .map(|m| vec![op(registry::MASTER, warp::WARP, m, 128)])
                     .unwrap_or_default(),
                 "births" => match (game, master) {
                     (Some(g), Some(m)) => {
@@ -434,7 +435,7 @@ impl<'d> Pipeline<'d> {
                     .unwrap_or_default(),
                 "free" => self.free_ops(),
                 "tally" => master
-                    .map(|m| vec![op(registry::TALLY, 1, m, 128)])
+                    .map(|m| vec![op(registry::TALLY, warp::WARP, m, 128)])
                     .unwrap_or_default(),
                 _ => Vec::new(),
             }
@@ -588,6 +589,7 @@ impl<'d> Pipeline<'d> {
             bodies: self.state.bodies(),
             ranges: self.state.ranges.view(),
             flags: f.flags.view(),
+            tile_counts: f.scan.tile_sums(slots),
         };
         let gather = GatherArgs {
             kind: self.state.bodies.kind.view(),
@@ -597,12 +599,12 @@ impl<'d> Pipeline<'d> {
             list: self.state.free_list.view(),
             count: self.state.free_count.view(),
         };
-        // SAFETY: as in `ops`.
+        // SAFETY: as in `ops`; the marks write the scan's first tile sums.
         unsafe {
-            let mut ops = vec![op(registry::MARK_FREE, slots, mark, 12)];
+            let mut ops = vec![op(registry::MARK_FREE, scan::tiles(slots), mark, 12)];
             ops.extend(
                 f.scan
-                    .ops(f.flags.view(), f.ranks.view())
+                    .ops_after_tile_sums(f.flags.view(), f.ranks.view())
                     .expect("the scan was made for the slots"),
             );
             ops.push(op(registry::GATHER_FREE, slots, gather, 16));

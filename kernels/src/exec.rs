@@ -34,6 +34,12 @@ impl Thread {
         self.block * self.block_dim + self.thread
     }
 
+    /// Index of this thread inside its warp (its lane, 0 to 31).
+    #[inline(always)]
+    pub fn lane(&self) -> u32 {
+        self.thread % crate::warp::WARP
+    }
+
     /// The calling GPU thread's coordinates, read from the special registers.
     #[cfg(target_arch = "nvptx64")]
     #[inline(always)]

@@ -7,9 +7,13 @@
 //! The execution model ([`exec`]) is deliberately small: a kernel body is a plain function of
 //! the calling thread's coordinates and a `#[repr(C)]` argument struct, and kernels never wait
 //! for each other's threads (no barriers, no shared memory). A phase boundary is a new launch,
-//! so the emulator's semantics are exactly the GPU's.
+//! so the emulator's semantics are exactly the GPU's. The lanes of one warp may exchange
+//! values through [`warp`]'s collectives, which give the same bits on both targets.
 #![cfg_attr(not(test), no_std)]
-#![cfg_attr(target_arch = "nvptx64", feature(abi_ptx, stdarch_nvptx))]
+#![cfg_attr(
+    target_arch = "nvptx64",
+    feature(abi_ptx, stdarch_nvptx, asm_experimental_arch)
+)]
 #![warn(missing_docs)]
 
 pub mod exec;
@@ -19,6 +23,7 @@ pub mod registry;
 pub mod render;
 pub mod rng;
 pub mod sim;
+pub mod warp;
 
 pub use exec::{DevSlice, Kernel, KernelArgs, KernelInfo, Thread};
 

@@ -74,11 +74,11 @@ kernels! {
     GATHER_FREE = gather_free(free_list::GatherArgs) => free_list::gather_free;
     /// Brings bodies to life at random places from their slots' generators.
     SCATTER = scatter(scatter::ScatterArgs) => scatter::scatter;
-    /// The master thread before the physics: ship, shots, spawn counts (one thread).
+    /// The master before the physics: ship, shots, spawn counts (one warp).
     MASTER = master(master::MasterArgs) => master::master;
     /// Explosions: kills burst into particles, the others move and fade.
     BURST_AND_FADE = burst_and_fade(effects::EffectsArgs) => effects::burst_and_fade;
-    /// The master thread after the physics: score, counts, FPS meter, game over (one thread).
+    /// The master after the physics: score, counts, FPS meter, game over (one warp).
     TALLY = tally(master::MasterArgs) => master::tally;
     /// Brings the enemies the master thread ordered to life at random places.
     BIRTHS = births(master::BirthArgs) => master::births;
@@ -105,6 +105,6 @@ kernels! {
     WRITE_VERTICES = write_vertices(render::VertexArgs) => render::write_vertices;
     /// Writes every particle's vertex for the GL renderer, after the bodies'.
     WRITE_PARTICLE_VERTICES = write_particle_vertices(particles::ParticleVertexArgs) => particles::write_particle_vertices;
-    /// The autopilot: the ship's input from what lies around it (one thread).
+    /// The autopilot: the ship's input from what lies around it (one warp).
     AUTOPILOT = autopilot(autopilot::AutopilotArgs) => autopilot::autopilot;
 }

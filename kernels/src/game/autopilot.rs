@@ -1,5 +1,5 @@
 //! The autopilot: a deterministic bot that writes the ship's [`Input`] on the device, for the
-//! headless demo, the benchmarks and the tests. It runs in its own one-thread launch before
+//! headless demo, the benchmarks and the tests. It runs in its own one-warp launch before
 //! the master thread every step, and passes the player's input through when the host's
 //! [`Command`] says the player flies. It looks around the ship through the previous step's
 //! grid (buckets of slots; positions as they are now), so a bot-played step needs no
@@ -15,7 +15,7 @@ use super::control::{Command, Input};
 use super::rules::Rules;
 use crate::sim::broad::{CellIndex, kind_bit};
 use crate::sim::{Bodies, KindInfo, Space};
-use crate::{DevSlice, KernelArgs, Thread};
+use crate::{DevSlice, KernelArgs, Thread, warp};
 
 /// Arguments of [`autopilot`].
 #[repr(C)]
@@ -44,54 +44,171 @@ unsafe impl KernelArgs for AutopilotArgs {}
 /// Fraction of the sight within which an edge of a clamping world pushes the ship back.
 pub const EDGE_MARGIN: f32 = 1.0;
 
-/// Thread 0 writes the input for this step: the command's, or the autopilot's if it flies.
+/// What one lane finds among its runs of the grid, or a warp among all of its lanes'.
+#[derive(Clone, Copy)]
+struct Sighting {
+    /// The push away from the enemies seen.
+    flee: Vec2,
+    /// The nearest enemy: its squared distance's bits over its visiting order (smaller is
+    /// nearer, then earlier), or `u64::MAX` for none.
+    nearest: u64,
+    /// The nearest enemy's slot.
+    slot: u32,
+    /// Entries visited (before the cap).
+    entries: u32,
+}
+
+impl Sighting {
+    const NONE: Sighting = Sighting {
+        flee: Vec2::ZERO,
+        nearest: u64::MAX,
+        slot: 0,
+        entries: 0,
+    };
+
+    /// Both lanes' findings: commutative, as a warp reduction needs (the visiting orders in
+    /// `nearest` are distinct, so one of two keys is strictly smaller).
+    #[inline(always)]
+    fn merge(self, other: Sighting) -> Sighting {
+        let (nearest, slot) = if other.nearest < self.nearest {
+            (other.nearest, other.slot)
+        } else {
+            (self.nearest, self.slot)
+        };
+        Sighting {
+            flee: self.flee + other.flee,
+            nearest,
+            slot,
+            entries: self.entries.wrapping_add(other.entries),
+        }
+    }
+}
+
+impl warp::Lanes for Sighting {
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_xor(self, mask: u32) -> Self {
+        Sighting {
+            flee: self.flee.shuffle_xor(mask),
+            nearest: self.nearest.shuffle_xor(mask),
+            slot: self.slot.shuffle_xor(mask),
+            entries: self.entries.shuffle_xor(mask),
+        }
+    }
+
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_up(self, delta: u32) -> Self {
+        Sighting {
+            flee: self.flee.shuffle_up(delta),
+            nearest: self.nearest.shuffle_up(delta),
+            slot: self.slot.shuffle_up(delta),
+            entries: self.entries.shuffle_up(delta),
+        }
+    }
+}
+
+/// The first warp writes the input for this step: the command's, or the autopilot's if it
+/// flies. The warp looks around the ship together: each lane takes one run of the grid's
+/// entries at a time (a kind's cells in one row of the 3×3 block), and the lanes' findings
+/// are reduced in a fixed tree, so the result is the same on every backend and schedule.
 #[inline(always)]
 pub fn autopilot(t: Thread, args: &AutopilotArgs) {
-    if t.global() != 0 {
+    let lane = t.lane();
+    // Only lane 0 writes.
+    if t.global() >= warp::WARP || warp::is_copy_of_lane0(lane) {
         return;
     }
     let command = args.command.get(0);
     if command.autopilot == 0 {
-        args.input.set(0, command.input);
+        if lane == 0 {
+            args.input.set(0, command.input);
+        }
         return;
     }
     let (b, rules, space) = (&args.bodies, &args.rules, &args.space);
     let ship = rules.ship.start;
     if !b.is_alive(ship) {
-        args.input.set(0, Input::default());
+        if lane == 0 {
+            args.input.set(0, Input::default());
+        }
         return;
     }
     let pos = b.pos.get(ship);
     let sight = rules.autopilot_sight;
-    let mut flee = Vec2::ZERO;
-    let mut target: Option<(f32, Vec2, Vec2)> = None;
     // The enemies: the kinds driven by a machine.
-    let mut enemies = 0u32;
-    for k in 0..args.kinds.len() {
-        if !args.kinds.get(k).dies_at_zero_energy() {
-            enemies |= kind_bit(k);
-        }
-    }
+    let kinds = args.kinds.len();
+    let enemies = warp::reduce(
+        lane,
+        |l| {
+            let mut mask = 0u32;
+            let mut k = l;
+            while k < kinds {
+                if !args.kinds.get(k).dies_at_zero_energy() {
+                    mask |= kind_bit(k);
+                }
+                k += warp::WARP;
+            }
+            mask
+        },
+        |a, c| a | c,
+    );
     // The grid is the previous step's; the enemies have moved since: their places now.
-    args.grid.for_each_near(space, pos, enemies, |other, _, _| {
-        if !b.is_alive(other) {
-            return;
+    let grid = &args.grid;
+    let near = grid.near_runs(space, pos, enemies);
+    let cap = if grid.cap == 0 { u32::MAX } else { grid.cap };
+    let mut found = Sighting::NONE;
+    // Runs in chunks of one a lane; `seen` entries came before the chunk.
+    let (mut chunk, mut seen) = (0, 0u32);
+    while chunk < near.count() && seen < cap {
+        let run = |l: u32| near.get(grid, space, chunk + l);
+        let lane_sighting = |l: u32| {
+            let (_, start, end) = run(l);
+            let before = seen.saturating_add(warp::exclusive_sum_u32(l, |j| {
+                let (_, start, end) = run(j);
+                end - start
+            }));
+            let allowed = (end - start).min(cap.saturating_sub(before));
+            let mut mine = Sighting {
+                entries: end - start,
+                ..Sighting::NONE
+            };
+            for entry in start..start + allowed {
+                let other = grid.slots.get(entry);
+                if !b.is_alive(other) {
+                    continue;
+                }
+                let d = space.offset(pos, b.pos.get(other));
+                let dist2 = d.length_squared();
+                if dist2 > sight * sight || dist2 <= 0.0 {
+                    continue;
+                }
+                let vel = b.vel.get(other);
+                let dist = libm::sqrtf(dist2);
+                // Closer enemies, and those coming at the ship, weigh more.
+                let coming = (-d.dot(vel) / dist).max(0.0) / rules.ship_speed;
+                let weight = (1.0 + coming) * (sight / dist - 1.0);
+                mine.flee -= d / dist * weight;
+                let order = before + (entry - start);
+                let key = u64::from(dist2.to_bits()) << 32 | u64::from(order);
+                if key < mine.nearest {
+                    (mine.nearest, mine.slot) = (key, other);
+                }
+            }
+            mine
+        };
+        let chunk_found = warp::reduce(lane, lane_sighting, Sighting::merge);
+        found.flee += chunk_found.flee;
+        if chunk_found.nearest < found.nearest {
+            (found.nearest, found.slot) = (chunk_found.nearest, chunk_found.slot);
         }
-        let d = space.offset(pos, b.pos.get(other));
-        let dist2 = d.length_squared();
-        if dist2 > sight * sight || dist2 <= 0.0 {
-            return;
-        }
-        let vel = b.vel.get(other);
-        let dist = libm::sqrtf(dist2);
-        // Closer enemies, and those coming at the ship, weigh more.
-        let coming = (-d.dot(vel) / dist).max(0.0) / rules.ship_speed;
-        let weight = (1.0 + coming) * (sight / dist - 1.0);
-        flee -= d / dist * weight;
-        if target.is_none_or(|(best, _, _)| dist2 < best) {
-            target = Some((dist2, d, vel));
-        }
-    });
+        seen = seen.saturating_add(chunk_found.entries);
+        chunk += warp::WARP;
+    }
+    if lane != 0 {
+        return;
+    }
+    let mut flee = found.flee;
     if !space.wraps() {
         flee += edge_push(pos, space.size, sight * EDGE_MARGIN) * 4.0;
     }
@@ -102,12 +219,13 @@ pub fn autopilot(t: Thread, args: &AutopilotArgs) {
         (space.size * 0.5 - pos) / (space.size.x.max(space.size.y))
     };
     let (move_x, move_y) = Input::move_towards(wish.clamp_length_max(1.0));
-    let (aim, fire) = match target {
-        Some((dist2, d, vel)) => {
-            let lead = libm::sqrtf(dist2) / rules.shot_speed;
-            (Input::aim_towards(d + (vel - b.vel.get(ship)) * lead), 1)
-        }
-        None => (0, 0),
+    let (aim, fire) = if found.nearest != u64::MAX {
+        let d = space.offset(pos, b.pos.get(found.slot));
+        let vel = b.vel.get(found.slot);
+        let lead = libm::sqrtf(d.length_squared()) / rules.shot_speed;
+        (Input::aim_towards(d + (vel - b.vel.get(ship)) * lead), 1)
+    } else {
+        (0, 0)
     };
     args.input.set(
         0,

@@ -1,12 +1,17 @@
 //! The master thread (paper section 5): the game's sequential logic, run by one dedicated
-//! thread in one-thread launches, [`master`] before the physics of each step and [`tally`]
-//! after it, and the parallel [`births`] it orders.
+//! warp in one-warp launches, [`master`] before the physics of each step and [`tally`] after
+//! it, and the parallel [`births`] it orders.
 //!
 //! Why its own launch: everything it decides (slot allocation, spawn counts, score, game
 //! over) must be made in one fixed order to stay deterministic, and every other kernel of the
-//! step reads what it wrote. A launch boundary is the only barrier the design allows, so the
-//! master thread gets a launch of its own, before the broad phase, rather than being thread 0
-//! of a block whose other threads would have to wait for it.
+//! step reads what it wrote. A launch boundary is the only barrier the design allows between
+//! warps, so the master gets a launch of its own, before the broad phase.
+//!
+//! The paper's master is one thread; here it is one warp, so that its loops over kinds,
+//! waves and shots take one pass of 32 lanes instead of a thread's walk: each lane owns some
+//! kinds (or shots), and the lanes' counts meet in warp reductions whose results do not
+//! depend on their order (integer sums, saturating sums). What stays sequential (the ship,
+//! its shot, the status) is lane 0's.
 //!
 //! Its work is small on purpose: it moves the ship, fires at most one shot, writes how many
 //! enemies of each kind to spawn ([`births`] brings them to life in parallel, each from its
@@ -19,7 +24,7 @@ use super::rules::{Rules, Wave};
 use crate::sim::free_list::FreeSlots;
 use crate::sim::scatter::{Place, birth, random_place};
 use crate::sim::{Bodies, Contacts, KindInfo, SlotRange, Space};
-use crate::{DevSlice, KernelArgs, Thread};
+use crate::{DevSlice, KernelArgs, Thread, warp};
 
 /// Arguments of [`master`].
 #[repr(C)]
@@ -57,7 +62,7 @@ pub struct MasterArgs {
 // SAFETY: repr(C) plain data.
 unsafe impl KernelArgs for MasterArgs {}
 
-/// The master thread before the physics (thread 0 only):
+/// The master warp before the physics:
 /// 1. at step 0, the ship is born in the middle of the world;
 /// 2. the ship takes the input's movement as its velocity, and recovers energy;
 /// 3. a shot leaves the ship along the aim if the fire key is held and the gun is ready,
@@ -67,22 +72,68 @@ unsafe impl KernelArgs for MasterArgs {}
 /// After game over nothing moves, fires or spawns, and the status is left as it is.
 #[inline(always)]
 pub fn master(t: Thread, args: &MasterArgs) {
-    if t.global() != 0 {
+    if t.global() >= warp::WARP {
         return;
     }
-    let (b, rules) = (&args.bodies, &args.rules);
+    let lane = t.lane();
+    let rules = &args.rules;
     let mut st = args.status.get(0);
-    for k in 0..args.births.len() {
-        args.births.set(k, 0);
-    }
+    let kinds = args.births.len();
     if st.is_over() {
         // The status stays as the last step left it, however many steps follow.
+        let mut k = lane;
+        while k < kinds {
+            args.births.set(k, 0);
+            k += warp::WARP;
+        }
         return;
     }
+    let step = st.step;
+    // Spawns, a kind a lane: each due wave takes what its kind has left, in wave order.
+    let mut mine = Spawns::default();
+    let mut k = lane;
+    while k < kinds {
+        let kind = spawns(args, k, step);
+        args.births.set(k, kind.births);
+        if let Some(speed) = kind.speed {
+            args.birth_speed.set(k, speed);
+        }
+        // Saturates rather than wraps (after 4,294,967,295 spawns of one kind), so that the
+        // dead counted from it never drop to 0.
+        args.spawned
+            .set(k, args.spawned.get(k).saturating_add(kind.births));
+        // At most the world's slots (2^24): no overflow.
+        mine.births += kind.births;
+        mine.waves += kind.waves;
+        k += warp::WARP;
+    }
+    // The warp's totals; lane `l`'s share recomputed where a thread cannot ask it (the
+    // CPU emulation; see `warp`), without writing.
+    let totals = warp::reduce(
+        lane,
+        |l| {
+            if l == lane {
+                return mine.packed();
+            }
+            let mut theirs = Spawns::default();
+            let mut k = l;
+            while k < kinds {
+                let kind = spawns(args, k, step);
+                theirs.births += kind.births;
+                theirs.waves += kind.waves;
+                k += warp::WARP;
+            }
+            theirs.packed()
+        },
+        u64::wrapping_add,
+    );
+    if lane != 0 {
+        return;
+    }
+    let b = &args.bodies;
     let input = args.input.get(0);
     st.events = Events::default();
     st.input = input;
-    let step = st.step;
     let ship = rules.ship.start;
     if step == 0 {
         let place = Place {
@@ -101,30 +152,50 @@ pub fn master(t: Thread, args: &MasterArgs) {
             st.events.shots_fired = 1;
         }
     }
-    // Spawns: each due wave takes what its kind has left.
-    for w in 0..args.waves.len() {
-        let wave = args.waves.get(w);
-        if wave.due(step) {
-            let k = wave.kind;
-            let asked = args.births.get(k);
-            let room = args.free.count.get(k) - asked;
-            args.births.set(k, asked + wave.count.min(room));
-            args.birth_speed.set(k, wave.speed);
-            st.events.waves += u32::from(wave.count.min(room) > 0);
-        }
-    }
-    for k in 0..args.births.len() {
-        let n = args.births.get(k);
-        // Saturates rather than wraps (after 4,294,967,295 spawns of one kind), so that the
-        // dead counted from it never drop to 0.
-        args.spawned.set(k, args.spawned.get(k).saturating_add(n));
-        // At most the world's slots (2^24): no overflow.
-        st.events.spawned += n;
-    }
+    st.events.spawned = totals as u32;
+    st.events.waves = (totals >> 32) as u32;
     args.status.set(0, st);
 }
 
-/// The master thread after the physics (thread 0 only), from the rebuilt free lists:
+/// One kind's spawns this step, or a lane's total of them.
+#[derive(Clone, Copy, Default)]
+struct Spawns {
+    /// Enemies to bring to life.
+    births: u32,
+    /// Due waves that brought at least one.
+    waves: u32,
+    /// The birth velocity deviation of the kind's last due wave, if one was due.
+    speed: Option<f32>,
+}
+
+impl Spawns {
+    /// The counts in one word for a warp sum (both stay below 2^32: births are at most the
+    /// world's slots, waves at most the schedule's length).
+    #[inline(always)]
+    fn packed(self) -> u64 {
+        u64::from(self.waves) << 32 | u64::from(self.births)
+    }
+}
+
+/// Kind `kind`'s spawns at step `step`: each due wave of the kind, in schedule order, takes
+/// what the kind's free slots have left.
+#[inline(always)]
+fn spawns(args: &MasterArgs, kind: u32, step: u32) -> Spawns {
+    let free = args.free.count.get(kind);
+    let mut out = Spawns::default();
+    for w in 0..args.waves.len() {
+        let wave = args.waves.get(w);
+        if wave.kind == kind && wave.due(step) {
+            let taken = wave.count.min(free - out.births);
+            out.births += taken;
+            out.waves += u32::from(taken > 0);
+            out.speed = Some(wave.speed);
+        }
+    }
+    out
+}
+
+/// The master warp after the physics, from the rebuilt free lists:
 /// 1. counts and score: an enemy kind's dead are those spawned minus those alive, each
 ///    worth its birth energy; the kills and the score saturate at `u32::MAX` instead of
 ///    wrapping, and never go back (a saturated spawn count would undercount the dead);
@@ -134,7 +205,9 @@ pub fn master(t: Thread, args: &MasterArgs) {
 ///    and then the world is frozen (see [`Bodies::frozen`]).
 #[inline(always)]
 pub fn tally(t: Thread, args: &MasterArgs) {
-    if t.global() != 0 {
+    let lane = t.lane();
+    // Only lane 0 writes.
+    if t.global() >= warp::WARP || warp::is_copy_of_lane0(lane) {
         return;
     }
     let (b, rules) = (&args.bodies, &args.rules);
@@ -142,32 +215,52 @@ pub fn tally(t: Thread, args: &MasterArgs) {
     if st.is_over() {
         return;
     }
-    let (mut alive, mut killed, mut score) = (0u32, 0u32, 0u32);
-    for k in 0..args.kinds.len() {
-        let info = args.kinds.get(k);
-        if info.dies_at_zero_energy() {
-            continue;
-        }
-        let now = args.ranges.get(k).capacity - args.free.count.get(k);
-        let dead = args.spawned.get(k).saturating_sub(now);
-        // At most the world's slots (2^24): no overflow.
-        alive += now;
-        killed = killed.saturating_add(dead);
-        // Birth energies are at least 1.
-        score = score.saturating_add(dead.saturating_mul(info.energy as u32));
-    }
-    let killed = killed.max(st.enemies_killed);
-    st.events.kills = killed - st.enemies_killed;
-    st.enemies_alive = alive;
-    st.enemies_killed = killed;
-    st.score = score.max(st.score);
+    // A kind a lane; the sums saturate, which keeps them independent of their order.
+    let counts = warp::reduce(
+        lane,
+        |l| {
+            let mut counts = Counts::default();
+            let mut k = l;
+            while k < args.kinds.len() {
+                let info = args.kinds.get(k);
+                if !info.dies_at_zero_energy() {
+                    let now = args.ranges.get(k).capacity - args.free.count.get(k);
+                    let dead = args.spawned.get(k).saturating_sub(now);
+                    // Birth energies are at least 1.
+                    let worth = dead.saturating_mul(info.energy as u32);
+                    counts = counts.merge(Counts {
+                        alive: now,
+                        killed: dead,
+                        score: worth,
+                    });
+                }
+                k += warp::WARP;
+            }
+            counts
+        },
+        Counts::merge,
+    );
     let shots = args.ranges.get(rules.shot_kind);
+    // The shots that struck, a slot a lane at a time.
+    let shot_hits = warp::sum_u32(lane, |l| {
+        let mut hits = 0u32;
+        let mut i = l;
+        while i < shots.capacity {
+            hits += u32::from(args.contacts.damage.get(shots.start + i) > 0);
+            i += warp::WARP;
+        }
+        hits
+    });
+    if lane != 0 {
+        return;
+    }
+    let killed = counts.killed.max(st.enemies_killed);
+    st.events.kills = killed - st.enemies_killed;
+    st.enemies_alive = counts.alive;
+    st.enemies_killed = killed;
+    st.score = counts.score.max(st.score);
     st.shots_alive = shots.capacity - args.free.count.get(rules.shot_kind);
-    // Summed in slot order over the kind's range (a few dozen slots): the same on every
-    // schedule.
-    st.events.shot_hits = (shots.start..shots.start + shots.capacity)
-        .map(|slot| u32::from(args.contacts.damage.get(slot) > 0))
-        .sum();
+    st.events.shot_hits = shot_hits;
     let ship = rules.ship.start;
     let ship_alive = b.is_alive(ship);
     st.events.ship_hits = if ship_alive {
@@ -191,6 +284,49 @@ pub fn tally(t: Thread, args: &MasterArgs) {
     args.status.set(0, st);
     if st.is_over() {
         b.frozen.set(0, 1);
+    }
+}
+
+/// The enemies alive, killed and the score they are worth, over some kinds.
+#[derive(Clone, Copy, Default)]
+struct Counts {
+    alive: u32,
+    killed: u32,
+    score: u32,
+}
+
+impl Counts {
+    /// Both sets of kinds: alive at most the world's slots (2^24, no overflow), killed and
+    /// score saturating at `u32::MAX` (a saturating sum of counts is the same in any order).
+    #[inline(always)]
+    fn merge(self, other: Counts) -> Counts {
+        Counts {
+            alive: self.alive + other.alive,
+            killed: self.killed.saturating_add(other.killed),
+            score: self.score.saturating_add(other.score),
+        }
+    }
+}
+
+impl warp::Lanes for Counts {
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_xor(self, mask: u32) -> Self {
+        Counts {
+            alive: self.alive.shuffle_xor(mask),
+            killed: self.killed.shuffle_xor(mask),
+            score: self.score.shuffle_xor(mask),
+        }
+    }
+
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_up(self, delta: u32) -> Self {
+        Counts {
+            alive: self.alive.shuffle_up(delta),
+            killed: self.killed.shuffle_up(delta),
+            score: self.score.shuffle_up(delta),
+        }
     }
 }
 

@@ -5,11 +5,11 @@
 //! per-tile starting offsets; [`scan_tiles`] then walks each tile once more from its offset.
 //! A problem of `n` elements takes `2·⌈log_TILE n⌉ - 1` launches and no barrier.
 //!
-//! Up to [`FLAT_TILES`] tiles, [`scan_tiles_after_sums`] replaces the recursion: each thread
-//! adds up the sums of the tiles before its own, so the scan takes two launches. Small scans
-//! are bound by launch latency, not by those few extra reads.
+//! Up to [`FLAT_TILES`] tiles, [`scan_tiles_after_sums`] replaces the recursion: each warp
+//! adds up the sums of the tiles before its own (a warp collective) and scans its own, so
+//! the scan takes two launches.
 
-use crate::{DevSlice, KernelArgs, Thread};
+use crate::{DevSlice, KernelArgs, Thread, warp};
 
 /// Elements per thread. 32 keeps a tile in one 128-byte line and leaves 2^19 threads at n = 2^24.
 pub const TILE: u32 = 32;
@@ -91,19 +91,39 @@ pub fn scan_tiles(t: Thread, args: &ScanArgs) {
 }
 
 /// [`scan_tiles`] where `tile_offsets` holds the tile sums themselves (of [`reduce_tiles`],
-/// at most [`FLAT_TILES`] of them, not scanned): thread `t` adds up those of the tiles
-/// before its own for its offset.
+/// at most [`FLAT_TILES`] of them, not scanned). The warp of tiles `w .. w + 32` adds up the
+/// sums before `w` together, each lane every 32nd of them (at most `FLAT_TILES / 32` reads a
+/// lane instead of up to `FLAT_TILES` for the last tile alone), and scans its own 32 sums
+/// across its lanes. Integer sums: the result does not depend on their order.
 #[inline(always)]
 pub fn scan_tiles_after_sums(t: Thread, args: &ScanArgs) {
     let tile = t.global();
-    if tile >= tiles(args.n) {
+    let lane = t.lane();
+    // The warp's first tile: the same in all its lanes, which all take part below.
+    let first = tile - lane;
+    let count = tiles(args.n);
+    let sums = args.tile_offsets;
+    let before = warp::sum_u32(lane, |l| {
+        let mut sum = 0u32;
+        let mut i = l;
+        // A warp wholly past the last tile (its block's tail) reads no further than it.
+        while i < first.min(count) {
+            sum = sum.wrapping_add(sums.get(i));
+            i += warp::WARP;
+        }
+        sum
+    });
+    let within = warp::exclusive_sum_u32(lane, |l| {
+        if first + l < count {
+            sums.get(first + l)
+        } else {
+            0
+        }
+    });
+    if tile >= count {
         return;
     }
-    let mut offset = 0u32;
-    for before in 0..tile {
-        offset = offset.wrapping_add(args.tile_offsets.get(before));
-    }
-    scan_tile(args, tile, offset);
+    scan_tile(args, tile, before.wrapping_add(within));
 }
 
 /// Writes the exclusive prefix sums of tile `tile`, from `running`.

@@ -292,27 +292,16 @@ impl CellIndex {
         mask: u32,
         mut visit: impl FnMut(u32, u32, Vec2),
     ) {
-        let ((rows, row_count), (cols, col_count)) = space.neighbourhood(pos);
-        // The block's columns as runs of consecutive columns, in visiting order.
-        let mut runs = [(0u32, 0u32); 3];
-        let mut run_count = 0;
-        for &c in &cols[..col_count] {
-            if run_count > 0 && runs[run_count - 1].1 + 1 == c {
-                runs[run_count - 1].1 = c;
-            } else {
-                runs[run_count] = (c, c);
-                run_count += 1;
-            }
-        }
+        let block = NearBlock::new(space, pos);
         let mut rest = mask & kinds_mask(self.kinds);
         // Entries the cap still allows.
         let mut left = if self.cap == 0 { u32::MAX } else { self.cap };
         while rest != 0 {
             let kind = rest.trailing_zeros();
             rest &= rest - 1;
-            for &r in &rows[..row_count] {
+            for &r in &block.rows[..block.row_count as usize] {
                 let row = kind * self.cells + r * space.cols;
-                for &(first, last) in &runs[..run_count] {
+                for &(first, last) in &block.runs[..block.run_count as usize] {
                     let start = self.start.get(row + first);
                     let end = self
                         .start
@@ -328,6 +317,94 @@ impl CellIndex {
                 }
             }
         }
+    }
+
+    /// The runs of entries that [`CellIndex::for_each_near`] visits around `pos` for the kinds
+    /// in `mask`, to be taken by index (a warp's lanes take one each). The cap is not
+    /// applied: the caller counts entries against [`CellIndex::cap`] in visiting order.
+    #[inline(always)]
+    pub fn near_runs(&self, space: &Space, pos: Vec2, mask: u32) -> NearRuns {
+        let mask = mask & kinds_mask(self.kinds);
+        NearRuns {
+            block: NearBlock::new(space, pos),
+            mask,
+            kinds: mask.count_ones(),
+        }
+    }
+}
+
+/// The rows of a query's 3×3 block, and its columns as runs of consecutive columns, in
+/// visiting order.
+#[derive(Clone, Copy, Debug)]
+pub struct NearBlock {
+    rows: [u32; 3],
+    row_count: u32,
+    runs: [(u32, u32); 3],
+    run_count: u32,
+}
+
+impl NearBlock {
+    /// The block around `pos`.
+    #[inline(always)]
+    fn new(space: &Space, pos: Vec2) -> Self {
+        let ((rows, row_count), (cols, col_count)) = space.neighbourhood(pos);
+        let mut runs = [(0u32, 0u32); 3];
+        let mut run_count = 0;
+        for &c in &cols[..col_count] {
+            if run_count > 0 && runs[run_count - 1].1 + 1 == c {
+                runs[run_count - 1].1 = c;
+            } else {
+                runs[run_count] = (c, c);
+                run_count += 1;
+            }
+        }
+        NearBlock {
+            rows,
+            row_count: row_count as u32,
+            runs,
+            run_count: run_count as u32,
+        }
+    }
+}
+
+/// The runs of one query of the grid in visiting order: kind by kind, row by row, run by
+/// run (see [`CellIndex::near_runs`]).
+#[derive(Clone, Copy, Debug)]
+pub struct NearRuns {
+    block: NearBlock,
+    mask: u32,
+    kinds: u32,
+}
+
+impl NearRuns {
+    /// Number of runs.
+    #[inline(always)]
+    pub fn count(&self) -> u32 {
+        self.kinds * self.block.row_count * self.block.run_count
+    }
+
+    /// Run `r`'s kind and entries `start .. end` of `grid`; `(0, 0, 0)` past the last run.
+    #[inline(always)]
+    pub fn get(&self, grid: &CellIndex, space: &Space, r: u32) -> (u32, u32, u32) {
+        if r >= self.count() {
+            return (0, 0, 0);
+        }
+        let per_kind = self.block.row_count * self.block.run_count;
+        // The kind: the (r / per_kind)-th kind of the mask.
+        let mut rest = self.mask;
+        for _ in 0..r / per_kind {
+            rest &= rest - 1;
+        }
+        let kind = rest.trailing_zeros();
+        let within = r % per_kind;
+        let row_index = (within / self.block.run_count) as usize;
+        let (first, last) = self.block.runs[(within % self.block.run_count) as usize];
+        let row = kind * grid.cells + self.block.rows[row_index] * space.cols;
+        (
+            kind,
+            grid.start.get(row + first),
+            grid.start.get(row + last + 1),
+        )
     }
 }
 

@@ -1,0 +1,202 @@
+//! Warp collectives: reductions and scans over the 32 lanes of a warp, the same bit for bit
+//! on the GPU and on the CPU emulation.
+//!
+//! A collective takes each lane's value as a function of the lane, `value(lane)`, instead of a
+//! value already in hand. On the GPU every lane evaluates `value` at its own lane and the
+//! lanes exchange results with `shfl.sync` (butterflies for reductions, shifts up for scans).
+//! On the CPU the emulator runs a block's threads one after the other, so no thread can wait
+//! for another: there each calling thread evaluates `value` at all 32 lanes itself and
+//! combines them in exactly the order the GPU's shuffles do. So:
+//!
+//! - `value` must be a pure function of the lane and of values that are the same in every
+//!   lane of the warp (warp-uniform), reading only memory that nothing writes during the
+//!   launch;
+//! - every lane of the warp must call the collective, in the same order, with no lane
+//!   returned early: kernels that use them launch whole warps (blocks are multiples of 32
+//!   threads) and let lanes past the work take part with a neutral value;
+//! - the combining operation must be commutative (`a ∘ b == b ∘ a` bit for bit: integer
+//!   sums, float sums, minima of integers), so that both halves of each butterfly agree and
+//!   every lane ends with the same result. Float sums are then a fixed tree, not a
+//!   left-to-right fold: deterministic, though not the order of a sequential loop.
+//!
+//! The cost on the CPU is 32 evaluations per thread instead of one: collectives serve the
+//! stages whose latency they cut (a warp instead of one thread, a strided sum instead of a
+//! long loop), which are small.
+
+use glam::Vec2;
+
+/// Threads in a warp.
+pub const WARP: u32 = 32;
+
+/// Whether the calling thread may skip a kernel whose lanes other than 0 write nothing: on
+/// the CPU, lane 0 evaluates every lane's values itself, so the other lanes' runs are copies
+/// of its work. Always `false` on the GPU, where each lane's share is its own.
+#[inline(always)]
+pub fn is_copy_of_lane0(lane: u32) -> bool {
+    cfg!(not(target_arch = "nvptx64")) && lane != 0
+}
+
+/// The butterfly distances of a reduction over a warp, in the order the GPU applies them.
+const BUTTERFLY: [u32; 5] = [16, 8, 4, 2, 1];
+
+/// A value the lanes of a warp can exchange: made of 32-bit words.
+pub trait Lanes: Copy {
+    /// The value that lane `lane ^ mask` holds (GPU only).
+    #[cfg(target_arch = "nvptx64")]
+    fn shuffle_xor(self, mask: u32) -> Self;
+    /// The value that lane `lane - delta` holds, or its own for the first `delta` lanes
+    /// (GPU only).
+    #[cfg(target_arch = "nvptx64")]
+    fn shuffle_up(self, delta: u32) -> Self;
+}
+
+impl Lanes for u32 {
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_xor(self, mask: u32) -> Self {
+        let out: u32;
+        // SAFETY: every lane of the warp executes this shuffle (the module's contract), so
+        // the full member mask is right; it reads registers only.
+        unsafe {
+            core::arch::asm!(
+                "shfl.sync.bfly.b32 {out}, {value}, {mask}, 31, 0xffffffff;",
+                out = out(reg32) out,
+                value = in(reg32) self,
+                mask = in(reg32) mask,
+                options(nostack),
+            );
+        }
+        out
+    }
+
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_up(self, delta: u32) -> Self {
+        let out: u32;
+        // SAFETY: as in `shuffle_xor`; a source lane below 0 leaves the lane's own value.
+        unsafe {
+            core::arch::asm!(
+                "shfl.sync.up.b32 {out}, {value}, {delta}, 0, 0xffffffff;",
+                out = out(reg32) out,
+                value = in(reg32) self,
+                delta = in(reg32) delta,
+                options(nostack),
+            );
+        }
+        out
+    }
+}
+
+impl Lanes for f32 {
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_xor(self, mask: u32) -> Self {
+        f32::from_bits(self.to_bits().shuffle_xor(mask))
+    }
+
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_up(self, delta: u32) -> Self {
+        f32::from_bits(self.to_bits().shuffle_up(delta))
+    }
+}
+
+impl Lanes for u64 {
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_xor(self, mask: u32) -> Self {
+        let low = (self as u32).shuffle_xor(mask);
+        let high = ((self >> 32) as u32).shuffle_xor(mask);
+        u64::from(high) << 32 | u64::from(low)
+    }
+
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_up(self, delta: u32) -> Self {
+        let low = (self as u32).shuffle_up(delta);
+        let high = ((self >> 32) as u32).shuffle_up(delta);
+        u64::from(high) << 32 | u64::from(low)
+    }
+}
+
+impl Lanes for Vec2 {
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_xor(self, mask: u32) -> Self {
+        Vec2::new(self.x.shuffle_xor(mask), self.y.shuffle_xor(mask))
+    }
+
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_up(self, delta: u32) -> Self {
+        Vec2::new(self.x.shuffle_up(delta), self.y.shuffle_up(delta))
+    }
+}
+
+/// `value(lane)` of all 32 lanes of the calling thread's warp combined by the commutative
+/// `combine`, as a butterfly: the same result in every lane (see the module's contract).
+#[inline(always)]
+pub fn reduce<T: Lanes>(lane: u32, value: impl Fn(u32) -> T, combine: impl Fn(T, T) -> T) -> T {
+    #[cfg(target_arch = "nvptx64")]
+    {
+        let mut v = value(lane);
+        for distance in BUTTERFLY {
+            v = combine(v, v.shuffle_xor(distance));
+        }
+        v
+    }
+    #[cfg(not(target_arch = "nvptx64"))]
+    {
+        let mut v: [T; WARP as usize] = core::array::from_fn(|l| value(l as u32));
+        for distance in BUTTERFLY {
+            let before = v;
+            for (l, slot) in v.iter_mut().enumerate() {
+                *slot = combine(before[l], before[l ^ distance as usize]);
+            }
+        }
+        v[lane as usize]
+    }
+}
+
+/// The wrapping sum of `value(lane)` over the warp's 32 lanes, in every lane.
+#[inline(always)]
+pub fn sum_u32(lane: u32, value: impl Fn(u32) -> u32) -> u32 {
+    reduce(lane, value, u32::wrapping_add)
+}
+
+/// The sum of `value(lane)` over the warp's 32 lanes, in every lane: a fixed tree of float
+/// additions, the same on every backend.
+#[inline(always)]
+pub fn sum_vec2(lane: u32, value: impl Fn(u32) -> Vec2) -> Vec2 {
+    reduce(lane, value, |a, b| a + b)
+}
+
+/// The smallest `value(lane)` over the warp's 32 lanes, in every lane.
+#[inline(always)]
+pub fn min_u64(lane: u32, value: impl Fn(u32) -> u64) -> u64 {
+    reduce(lane, value, u64::min)
+}
+
+/// The wrapping sum of `value(l)` over the lanes `l` before `lane` (an exclusive scan): each
+/// lane gets its own.
+#[inline(always)]
+pub fn exclusive_sum_u32(lane: u32, value: impl Fn(u32) -> u32) -> u32 {
+    #[cfg(target_arch = "nvptx64")]
+    {
+        let own = value(lane);
+        let mut inclusive = own;
+        let mut distance = 1;
+        while distance < WARP {
+            let before = inclusive.shuffle_up(distance);
+            if lane >= distance {
+                inclusive = inclusive.wrapping_add(before);
+            }
+            distance *= 2;
+        }
+        inclusive.wrapping_sub(own)
+    }
+    #[cfg(not(target_arch = "nvptx64"))]
+    {
+        (0..lane).fold(0u32, |sum, l| sum.wrapping_add(value(l)))
+    }
+}
