@@ -127,43 +127,6 @@ impl PrefixSum {
         input: DevSlice<u32>,
         output: DevSlice<u32>,
     ) -> Result<Vec<Op>, Error> {
-        self.check(input, output)?;
-        let mut ops = Vec::new();
-        // SAFETY: forwarded from the caller.
-        unsafe { self.push_ops(input, output, 0, false, &mut ops) };
-        Ok(ops)
-    }
-
-    /// As [`PrefixSum::ops`] when an earlier op has already written the sum of each tile of
-    /// `input` into [`PrefixSum::tile_sums`] (a kernel that makes the input can count it as
-    /// it goes, which saves the first pass).
-    ///
-    /// # Safety
-    /// As for [`PrefixSum::ops`].
-    pub unsafe fn ops_after_tile_sums(
-        &self,
-        input: DevSlice<u32>,
-        output: DevSlice<u32>,
-    ) -> Result<Vec<Op>, Error> {
-        self.check(input, output)?;
-        let mut ops = Vec::new();
-        // SAFETY: forwarded from the caller.
-        unsafe { self.push_ops(input, output, 0, true, &mut ops) };
-        Ok(ops)
-    }
-
-    /// Where the sums of the tiles of an input of `n` elements go: empty for a single tile,
-    /// which needs none.
-    pub fn tile_sums(&self, n: u32) -> DevSlice<u32> {
-        if n <= scan::TILE {
-            DevSlice::EMPTY
-        } else {
-            self.levels[0].view_prefix(scan::tiles(n))
-        }
-    }
-
-    /// Checks that a scan of `input` into `output` fits this scratch.
-    fn check(&self, input: DevSlice<u32>, output: DevSlice<u32>) -> Result<(), Error> {
         if input.len() != output.len() || input.len() as usize > self.capacity {
             return Err(Error::Invalid(format!(
                 "a prefix sum of {} elements into {} (capacity {})",
@@ -172,18 +135,19 @@ impl PrefixSum {
                 self.capacity
             )));
         }
-        Ok(())
+        let mut ops = Vec::new();
+        // SAFETY: forwarded from the caller.
+        unsafe { self.push_ops(input, output, 0, &mut ops) };
+        Ok(ops)
     }
 
     /// # Safety
-    /// As for [`PrefixSum::ops`]; `level` indexes the scratch that matches their length;
-    /// with `reduced`, its tile sums are already written.
+    /// As for [`PrefixSum::ops`]; `level` indexes the scratch that matches their length.
     unsafe fn push_ops(
         &self,
         input: DevSlice<u32>,
         output: DevSlice<u32>,
         level: usize,
-        reduced: bool,
         ops: &mut Vec<Op>,
     ) {
         let n = input.len();
@@ -203,17 +167,15 @@ impl PrefixSum {
             let bytes = 4 * u64::from(n + tiles);
             // SAFETY: forwarded; the scratch level holds `tiles` elements.
             unsafe {
-                if !reduced {
-                    ops.push(Op::launch(
-                        registry::SCAN_REDUCE,
-                        grid(tiles),
-                        BLOCK,
-                        args,
-                        bytes,
-                    ));
-                }
+                ops.push(Op::launch(
+                    registry::SCAN_REDUCE,
+                    grid(tiles),
+                    BLOCK,
+                    args,
+                    bytes,
+                ));
                 if !flat {
-                    self.push_ops(sums, sums, level + 1, false, ops);
+                    self.push_ops(sums, sums, level + 1, ops);
                 }
             }
             sums

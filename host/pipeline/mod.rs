@@ -14,7 +14,7 @@
 //! | `integrate` | Euler, the boundary rule, deaths | always |
 //! | `substeps` | broad, narrow and integrate again for each further substep | worlds with substeps |
 //! | `effects` | kills burst into particles, the others move and fade (before `free` rebuilds the flags it reads) | games with explosions |
-//! | `free` | the free lists: flags and their tile counts, the rest of their prefix sum, gather | always |
+//! | `free` | the free lists: flags, their prefix sum, gather | always |
 //! | `tally` | the master after the physics (one warp) | games |
 //!
 //! The scene decides which stages exist and which kernels they launch; every step of a
@@ -41,7 +41,6 @@ use gpuwars_kernels::game::control::{Command, Input, Status};
 use gpuwars_kernels::game::effects::{Burst, EffectsArgs, Particles};
 use gpuwars_kernels::game::master::{BirthArgs, MasterArgs};
 use gpuwars_kernels::game::rules::{Brain, Rules, Wave};
-use gpuwars_kernels::primitives::scan;
 use gpuwars_kernels::sim::Space;
 use gpuwars_kernels::sim::broad::{self, CountArgs, MergeArgs, OrderArgs, PlaceArgs};
 use gpuwars_kernels::sim::free_list::{GatherArgs, MarkArgs};
@@ -589,7 +588,6 @@ impl<'d> Pipeline<'d> {
             bodies: self.state.bodies(),
             ranges: self.state.ranges.view(),
             flags: f.flags.view(),
-            tile_counts: f.scan.tile_sums(slots),
         };
         let gather = GatherArgs {
             kind: self.state.bodies.kind.view(),
@@ -599,12 +597,12 @@ impl<'d> Pipeline<'d> {
             list: self.state.free_list.view(),
             count: self.state.free_count.view(),
         };
-        // SAFETY: as in `ops`; the marks write the scan's first tile sums.
+        // SAFETY: as in `ops`.
         unsafe {
-            let mut ops = vec![op(registry::MARK_FREE, scan::tiles(slots), mark, 12)];
+            let mut ops = vec![op(registry::MARK_FREE, slots, mark, 12)];
             ops.extend(
                 f.scan
-                    .ops_after_tile_sums(f.flags.view(), f.ranks.view())
+                    .ops(f.flags.view(), f.ranks.view())
                     .expect("the scan was made for the slots"),
             );
             ops.push(op(registry::GATHER_FREE, slots, gather, 16));

@@ -292,16 +292,29 @@ impl CellIndex {
         mask: u32,
         mut visit: impl FnMut(u32, u32, Vec2),
     ) {
-        let block = NearBlock::new(space, pos);
+        let ((rows, row_count), (cols, col_count)) = space.neighbourhood(pos);
+        // The block's columns as runs of consecutive columns, in visiting order. Written out
+        // here rather than shared with `column_runs`: through a helper, the runs went to
+        // local memory and the enemies' `think` took 40% longer at 16M bodies (H200).
+        let mut runs = [(0u32, 0u32); 3];
+        let mut run_count = 0;
+        for &c in &cols[..col_count] {
+            if run_count > 0 && runs[run_count - 1].1 + 1 == c {
+                runs[run_count - 1].1 = c;
+            } else {
+                runs[run_count] = (c, c);
+                run_count += 1;
+            }
+        }
         let mut rest = mask & kinds_mask(self.kinds);
         // Entries the cap still allows.
         let mut left = if self.cap == 0 { u32::MAX } else { self.cap };
         while rest != 0 {
             let kind = rest.trailing_zeros();
             rest &= rest - 1;
-            for &r in &block.rows[..block.row_count as usize] {
+            for &r in &rows[..row_count] {
                 let row = kind * self.cells + r * space.cols;
-                for &(first, last) in &block.runs[..block.run_count as usize] {
+                for &(first, last) in &runs[..run_count] {
                     let start = self.start.get(row + first);
                     let end = self
                         .start
@@ -348,16 +361,7 @@ impl NearBlock {
     #[inline(always)]
     fn new(space: &Space, pos: Vec2) -> Self {
         let ((rows, row_count), (cols, col_count)) = space.neighbourhood(pos);
-        let mut runs = [(0u32, 0u32); 3];
-        let mut run_count = 0;
-        for &c in &cols[..col_count] {
-            if run_count > 0 && runs[run_count - 1].1 + 1 == c {
-                runs[run_count - 1].1 = c;
-            } else {
-                runs[run_count] = (c, c);
-                run_count += 1;
-            }
-        }
+        let (runs, run_count) = column_runs(&cols[..col_count]);
         NearBlock {
             rows,
             row_count: row_count as u32,
@@ -365,6 +369,22 @@ impl NearBlock {
             run_count: run_count as u32,
         }
     }
+}
+
+/// A block's columns (at most three, in visiting order) as runs of consecutive columns.
+#[inline(always)]
+fn column_runs(cols: &[u32]) -> ([(u32, u32); 3], usize) {
+    let mut runs = [(0u32, 0u32); 3];
+    let mut run_count = 0;
+    for &c in cols {
+        if run_count > 0 && runs[run_count - 1].1 + 1 == c {
+            runs[run_count - 1].1 = c;
+        } else {
+            runs[run_count] = (c, c);
+            run_count += 1;
+        }
+    }
+    (runs, run_count)
 }
 
 /// The runs of one query of the grid in visiting order: kind by kind, row by row, run by

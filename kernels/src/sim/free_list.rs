@@ -2,10 +2,8 @@
 //! indicate available positions for individuals creation"), rebuilt after every step by
 //! stream compaction so that it needs neither atomics nor a sequential scan:
 //!
-//! 1. [`mark_free`]: `flags[i]` = 1 where slot `i` is a usable slot without a live body, a
-//!    tile of [`TILE`] slots a thread, which also writes its tile's count: the first pass of
-//!    the prefix sum;
-//! 2. the host's prefix sum of the flags goes on from those tile sums;
+//! 1. [`mark_free`]: `flags[i]` = 1 where slot `i` is a usable slot without a live body;
+//! 2. the host takes the exclusive prefix sum of the flags;
 //! 3. [`gather_free`]: each free slot writes itself into its range's list at its rank, and
 //!    the last slot of each range writes the range's count.
 //!
@@ -13,7 +11,6 @@
 
 use super::bodies::Bodies;
 use super::kinds::SlotRange;
-use crate::primitives::scan::{TILE, tiles};
 use crate::{DevSlice, KernelArgs, Thread};
 
 /// Each kind's free slots, as the free-list rebuild leaves them.
@@ -36,9 +33,6 @@ pub struct MarkArgs {
     pub ranges: DevSlice<SlotRange>,
     /// Output: 1 for a free usable slot, else 0; one per slot.
     pub flags: DevSlice<u32>,
-    /// Output: the number of free usable slots in each tile of [`TILE`] slots (the first
-    /// level of the flags' prefix sum, `tiles(slots)` elements; empty for a single tile).
-    pub tile_counts: DevSlice<u32>,
 }
 // SAFETY: repr(C) plain data.
 unsafe impl KernelArgs for MarkArgs {}
@@ -49,31 +43,16 @@ fn usable(slot: u32, range: SlotRange) -> bool {
     slot >= range.start && slot < range.end()
 }
 
-/// Thread `t` writes the flags of tile `t` (slots `t·TILE ..`) and their count. Ranges
-/// start at multiples of 32 slots and own the padding up to the next one, and a world's slots
-/// are a multiple of 32, so a tile is whole and lies in one kind's range.
+/// Thread `i` writes `flags[i]`.
 #[inline(always)]
 pub fn mark_free(t: Thread, args: &MarkArgs) {
-    let tile = t.global();
-    if tile >= tiles(args.flags.len()) {
+    let slot = t.global();
+    if slot >= args.flags.len() {
         return;
     }
-    let start = tile * TILE;
-    let b = &args.bodies;
-    let range = args.ranges.get(b.kind.get(start));
-    let alive: [u32; TILE as usize] = b.alive.get_run(start);
-    let mut count = 0u32;
-    let flags: [u32; TILE as usize] = core::array::from_fn(|i| {
-        let slot = start + i as u32;
-        let free = usable(slot, range) && alive[i] == 0;
-        count += free as u32;
-        free as u32
-    });
-    args.flags.set_run(start, flags);
-    // A world of one tile needs no sums.
-    if !args.tile_counts.is_empty() {
-        args.tile_counts.set(tile, count);
-    }
+    let range = args.ranges.get(args.bodies.kind.get(slot));
+    let free = usable(slot, range) && !args.bodies.is_alive(slot);
+    args.flags.set(slot, free as u32);
 }
 
 /// Arguments of [`gather_free`].
