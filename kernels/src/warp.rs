@@ -44,10 +44,6 @@ pub trait Lanes: Copy {
     /// The value that lane `lane ^ mask` holds (GPU only).
     #[cfg(target_arch = "nvptx64")]
     fn shuffle_xor(self, mask: u32) -> Self;
-    /// The value that lane `lane - delta` holds, or its own for the first `delta` lanes
-    /// (GPU only).
-    #[cfg(target_arch = "nvptx64")]
-    fn shuffle_up(self, delta: u32) -> Self;
 }
 
 impl Lanes for u32 {
@@ -68,23 +64,6 @@ impl Lanes for u32 {
         }
         out
     }
-
-    #[cfg(target_arch = "nvptx64")]
-    #[inline(always)]
-    fn shuffle_up(self, delta: u32) -> Self {
-        let out: u32;
-        // SAFETY: as in `shuffle_xor`; a source lane below 0 leaves the lane's own value.
-        unsafe {
-            core::arch::asm!(
-                "shfl.sync.up.b32 {out}, {value}, {delta}, 0, 0xffffffff;",
-                out = out(reg32) out,
-                value = in(reg32) self,
-                delta = in(reg32) delta,
-                options(nostack),
-            );
-        }
-        out
-    }
 }
 
 impl Lanes for f32 {
@@ -92,12 +71,6 @@ impl Lanes for f32 {
     #[inline(always)]
     fn shuffle_xor(self, mask: u32) -> Self {
         f32::from_bits(self.to_bits().shuffle_xor(mask))
-    }
-
-    #[cfg(target_arch = "nvptx64")]
-    #[inline(always)]
-    fn shuffle_up(self, delta: u32) -> Self {
-        f32::from_bits(self.to_bits().shuffle_up(delta))
     }
 }
 
@@ -109,14 +82,6 @@ impl Lanes for u64 {
         let high = ((self >> 32) as u32).shuffle_xor(mask);
         u64::from(high) << 32 | u64::from(low)
     }
-
-    #[cfg(target_arch = "nvptx64")]
-    #[inline(always)]
-    fn shuffle_up(self, delta: u32) -> Self {
-        let low = (self as u32).shuffle_up(delta);
-        let high = ((self >> 32) as u32).shuffle_up(delta);
-        u64::from(high) << 32 | u64::from(low)
-    }
 }
 
 impl Lanes for Vec2 {
@@ -125,12 +90,25 @@ impl Lanes for Vec2 {
     fn shuffle_xor(self, mask: u32) -> Self {
         Vec2::new(self.x.shuffle_xor(mask), self.y.shuffle_xor(mask))
     }
+}
 
-    #[cfg(target_arch = "nvptx64")]
-    #[inline(always)]
-    fn shuffle_up(self, delta: u32) -> Self {
-        Vec2::new(self.x.shuffle_up(delta), self.y.shuffle_up(delta))
+/// The value that lane `lane - delta` holds, or the lane's own for the first `delta` lanes.
+#[cfg(target_arch = "nvptx64")]
+#[inline(always)]
+fn shuffle_up(value: u32, delta: u32) -> u32 {
+    let out: u32;
+    // SAFETY: every lane of the warp executes this shuffle (the module's contract), so the
+    // full member mask is right; it reads registers only.
+    unsafe {
+        core::arch::asm!(
+            "shfl.sync.up.b32 {out}, {value}, {delta}, 0, 0xffffffff;",
+            out = out(reg32) out,
+            value = in(reg32) value,
+            delta = in(reg32) delta,
+            options(nostack),
+        );
     }
+    out
 }
 
 /// `value(lane)` of all 32 lanes of the calling thread's warp combined by the commutative
@@ -187,7 +165,7 @@ pub fn exclusive_sum_u32(lane: u32, value: impl Fn(u32) -> u32) -> u32 {
         let mut inclusive = own;
         let mut distance = 1;
         while distance < WARP {
-            let before = inclusive.shuffle_up(distance);
+            let before = shuffle_up(inclusive, distance);
             if lane >= distance {
                 inclusive = inclusive.wrapping_add(before);
             }

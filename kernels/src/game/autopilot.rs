@@ -95,17 +95,6 @@ impl warp::Lanes for Sighting {
             entries: self.entries.shuffle_xor(mask),
         }
     }
-
-    #[cfg(target_arch = "nvptx64")]
-    #[inline(always)]
-    fn shuffle_up(self, delta: u32) -> Self {
-        Sighting {
-            flee: self.flee.shuffle_up(delta),
-            nearest: self.nearest.shuffle_up(delta),
-            slot: self.slot.shuffle_up(delta),
-            entries: self.entries.shuffle_up(delta),
-        }
-    }
 }
 
 /// The first warp writes the input for this step: the command's, or the autopilot's if it

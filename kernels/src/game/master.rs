@@ -318,16 +318,6 @@ impl warp::Lanes for Counts {
             score: self.score.shuffle_xor(mask),
         }
     }
-
-    #[cfg(target_arch = "nvptx64")]
-    #[inline(always)]
-    fn shuffle_up(self, delta: u32) -> Self {
-        Counts {
-            alive: self.alive.shuffle_up(delta),
-            killed: self.killed.shuffle_up(delta),
-            score: self.score.shuffle_up(delta),
-        }
-    }
 }
 
 /// The ship goes where the stick points, at the scene's speed, and recovers energy.
