@@ -18,7 +18,7 @@ use std::sync::mpsc;
 
 use anyhow::bail;
 use clap::Parser;
-use gpuwars_kernels::rng::dcmt::{Creator, tempering_parameters};
+use gpuwars::sim::rng::dcmt::{Creator, tempering_parameters};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 

@@ -6,10 +6,10 @@ mod common;
 use common::sim::{circle, kind, world};
 use glam::Vec2;
 use gpuwars::Device;
-use gpuwars::kernels::rng::dcmt::{Creator, tempering_parameters};
 use gpuwars::kernels::rng::{Mt607, Mt19937};
 use gpuwars::pipeline::Simulation;
 use gpuwars::sim::Boundary;
+use gpuwars::sim::rng::dcmt::{Creator, tempering_parameters};
 use gpuwars::sim::rng::{TABLE, TABLE_SEED, table_params};
 
 #[test]

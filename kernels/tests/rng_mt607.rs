@@ -57,7 +57,7 @@ impl Naive {
 }
 
 /// Parameter sets from dcmt (seed 4172, ids 0, 1, 13, 65535; see
-/// tests/dcmt.rs for the source), plus a made-up one.
+/// tests/rng_dcmt.rs at the repository root for the source), plus a made-up one.
 const PARAMS: [Mt607Params; 5] = [
     Mt607Params::new(0xe98e_0000, 0xddee_7380, 0x6f7a_8000),
     Mt607Params::new(0xf03e_0001, 0x32f7_7780, 0xef65_8000),

@@ -1,14 +1,13 @@
 //! Mersenne Twister family.
 //!
 //! - [`Mt19937`]: the reference generator of Matsumoto & Nishimura (1998),
-//!   seeded like `mt19937ar.c`. dcmt also uses it internally.
-//! - [`dcmt::Creator`]: the "Dynamic Creator" parameter search (dcmt 0.6.x),
-//!   restricted to the Mersenne exponent 607 with 32-bit words.
+//!   seeded like `mt19937ar.c`. The host draws the slots' seeds from it, and
+//!   the host's dcmt parameter search (`gpuwars::sim::rng::dcmt`) uses it
+//!   internally.
 //! - [`Mt607`]: the small 19-word generator that runs one per GPU thread, as
 //!   in V. Podlozhnyuk's "Parallel Mersenne Twister" (NVIDIA, 2007).
 //! - [`RngStreams`]: one MT607 per body slot in device memory, drawn by kernels.
 
-pub mod dcmt;
 pub mod mt19937;
 pub mod mt607;
 pub mod streams;

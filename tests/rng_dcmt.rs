@@ -1,8 +1,8 @@
 //! dcmt against published parameter sets, plus independent checks of the
 //! period and of the equidistribution the tempering achieves.
 
-use gpuwars_kernels::rng::Mt607Params;
-use gpuwars_kernels::rng::dcmt::{self, Creator};
+use gpuwars::kernels::rng::{Mt607, Mt607Params};
+use gpuwars::sim::rng::dcmt::{self, Creator};
 
 /// Records 0..32 of `data/MersenneTwister.dat` in the GitHub repository
 /// denglide/CudaDsmc (commit 9e2be03), the binary parameter file of
@@ -330,7 +330,7 @@ fn found_parameters_have_full_period() {
         assert_eq!(p.matrix_a & 0x8000_0000, 0x8000_0000);
         // Any output bit satisfies the recurrence; its shortest LFSR has the
         // characteristic polynomial's degree only if that is irreducible.
-        let mut g = gpuwars_kernels::rng::Mt607::new(p, 12345);
+        let mut g = Mt607::new(p, 12345);
         let bits: Vec<bool> = (0..2 * P + 50).map(|_| g.next_u32() & 1 == 1).collect();
         let lfsr = berlekamp_massey(&bits);
         assert_eq!(lfsr.len() - 1, P, "{p:x?}: linear complexity");
@@ -344,7 +344,7 @@ fn found_parameters_have_full_period() {
 fn primitivity_check_rejects_other_matrix() {
     // Same id bits but a different, not-searched upper half.
     let p = Mt607Params::new(0x8000_0000, 0, 0);
-    let mut g = gpuwars_kernels::rng::Mt607::new(p, 1);
+    let mut g = Mt607::new(p, 1);
     let bits: Vec<bool> = (0..2 * P + 50).map(|_| g.next_u32() & 1 == 1).collect();
     let lfsr = berlekamp_massey(&bits);
     assert!(lfsr.len() - 1 != P || !is_primitive_607(&lfsr));

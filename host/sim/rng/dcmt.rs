@@ -9,9 +9,11 @@
 //!
 //! The search is host-side work: about 0.1 s per id (median; up to ~0.7 s,
 //! release build) and about 70 KiB of stack, far too much for a GPU thread.
+//! It runs once, offline, to make the committed table ([`super::TABLE`]); the
+//! device only needs the resulting [`Mt607Params`].
 
-use super::mt607::{self, Mt607Params};
-use super::mt19937::Mt19937;
+use gpuwars_kernels::rng::Mt19937;
+use gpuwars_kernels::rng::mt607::{self, Mt607Params};
 
 /// Mersenne exponent: the period is 2^607 - 1.
 const P: usize = 607;

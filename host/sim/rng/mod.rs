@@ -1,6 +1,9 @@
 //! The slots' generators: parameter sets from the committed dcmt table (slot `i` takes set
 //! `i mod` the table's length, on the device: `gpuwars_kernels::rng::streams::seed_streams`),
-//! seeds from MT19937.
+//! seeds from MT19937. The table itself comes from the Dynamic Creator's search ([`dcmt`]),
+//! run once, offline.
+
+pub mod dcmt;
 
 use gpuwars_kernels::rng::Mt19937;
 use gpuwars_kernels::rng::mt607::Mt607Params;
