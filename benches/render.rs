@@ -121,10 +121,12 @@ fn displayed(c: &mut Criterion) {
         if let Ok(mut image) = DeviceImage::new(facade, &device, width, height) {
             // The frame never leaves the GPU: drawn into a GL pixel buffer mapped for CUDA.
             let mut pbo_frame = |game: &mut Game| {
-                // SAFETY: the mapped buffer holds the frame; only these launches touch it.
-                let texture = image
-                    .set(|pixels| unsafe { game.render_into(width, height, &camera, 0.0, pixels) })
-                    .unwrap();
+                // SAFETY: the view goes only into the launches `render_into` queues; the
+                // mapped buffer holds the frame; only these launches touch it.
+                let texture = unsafe {
+                    image.set(|pixels| game.render_into(width, height, &camera, 0.0, pixels))
+                }
+                .unwrap();
                 let mut surface = target.surface(facade).unwrap();
                 blit.draw(&mut surface, texture, true, (0, 0), height, false)
                     .unwrap();

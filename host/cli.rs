@@ -11,13 +11,13 @@ use crate::BackendRequest;
 use crate::benchmark::{Outputs, scale};
 use crate::files::{RunFiles, shown, thousands};
 use crate::game::Options;
-use crate::game::demo::{Frames, Pilot, RunOptions};
+use crate::game::demo::{DemoPilot, Frames, RunOptions};
 use crate::game::replay::MAX_STEPS;
 use crate::game::{highscore, scene};
 use crate::graphics::Renderer;
 use crate::graphics::camera::{Camera, CameraMode, DEFAULT_ZOOM, MAX_ZOOM, MIN_ZOOM};
 use crate::pipeline::draw::MAX_SIDE;
-use crate::play::Pilot as PlayPilot;
+use crate::play::Pilot;
 
 /// GpuWars: a top-down shooter whose whole game loop runs as GPU kernels.
 #[derive(Parser)]
@@ -280,7 +280,7 @@ pub struct DemoArgs {
     pub record: Option<PathBuf>,
     /// Who flies the ship: the autopilot, or nobody (it never moves and never fires).
     #[arg(long, value_enum, default_value_t)]
-    pub pilot: Pilot,
+    pub pilot: DemoPilot,
     /// Draw the final state with the kernel renderer and write it to this PNG file (a bare
     /// `gpuwars` writes gpuwars-demo.png in the system's temporary folder).
     #[arg(long, env = "GPUWARS_SCREENSHOT")]
@@ -352,7 +352,7 @@ pub struct PlayArgs {
     pub seed: u32,
     /// Who flies the ship: you (keyboard, mouse or gamepad), the autopilot, or nobody.
     #[arg(long, value_enum, default_value_t)]
-    pub pilot: PlayPilot,
+    pub pilot: Pilot,
     /// Start with the sound off (M toggles it).
     #[arg(long)]
     pub mute: bool,

@@ -5,15 +5,38 @@
 //! [`CountingSort::new`]) so that a game step allocates nothing.
 
 use gpuwars_kernels::primitives::{histogram as hist, scan, sort};
-use gpuwars_kernels::{DevSlice, registry};
+use gpuwars_kernels::{DevSlice, Kernel, KernelArgs, registry};
 
+use crate::backend::{Binder, Launch};
 use crate::{Buffer, Device, Error, Op};
 
-/// Threads per block of every primitive's launches.
+/// Threads per block of every primitive's launches (and of the step's).
 pub const BLOCK: u32 = 256;
 
 fn grid(threads: u32) -> u32 {
     threads.div_ceil(BLOCK)
+}
+
+/// A launch of `kernel` on at least `threads` threads, in blocks of [`BLOCK`]: see
+/// [`Op::launch`].
+///
+/// # Safety
+/// As for [`Op::launch`].
+pub(crate) unsafe fn threads<A: KernelArgs>(
+    kernel: Kernel<A>,
+    threads: u32,
+    args: A,
+    binder: Binder,
+    bytes: u64,
+) -> Op {
+    let launch = Launch {
+        kernel,
+        grid: grid(threads),
+        block: BLOCK,
+        args,
+    };
+    // SAFETY: forwarded.
+    unsafe { Op::launch(launch, binder, bytes) }
 }
 
 /// `n` as a kernel size, after checking it fits the buffers and the scratch capacity (if any).
@@ -91,9 +114,7 @@ impl PrefixSum {
             Some(self.capacity),
             &[("input", input.len()), ("output", output.len())],
         )?;
-        // SAFETY: the views are of live buffers of `device`, `n` within each (checked), and
-        // the ops run before this borrow of them ends.
-        let ops = unsafe { self.ops(input.view_prefix(n), output.view_prefix(n)) }?;
+        let ops = self.ops(input, output, n)?;
         device.run(&device.plan(ops, false)?)
     }
 
@@ -110,80 +131,66 @@ impl PrefixSum {
             Some(self.capacity),
             &[("data", data.len())],
         )?;
-        let view = data.view_prefix(n);
-        // SAFETY: as in `run`; `scan_tiles` supports input == output.
-        let ops = unsafe { self.ops(view, view) }?;
+        // `scan_tiles` supports input == output.
+        let ops = self.ops(data, data, n)?;
         device.run(&device.plan(ops, false)?)
     }
 
-    /// The launches that write the exclusive prefix sums of `input` to `output` (which may
-    /// be `input` itself), for a plan.
-    ///
-    /// # Safety
-    /// As for [`Op::launch`]: `input` and `output` view buffers of the device that will run
-    /// the ops, of the same length, and outlive them; so does this scratch.
-    pub unsafe fn ops(
-        &self,
-        input: DevSlice<u32>,
-        output: DevSlice<u32>,
-    ) -> Result<Vec<Op>, Error> {
-        if input.len() != output.len() || input.len() as usize > self.capacity {
+    /// The launches that write the exclusive prefix sums of the first `n` elements of
+    /// `input` to `output` (which may be `input` itself), for a plan; they hold both
+    /// buffers and this scratch.
+    pub fn ops(&self, input: &Buffer<u32>, output: &Buffer<u32>, n: u32) -> Result<Vec<Op>, Error> {
+        if n as usize > input.len().min(output.len()) || n as usize > self.capacity {
             return Err(Error::Invalid(format!(
-                "a prefix sum of {} elements into {} (capacity {})",
+                "a prefix sum of {n} elements from {} into {} (capacity {})",
                 input.len(),
                 output.len(),
                 self.capacity
             )));
         }
         let mut ops = Vec::new();
-        // SAFETY: forwarded from the caller.
-        unsafe { self.push_ops(input, output, 0, &mut ops) };
+        self.push_ops(input, output, n, 0, &mut ops);
         Ok(ops)
     }
 
-    /// # Safety
-    /// As for [`PrefixSum::ops`]; `level` indexes the scratch that matches their length.
-    unsafe fn push_ops(
+    /// The launches of [`PrefixSum::ops`] at scratch level `level`, which holds the tile sums
+    /// of `n` elements.
+    fn push_ops(
         &self,
-        input: DevSlice<u32>,
-        output: DevSlice<u32>,
+        input: &Buffer<u32>,
+        output: &Buffer<u32>,
+        n: u32,
         level: usize,
         ops: &mut Vec<Op>,
     ) {
-        let n = input.len();
         let tiles = scan::tiles(n);
         // Few tiles: each adds up the sums before its own (two launches); else recurse.
         let flat = n > scan::TILE && tiles <= scan::FLAT_TILES;
+        // SAFETY (both binders): their views go into the op made with each.
+        let mut b = unsafe { Binder::new() };
         let tile_offsets = if n <= scan::TILE {
             DevSlice::EMPTY
         } else {
-            let sums = self.levels[level].view_prefix(tiles);
+            let sums = &self.levels[level];
+            let mut reduce = unsafe { Binder::new() };
             let args = scan::ReduceArgs {
-                input,
-                tile_sums: sums,
+                input: reduce.view_prefix(input, n),
+                tile_sums: reduce.view_prefix(sums, tiles),
                 n,
                 reserved: 0,
             };
             let bytes = 4 * u64::from(n + tiles);
-            // SAFETY: forwarded; the scratch level holds `tiles` elements.
-            unsafe {
-                ops.push(Op::launch(
-                    registry::SCAN_REDUCE,
-                    grid(tiles),
-                    BLOCK,
-                    args,
-                    bytes,
-                ));
-                if !flat {
-                    self.push_ops(sums, sums, level + 1, ops);
-                }
+            // SAFETY: `n` elements in each view (checked by `ops`), the level holds `tiles`.
+            ops.push(unsafe { threads(registry::SCAN_REDUCE, tiles, args, reduce, bytes) });
+            if !flat {
+                self.push_ops(sums, sums, tiles, level + 1, ops);
             }
-            sums
+            b.view_prefix(sums, tiles)
         };
         let args = scan::ScanArgs {
-            input,
+            input: b.view_prefix(input, n),
             tile_offsets,
-            output,
+            output: b.view_prefix(output, n),
             n,
             reserved: 0,
         };
@@ -193,8 +200,8 @@ impl PrefixSum {
         } else {
             registry::SCAN_TILES
         };
-        // SAFETY: forwarded.
-        ops.push(unsafe { Op::launch(kernel, grid(tiles), BLOCK, args, bytes) });
+        // SAFETY: as above; the scan supports `input == output`.
+        ops.push(unsafe { threads(kernel, tiles, args, b, bytes) });
     }
 }
 
@@ -208,14 +215,16 @@ pub fn histogram(
 ) -> Result<(), Error> {
     let n = checked_n("a histogram", n, None, &[("keys", keys.len())])?;
     device.zero(counts)?;
+    // SAFETY: the views go into this op only.
+    let mut b = unsafe { Binder::new() };
     let args = hist::HistogramArgs {
-        keys: keys.view_prefix(n),
-        counts: counts.view(),
+        keys: b.view_prefix(keys, n),
+        counts: b.view(counts),
         n,
         reserved: 0,
     };
-    // SAFETY: live buffers of `device`, `n` keys in view.
-    unsafe { device.launch(registry::HISTOGRAM, grid(n), BLOCK, &args) }
+    // SAFETY: `n` keys in view; the keys and the counts are two buffers.
+    device.launch(unsafe { threads(registry::HISTOGRAM, n, args, b, 0) })
 }
 
 /// Deterministic counting sort of `(key, index)` pairs: sorts keys below a bound and returns,
@@ -273,46 +282,46 @@ impl CountingSort {
             ],
         )?;
         let tiles = sort::tiles(n);
-        let matrix = self.counts.view_prefix(sort::RADIX * tiles);
+        let matrix = sort::RADIX * tiles;
         let passes = sort::passes(key_bound);
-        let mut keys_in = keys.view_prefix(n);
-        let mut indices_in = DevSlice::EMPTY;
+        let (mut keys_in, mut indices_in) = (keys, None);
         for pass in 0..passes {
             // Alternate so that the last pass lands in the caller's buffers.
-            let (k_out, i_out) = if (passes - 1 - pass).is_multiple_of(2) {
-                (keys_out.view_prefix(n), indices_out.view_prefix(n))
-            } else {
-                (
-                    self.keys_tmp.view_prefix(n),
-                    self.indices_tmp.view_prefix(n),
-                )
-            };
+            let (k_out, i_out): (&Buffer<u32>, &Buffer<u32>) =
+                if (passes - 1 - pass).is_multiple_of(2) {
+                    (keys_out, indices_out)
+                } else {
+                    (&self.keys_tmp, &self.indices_tmp)
+                };
             let shift = pass * sort::DIGIT_BITS;
+            // SAFETY (both binders): their views go into the op made with each.
+            let mut b = unsafe { Binder::new() };
             let count = sort::CountArgs {
-                keys: keys_in,
-                counts: matrix,
+                keys: b.view_prefix(keys_in, n),
+                counts: b.view_prefix(&self.counts, matrix),
                 n,
                 shift,
             };
+            // SAFETY: `n` keys (checked), the counts sized for the tiles; two buffers.
+            let count = unsafe { threads(registry::SORT_COUNT, tiles, count, b, 0) };
+            let mut b = unsafe { Binder::new() };
             let scatter = sort::ScatterArgs {
-                keys_in,
-                indices_in,
-                offsets: matrix,
-                keys_out: k_out,
-                indices_out: i_out,
+                keys_in: b.view_prefix(keys_in, n),
+                indices_in: indices_in.map_or(DevSlice::EMPTY, |i| b.view_prefix(i, n)),
+                offsets: b.view_prefix(&self.counts, matrix),
+                keys_out: b.view_prefix(k_out, n),
+                indices_out: b.view_prefix(i_out, n),
                 n,
                 shift,
             };
-            // SAFETY: every view is of a live buffer of `device` sized for `n` keys (checked
-            // above or allocated for the capacity); input and output of a pass are distinct;
-            // the ops run before this call returns.
-            unsafe {
-                device.launch(registry::SORT_COUNT, grid(tiles), BLOCK, &count)?;
-                device.run(&device.plan(self.scan.ops(matrix, matrix)?, false)?)?;
-                device.launch(registry::SORT_SCATTER, grid(tiles), BLOCK, &scatter)?;
-            }
+            // SAFETY: as above; a pass's inputs and outputs are distinct buffers.
+            let scatter = unsafe { threads(registry::SORT_SCATTER, tiles, scatter, b, 0) };
+            let mut ops = vec![count];
+            ops.extend(self.scan.ops(&self.counts, &self.counts, matrix)?);
+            ops.push(scatter);
+            device.run(&device.plan(ops, false)?)?;
             keys_in = k_out;
-            indices_in = i_out;
+            indices_in = Some(i_out);
         }
         Ok(())
     }

@@ -262,8 +262,8 @@ fn demo_profiles_every_stage_and_runs_the_same_game() {
         .collect();
     // `paper` has every stage of the pipeline, in the pipeline's order, but `substeps`: it
     // takes one substep a step.
-    let every: Vec<&str> = gpuwars::pipeline::STAGES
-        .into_iter()
+    let every: Vec<&str> = (gpuwars::pipeline::Stage::ALL.iter())
+        .map(|s| s.name())
         .filter(|&s| s != "substeps")
         .collect();
     assert_eq!(stages, every);

@@ -38,22 +38,25 @@ fn check_step(
     let n = burst.per_kill as usize;
     let dt = scene.world.dt;
     let mut bursts = 0;
-    for p in 0..p1.life.len() {
+    for p in 0..p1.particles.life.len() {
         let owner = burst.first_slot as usize + p / n;
-        let kind = b1.kind[owner] as usize;
+        let kind = b1.bodies.kind[owner] as usize;
         let enemy = scene.game.behaviours[kind].is_some();
         let usable = (owner as u32) < layout.ranges[kind].end();
-        let died = enemy && usable && b0.alive[owner] != 0 && b1.alive[owner] == 0;
+        let died = enemy && usable && b0.bodies.alive[owner] != 0 && b1.bodies.alive[owner] == 0;
         if died {
             if p % n == 0 {
                 bursts += 1;
             }
             assert_eq!(
-                p1.pos[p], b1.pos[owner],
+                p1.particles.pos[p], b1.bodies.pos[owner],
                 "particle {p} is born where {owner} died"
             );
-            assert_eq!(p1.kind[p], b1.kind[owner], "particle {p} takes its kind");
-            let life = p1.life[p];
+            assert_eq!(
+                p1.particles.kind[p], b1.bodies.kind[owner],
+                "particle {p} takes its kind"
+            );
+            let life = p1.particles.life[p];
             assert!(
                 (burst.lifetime - burst.lifetime / 3..=burst.lifetime).contains(&life),
                 "particle {p}: life {life} of {}",
@@ -61,7 +64,7 @@ fn check_step(
             );
             // Away from the enemy at a third of the burst's speed to all of it, in its
             // share of the circle.
-            let away = p1.vel[p] - b1.vel[owner] * 0.25;
+            let away = p1.particles.vel[p] - b1.bodies.vel[owner] * 0.25;
             let speed = away.length();
             let slack = 1e-3 * burst.speed;
             assert!(
@@ -75,13 +78,28 @@ fn check_step(
                 turn >= j * share - 1e-3 && turn <= (j + 1.0) * share + 1e-3,
                 "particle {p}: heading {turn} outside share {j}"
             );
-        } else if p0.life[p] > 0 {
-            assert_eq!(p1.pos[p], p0.pos[p] + p0.vel[p] * dt, "particle {p} moves");
-            assert_eq!(p1.vel[p], p0.vel[p] * burst.keep, "particle {p} slows");
-            assert_eq!(p1.life[p], p0.life[p] - 1, "particle {p} ages");
+        } else if p0.particles.life[p] > 0 {
+            assert_eq!(
+                p1.particles.pos[p],
+                p0.particles.pos[p] + p0.particles.vel[p] * dt,
+                "particle {p} moves"
+            );
+            assert_eq!(
+                p1.particles.vel[p],
+                p0.particles.vel[p] * burst.keep,
+                "particle {p} slows"
+            );
+            assert_eq!(
+                p1.particles.life[p],
+                p0.particles.life[p] - 1,
+                "particle {p} ages"
+            );
         } else {
-            assert_eq!(p1.life[p], 0, "particle {p} stays gone");
-            assert_eq!((p1.pos[p], p1.vel[p]), (p0.pos[p], p0.vel[p]));
+            assert_eq!(p1.particles.life[p], 0, "particle {p} stays gone");
+            assert_eq!(
+                (p1.particles.pos[p], p1.particles.vel[p]),
+                (p0.particles.pos[p], p0.particles.vel[p])
+            );
         }
     }
     bursts
@@ -195,7 +213,7 @@ fn a_scene_without_explosions_launches_nothing_for_them() {
     let particles = game.pipeline().particles().unwrap().unwrap();
     let burst = particles.burst;
     assert_eq!(
-        particles.life.len() as u32,
+        particles.particles.life.len() as u32,
         (burst.end_slot - burst.first_slot) * burst.per_kill
     );
 }

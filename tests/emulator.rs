@@ -3,30 +3,22 @@
 
 mod common;
 
-use common::{random_below, rng_for};
-use gpuwars::kernels::primitives::histogram::HistogramArgs;
-use gpuwars::kernels::registry;
+use common::{histogram_op as histogram, random_below, rng_for};
 use gpuwars::primitives::CountingSort;
 use gpuwars::{Device, Error};
 
 fn launches_outside_the_block_limits_are_refused(device: &Device) {
     let keys = device.upload(&[0u32]).unwrap();
     let counts = device.alloc_zeroed::<u32>(1).unwrap();
-    let args = HistogramArgs {
-        keys: keys.view(),
-        counts: counts.view(),
-        n: 1,
-        reserved: 0,
-    };
     for block in [0, 1025] {
-        // SAFETY: live buffers; the launch is refused before anything runs.
-        let err = unsafe { device.launch(registry::HISTOGRAM, 1, block, &args) }.unwrap_err();
+        let err = device
+            .launch(histogram(&keys, &counts, 1, 1, block))
+            .unwrap_err();
         assert!(matches!(err, Error::Invalid(_)), "{err}");
         assert!(err.to_string().contains("1..=1024"), "{err}");
     }
     // A grid of zero blocks runs nothing.
-    // SAFETY: as above.
-    unsafe { device.launch(registry::HISTOGRAM, 0, 32, &args) }.unwrap();
+    device.launch(histogram(&keys, &counts, 1, 0, 32)).unwrap();
     assert_eq!(device.download(&counts).unwrap(), [0]);
 }
 
@@ -36,21 +28,44 @@ fn every_thread_of_the_grid_runs_once(device: &Device) {
     let keys = device.upload(&(0..n).collect::<Vec<u32>>()).unwrap();
     let mut counts = device.alloc_zeroed::<u32>(n as usize).unwrap();
     device.zero(&mut counts).unwrap();
-    let args = HistogramArgs {
-        keys: keys.view(),
-        counts: counts.view(),
-        n,
-        reserved: 0,
-    };
-    // SAFETY: live buffers of n elements.
-    unsafe { device.launch(registry::HISTOGRAM, 9, 128, &args) }.unwrap();
+    device.launch(histogram(&keys, &counts, n, 9, 128)).unwrap();
     device.synchronize().unwrap();
     assert_eq!(device.download(&counts).unwrap(), vec![1; n as usize]);
+}
+
+/// A plan holds the buffers its ops view: dropping every handle the code that made it had
+/// frees nothing, so the plan still reads its keys, even after new buffers were allocated
+/// (which, had the keys been freed, would likely take their memory on the CPU).
+fn a_plan_keeps_its_buffers_alive(device: &Device) {
+    let n = 4096;
+    let keys: Vec<u32> = (0..n).map(|i| i % 8).collect();
+    let counts = device.alloc_zeroed::<u32>(8).unwrap();
+    let plan = {
+        let keys = device.upload(&keys).unwrap();
+        let plan = device
+            .plan(vec![histogram(&keys, &counts, n, n / 128, 128)], true)
+            .unwrap();
+        drop(keys);
+        plan
+    };
+    let reused: Vec<_> = (0..8)
+        .map(|_| device.upload(&vec![9u32; n as usize]).unwrap())
+        .collect();
+    device.run(&plan).unwrap();
+    device.synchronize().unwrap();
+    assert_eq!(device.download(&counts).unwrap(), [n / 8; 8]);
+    // The counts' last handle goes too: the plan still runs on memory it holds (which
+    // memcheck checks on the GPU).
+    drop(counts);
+    drop(reused);
+    device.run(&plan).unwrap();
+    device.synchronize().unwrap();
 }
 
 on_both_backends!(
     launches_outside_the_block_limits_are_refused,
     every_thread_of_the_grid_runs_once,
+    a_plan_keeps_its_buffers_alive,
 );
 
 /// An out-of-bounds index is an error, not a crash of the host. (CPU only here: on the GPU the
@@ -62,14 +77,9 @@ fn an_out_of_bounds_kernel_is_an_error() {
     let keys = device.upload(&[0u32; 4]).unwrap();
     let counts = device.alloc_zeroed::<u32>(1).unwrap();
     // `n` claims more keys than the view holds.
-    let args = HistogramArgs {
-        keys: keys.view(),
-        counts: counts.view(),
-        n: 5,
-        reserved: 0,
-    };
-    // SAFETY: the views are right; only `n` is wrong, which the bounds checks catch.
-    let err = unsafe { device.launch(registry::HISTOGRAM, 1, 8, &args) }.unwrap_err();
+    let err = device
+        .launch(histogram(&keys, &counts, 5, 1, 8))
+        .unwrap_err();
     match err {
         Error::KernelFault { kernel, message } => {
             assert_eq!(kernel, "histogram");

@@ -34,10 +34,14 @@ fn kamikaze_that_sees_the_ship_hits_it(device: &Device) {
         |status, snap| {
             step += 1;
             if let Some(&k) = live_of(snap, FIRST_ENEMY).first()
-                && snap.state[k] == State::Attacking as u32
+                && snap.bodies.state[k] == State::Attacking as u32
             {
                 attacked_at.get_or_insert(step);
-                distances.push(torus_distance(snap.pos[SHIP], snap.pos[k], 400.0));
+                distances.push(torus_distance(
+                    snap.bodies.pos[SHIP],
+                    snap.bodies.pos[k],
+                    400.0,
+                ));
             }
             if status.events.ship_hits > 0 {
                 hit_at.get_or_insert(step);
@@ -128,20 +132,20 @@ fn share_of_shots_that_hit(device: &Device, avoid: &'static str) -> f64 {
         1200,
         |snap| {
             let nearest = live_of(snap, FIRST_ENEMY).into_iter().min_by(|&a, &b| {
-                let d = |k: usize| snap.pos[k].distance_squared(snap.pos[SHIP]);
+                let d = |k: usize| snap.bodies.pos[k].distance_squared(snap.bodies.pos[SHIP]);
                 d(a).total_cmp(&d(b))
             });
-            nearest.map(|k| aim_at(snap, SHIP, snap.pos[k], true))
+            nearest.map(|k| aim_at(snap, SHIP, snap.bodies.pos[k], true))
         },
         |status, snap| {
             fired += u64::from(status.events.shots_fired);
             // A shot touching anything this step is a hit (it dies of it).
             let struck = (0..snap.slots())
-                .filter(|&s| snap.kind[s] == 1 && snap.contacts[s] > 0)
+                .filter(|&s| snap.bodies.kind[s] == 1 && snap.contacts[s] > 0)
                 .count() as u64;
             // The status counts the same hits, and says where the ship is.
             assert_eq!(u64::from(status.events.shot_hits), struck);
-            assert_eq!(status.ship, snap.pos[SHIP]);
+            assert_eq!(status.ship, snap.bodies.pos[SHIP]);
             hits += struck;
         },
     );
@@ -179,19 +183,19 @@ fn tricky_enemy_low_on_energy_escapes_and_recovers(device: &Device) {
         1200,
         |snap| {
             let target = live_of(snap, FIRST_ENEMY).first().copied();
-            let state = target.map(|k| snap.state[k]);
+            let state = target.map(|k| snap.bodies.state[k]);
             escaped |= state == Some(State::Escaping as u32);
             // Shoot it one shot at a time until it runs, then let it go.
             let in_flight = !live_of(snap, 1).is_empty();
             Some(match target {
-                Some(k) => aim_at(snap, SHIP, snap.pos[k], !escaped && !in_flight),
+                Some(k) => aim_at(snap, SHIP, snap.bodies.pos[k], !escaped && !in_flight),
                 None => Input::default(),
             })
         },
         |_, snap| {
             if let Some(&k) = live_of(snap, FIRST_ENEMY).first() {
-                let d = torus_distance(snap.pos[SHIP], snap.pos[k], 600.0);
-                log.push((snap.state[k], snap.energy[k], d));
+                let d = torus_distance(snap.bodies.pos[SHIP], snap.bodies.pos[k], 600.0);
+                log.push((snap.bodies.state[k], snap.bodies.energy[k], d));
             }
         },
     );

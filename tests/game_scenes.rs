@@ -6,7 +6,7 @@ mod common;
 use gpuwars::Device;
 use gpuwars::backend::Schedule;
 use gpuwars::game::Options;
-use gpuwars::game::demo::{Pilot, RunOptions};
+use gpuwars::game::demo::{DemoPilot, RunOptions};
 use gpuwars::game::scene::built_in;
 use gpuwars::game::{Game, Scene, demo};
 use gpuwars::kernels::game::control::{Input, Status};
@@ -243,7 +243,7 @@ fn a_ship_with_no_pilot_loses_the_paper_scene_and_the_autopilot_does_better() {
     let five_minutes = 5 * 60 * 60;
     for seed in [1, 2] {
         let idle = RunOptions {
-            pilot: Pilot::None,
+            pilot: DemoPilot::None,
             ..RunOptions::default()
         };
         let (lost, _) =

@@ -10,7 +10,7 @@ mod common;
 
 use std::process::Command;
 
-use gpuwars::kernels::primitives::histogram::HistogramArgs;
+use gpuwars::backend::{Binder, Launch};
 use gpuwars::kernels::primitives::scan::ReduceArgs;
 use gpuwars::kernels::registry;
 use gpuwars::{BackendKind, BackendRequest, Buffer, Device, Error, Op};
@@ -22,18 +22,14 @@ const BINS: usize = 8;
 /// The child process's variable naming the way it faults: `launch`, `ring` or `graph`.
 const HOW: &str = "GPUWARS_TEST_FAULT";
 
-fn histogram(keys: &Buffer<u32>, counts: &Buffer<u32>, n: u32) -> HistogramArgs {
-    HistogramArgs {
-        keys: keys.view(),
-        counts: counts.view(),
-        n,
-        reserved: 0,
-    }
+/// A histogram of the first `n` keys on one block of 32 threads.
+fn histogram(keys: &Buffer<u32>, counts: &Buffer<u32>, n: u32) -> Op {
+    common::histogram_op(keys, counts, n, 1, 32)
 }
 
 /// A histogram whose `n` claims one key more than its view holds: thread 16 reads past the
 /// end.
-fn out_of_bounds(keys: &Buffer<u32>, counts: &Buffer<u32>) -> HistogramArgs {
+fn out_of_bounds(keys: &Buffer<u32>, counts: &Buffer<u32>) -> Op {
     histogram(keys, counts, KEYS.len() as u32 + 1)
 }
 
@@ -42,8 +38,8 @@ fn out_of_bounds(keys: &Buffer<u32>, counts: &Buffer<u32>) -> HistogramArgs {
 fn fault_by_launch(device: &Device) -> Error {
     let keys = device.upload(&KEYS).unwrap();
     let counts = device.alloc_zeroed::<u32>(BINS).unwrap();
-    // SAFETY: the views are right; only `n` is wrong, which the bounds checks catch.
-    unsafe { device.launch(registry::HISTOGRAM, 1, 32, &out_of_bounds(&keys, &counts)) }
+    device
+        .launch(out_of_bounds(&keys, &counts))
         .and_then(|()| device.synchronize())
         .unwrap_err()
 }
@@ -56,8 +52,8 @@ fn fault_by_ring(device: &Device) -> Error {
     let mut ring = device.ring::<u32, u32>(2).unwrap();
     ring.reserve().unwrap();
     ring.send(device, KEYS[0], &keys).unwrap();
-    // SAFETY: as in `fault_by_launch`.
-    unsafe { device.launch(registry::HISTOGRAM, 1, 32, &out_of_bounds(&keys, &counts)) }
+    device
+        .launch(out_of_bounds(&keys, &counts))
         .and_then(|()| ring.receive(device, &counts))
         .and_then(|()| ring.oldest().map(drop))
         .unwrap_err()
@@ -69,20 +65,29 @@ fn fault_by_plan(device: &Device) -> Error {
     let keys = device.upload(&KEYS).unwrap();
     let counts = device.alloc_zeroed::<u32>(BINS).unwrap();
     let sums = device.alloc_zeroed::<u32>(1).unwrap();
-    let reduce = ReduceArgs {
-        input: keys.view(),
-        tile_sums: sums.view(),
+    // SAFETY: the views go into this op only.
+    let mut b = unsafe { Binder::new() };
+    let args = ReduceArgs {
+        input: b.view(&keys),
+        tile_sums: b.view(&sums),
         n: KEYS.len() as u32,
         reserved: 0,
     };
-    // SAFETY: live buffers of the sizes the kernels ask for, kept until the plan is dropped,
-    // but for the histogram's `n`, which the bounds checks catch.
-    let ops = unsafe {
-        vec![
-            Op::launch(registry::SCAN_REDUCE, 1, 32, reduce, 0),
-            Op::launch(registry::HISTOGRAM, 1, 32, out_of_bounds(&keys, &counts), 0),
-        ]
+    let (kernel, grid, block) = (registry::SCAN_REDUCE, 1, 32);
+    // SAFETY: two buffers of this binder, of the sizes the kernel asks for.
+    let reduce = unsafe {
+        Op::launch(
+            Launch {
+                kernel,
+                grid,
+                block,
+                args,
+            },
+            b,
+            0,
+        )
     };
+    let ops = vec![reduce, out_of_bounds(&keys, &counts)];
     let plan = device.plan(ops, true).unwrap();
     assert_eq!(plan.is_graph(), device.kind() == BackendKind::Cuda);
     device
@@ -128,9 +133,9 @@ fn check_fault(err: &Error, kernel: &str, backend: BackendKind) {
 fn check_histogram(device: &Device) {
     let keys = device.upload(&KEYS).unwrap();
     let counts = device.alloc_zeroed::<u32>(BINS).unwrap();
-    let args = histogram(&keys, &counts, KEYS.len() as u32);
-    // SAFETY: live buffers; `n` is the number of keys.
-    unsafe { device.launch(registry::HISTOGRAM, 1, 32, &args) }.unwrap();
+    device
+        .launch(histogram(&keys, &counts, KEYS.len() as u32))
+        .unwrap();
     device.synchronize().unwrap();
     assert_eq!(device.download(&counts).unwrap(), [2; BINS]);
 }

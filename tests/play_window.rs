@@ -151,12 +151,12 @@ xdotool keyup w keyup Up key Escape";
     let mut at = Vec::new();
     for (i, input) in replay.inputs.iter().enumerate() {
         if marks.contains(&i) {
-            at.push(game.snapshot().unwrap().pos[ship]);
+            at.push(game.snapshot().unwrap().bodies.pos[ship]);
         }
         game.step(Some(*input)).unwrap();
     }
     if at.len() < 3 {
-        at.push(game.snapshot().unwrap().pos[ship]);
+        at.push(game.snapshot().unwrap().bodies.pos[ship]);
     }
     assert!(at[1].x > at[0].x + 10.0, "D moved the ship right: {at:?}");
     assert!(at[2].y > at[1].y + 10.0, "W moved the ship up: {at:?}");

@@ -327,7 +327,7 @@ fn gl_draws_a_game_as_the_kernel_does(device: &Device) {
         );
         if camera.mode == CameraMode::Field {
             let state = game.snapshot().unwrap();
-            for kind in state.live().map(|slot| state.kind[slot] as usize) {
+            for kind in state.live().map(|slot| state.bodies.kind[slot] as usize) {
                 let look = &looks[kind];
                 let drawn = [look.colour, look.nose, look.hurt];
                 assert!(
@@ -382,10 +382,11 @@ fn kernel_frames_shown_from_a_gl_pixel_buffer_are_the_frames() {
     let (width, height) = (640, 360);
     let camera = Camera::default();
     let mut image = DeviceImage::new(gl.facade(), gpu, width, height).unwrap();
-    // SAFETY: the mapped buffer holds the frame's pixels; only these launches touch it.
-    let texture = image
-        .set(|pixels| unsafe { game.render_into(width, height, &camera, 0.0, pixels) })
-        .unwrap();
+    // SAFETY: the view goes only into the launches `render_into` queues; the mapped buffer
+    // holds the frame's pixels; only these launches touch it.
+    let texture =
+        unsafe { image.set(|pixels| game.render_into(width, height, &camera, 0.0, pixels)) }
+            .unwrap();
     let shown: RawImage2d<u8> = texture.read();
     let shown = Frame {
         width,
@@ -522,7 +523,7 @@ fn the_device_camera_is_the_hosts_bit_for_bit(device: &Device) {
         game.render(1280, 720, &camera, dt).unwrap();
         let lens = game.lens(&camera, 1280, 720, dt);
         let snapshot = game.snapshot().unwrap();
-        let pos = (snapshot.alive[ship] != 0).then(|| snapshot.pos[ship]);
+        let pos = (snapshot.bodies.alive[ship] != 0).then(|| snapshot.bodies.pos[ship]);
         let host = camera::view(&lens, pos, &mut state);
         let shown = game.pipeline().shown().unwrap();
         assert_eq!(
@@ -639,7 +640,7 @@ fn silhouettes_cover_the_pixels_of_their_shapes(device: &Device) {
                 } else {
                     silhouette
                 };
-                let dir = sim.snapshot().unwrap().dir[0].as_dvec2();
+                let dir = sim.snapshot().unwrap().bodies.dir[0].as_dvec2();
                 let (mut drawn, mut expected, mut edge) = (0, 0, 1);
                 for y in 0..240 {
                     for x in 0..240 {
@@ -835,7 +836,7 @@ fn the_radar_marks_the_ship_and_outlines_the_view(device: &Device) {
     assert_ne!(frame.pixel(left - 1, top + 5), radar::FRAME);
     // The ship's cross: its radar pixel is its position's share of 216.
     let snapshot = game.snapshot().unwrap();
-    let pos = snapshot.pos[game.pipeline().ship() as usize];
+    let pos = snapshot.bodies.pos[game.pipeline().ship() as usize];
     let sx = (pos.x / 4096.0 * 216.0).floor() as u32;
     let sy = 215 - (pos.y / 4096.0 * 216.0).floor() as u32;
     let (cx, cy) = (left + 1 + sx, top + 1 + sy);
@@ -957,9 +958,9 @@ fn particles_are_drawn_in_their_kinds_colour_faded_by_age(device: &Device) {
     let lifetime = particles.burst.lifetime;
     // 1.5 units at 4/3 pixels per unit.
     let radius = 2.0;
-    let centres: Vec<(usize, Vec2)> = (0..particles.life.len())
-        .filter(|&p| particles.life[p] > 0)
-        .map(|p| (p, view.to_image(particles.pos[p])))
+    let centres: Vec<(usize, Vec2)> = (0..particles.particles.life.len())
+        .filter(|&p| particles.particles.life[p] > 0)
+        .map(|p| (p, view.to_image(particles.particles.pos[p])))
         .collect();
     // (life, level, brightness) of each particle checked.
     let mut checked = Vec::new();
@@ -975,24 +976,28 @@ fn particles_are_drawn_in_their_kinds_colour_faded_by_age(device: &Device) {
             .all(|&(q, d)| q == p || (d - c).length() > 2.0 * radius + 2.0);
         let clear = bodies
             .live()
-            .all(|b| (bodies.pos[b] - particles.pos[p]).length() > 22.0);
+            .all(|b| (bodies.bodies.pos[b] - particles.particles.pos[p]).length() > 22.0);
         if !inside || !alone || !clear || shown.radar.contains(x, y) {
             continue;
         }
-        let level = expected_level(particles.life[p], lifetime);
-        let expected = fade(looks[particles.kind[p] as usize].colour, BACKGROUND, level);
+        let level = expected_level(particles.particles.life[p], lifetime);
+        let expected = fade(
+            looks[particles.particles.kind[p] as usize].colour,
+            BACKGROUND,
+            level,
+        );
         assert_eq!(
             frame.pixel(x, y),
             expected,
             "particle {p} (life {}) at {c}",
-            particles.life[p]
+            particles.particles.life[p]
         );
         // A disc: the pixels beside the one under its centre are within 2 pixels of it.
         assert_eq!(frame.pixel(x + 1, y), expected, "particle {p}: its disc");
         assert_eq!(frame.pixel(x, y + 1), expected, "particle {p}: its disc");
         let [r, g, b, _] = expected.to_le_bytes();
         checked.push((
-            particles.life[p],
+            particles.particles.life[p],
             level,
             u32::from(r) + u32::from(g) + u32::from(b),
         ));
@@ -1102,7 +1107,7 @@ fn a_scene_without_explosions_launches_no_particle_drawing() {
     let game = Game::new(common::cpu(), &scene, 1).unwrap();
     let pipeline = game.pipeline();
     assert_eq!(without, pipeline.layout().slots + 1);
-    let particles = pipeline.particles().unwrap().unwrap().life.len() as u32;
+    let particles = pipeline.particles().unwrap().unwrap().particles.life.len() as u32;
     assert_eq!(with, without + particles);
 }
 

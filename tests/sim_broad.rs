@@ -38,25 +38,26 @@ fn check_step(device: &Device, spec: &WorldSpec, positions: &[(usize, Vec2, Vec2
     assert_eq!(after.contacts, count, "contacts per slot");
     for s in before.live() {
         assert_eq!(
-            after.energy[s],
-            before.energy[s] - damage[s],
+            after.bodies.energy[s],
+            before.bodies.energy[s] - damage[s],
             "energy of slot {s}"
         );
-        let expected_vel = before.vel[s] + kick[s];
-        if after.alive[s] != 0 && spec.boundary == Boundary::Wrap {
+        let expected_vel = before.bodies.vel[s] + kick[s];
+        if after.bodies.alive[s] != 0 && spec.boundary == Boundary::Wrap {
             // Without forces, the step moves a body by its new velocity times dt plus its
             // push, around the torus.
             let expected_move = expected_vel * spec.dt + push[s];
             let space = sim.space();
-            let (expected_pos, _) = space.confine(before.pos[s] + expected_move, expected_vel);
-            let miss = space.offset(expected_pos, after.pos[s]);
+            let (expected_pos, _) =
+                space.confine(before.bodies.pos[s] + expected_move, expected_vel);
+            let miss = space.offset(expected_pos, after.bodies.pos[s]);
             assert!(
                 miss.length() <= 1e-4 * expected_move.length().max(1.0),
                 "slot {s} is at {} instead of {expected_pos}",
-                after.pos[s]
+                after.bodies.pos[s]
             );
             assert!(
-                close(after.vel[s], expected_vel, 1e-4),
+                close(after.bodies.vel[s], expected_vel, 1e-4),
                 "velocity of slot {s}"
             );
         }

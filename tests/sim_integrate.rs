@@ -53,8 +53,8 @@ fn euler_follows_the_closed_form_under_constant_force(device: &Device) {
         let v = v0.as_dvec2() + a * nf * dt;
         let x = x0.as_dvec2() + v0.as_dvec2() * nf * dt + a * dt * dt * nf * (nf + 1.0) / 2.0;
         let (got_x, got_v) = (
-            after.pos[slot as usize].as_dvec2(),
-            after.vel[slot as usize].as_dvec2(),
+            after.bodies.pos[slot as usize].as_dvec2(),
+            after.bodies.vel[slot as usize].as_dvec2(),
         );
         // Each step rounds each coordinate by a relative 2^-24 or so.
         let tolerance = |scale: DVec2| nf * 4.0 * f64::from(f32::EPSILON) * scale.length().max(1.0);
@@ -92,17 +92,17 @@ fn bodies_leaving_a_wrapping_world_come_back_on_the_other_side(device: &Device) 
     sim.step().unwrap();
     let after = sim.snapshot().unwrap();
     assert!(
-        (after.pos[0] - Vec2::new(0.5, 25.0)).length() < 1e-4,
+        (after.bodies.pos[0] - Vec2::new(0.5, 25.0)).length() < 1e-4,
         "{}",
-        after.pos[0]
+        after.bodies.pos[0]
     );
     assert!(
-        (after.pos[1] - Vec2::new(50.0, 49.7)).length() < 1e-4,
+        (after.bodies.pos[1] - Vec2::new(50.0, 49.7)).length() < 1e-4,
         "{}",
-        after.pos[1]
+        after.bodies.pos[1]
     );
-    assert_eq!(after.vel[0], Vec2::new(10.0, 0.0));
-    assert_eq!(after.dir[1], Vec2::NEG_Y);
+    assert_eq!(after.bodies.vel[0], Vec2::new(10.0, 0.0));
+    assert_eq!(after.bodies.dir[1], Vec2::NEG_Y);
 }
 
 fn bodies_reaching_a_clamped_edge_stop_there(device: &Device) {
@@ -117,8 +117,8 @@ fn bodies_reaching_a_clamped_edge_stop_there(device: &Device) {
         .unwrap();
     sim.step().unwrap();
     let after = sim.snapshot().unwrap();
-    assert_eq!(after.pos[0], Vec2::new(100.0, 0.0));
-    assert_eq!(after.vel[0], Vec2::ZERO);
+    assert_eq!(after.bodies.pos[0], Vec2::new(100.0, 0.0));
+    assert_eq!(after.bodies.vel[0], Vec2::ZERO);
 }
 
 fn a_speed_limit_caps_the_velocity(device: &Device) {
@@ -134,9 +134,9 @@ fn a_speed_limit_caps_the_velocity(device: &Device) {
     sim.step().unwrap();
     let after = sim.snapshot().unwrap();
     assert!(
-        (after.vel[0] - Vec2::new(3.0, 4.0)).length() < 1e-5,
+        (after.bodies.vel[0] - Vec2::new(3.0, 4.0)).length() < 1e-5,
         "{}",
-        after.vel[0]
+        after.bodies.vel[0]
     );
 }
 
@@ -170,7 +170,7 @@ fn explicit_euler_and_verlet_follow_their_closed_forms(device: &Device) {
         };
         let v = v0.as_dvec2() + g * nf * dt;
         let tolerance = nf * 4.0 * f64::from(f32::EPSILON) * x.length();
-        let (got_x, got_v) = (got.pos[0].as_dvec2(), got.vel[0].as_dvec2());
+        let (got_x, got_v) = (got.bodies.pos[0].as_dvec2(), got.bodies.vel[0].as_dvec2());
         assert!(
             (got_x - x).length() <= tolerance,
             "{integrator}: x {got_x} vs {x}"
@@ -209,8 +209,8 @@ fn substeps_are_steps_of_a_smaller_dt(device: &Device) {
     }
     let (a, b) = (a.snapshot().unwrap(), b.snapshot().unwrap());
     assert!(a.contacts.iter().any(|&c| c > 0), "the world must collide");
-    assert_eq!(a.pos, b.pos);
-    assert_eq!(a.vel, b.vel);
+    assert_eq!(a.bodies.pos, b.bodies.pos);
+    assert_eq!(a.bodies.vel, b.bodies.vel);
 }
 
 /// Twenty bodies on one spot around a centre body: summed, the centre body is pushed by
@@ -233,7 +233,7 @@ fn relaxation_averages_and_scales_the_push(device: &Device) {
         sim.step().unwrap();
         let s = sim.snapshot().unwrap();
         assert_eq!(s.contacts[0], 20);
-        (s.pos[0] - centre).x
+        (s.bodies.pos[0] - centre).x
     };
     // Each contact pushes slot 0 left by half the depth of 8 (equal masses).
     assert_eq!(push_of(false, 1.0), -80.0);

@@ -64,9 +64,9 @@ fn device_streams_match_the_host_generator(device: &Device) {
         let u = Vec2::new(mt.next_f32(), mt.next_f32());
         let (nx, ny) = mt.next_normal_pair();
         let (pos, vel) = sim.space().confine(u * spec.size, Vec2::new(nx, ny) * 7.0);
-        assert_eq!(after.pos[slot], pos, "slot {slot}");
-        assert_eq!(after.vel[slot], vel, "slot {slot}");
-        assert_eq!(after.rng_index[slot], 4);
+        assert_eq!(after.bodies.pos[slot], pos, "slot {slot}");
+        assert_eq!(after.bodies.vel[slot], vel, "slot {slot}");
+        assert_eq!(after.bodies.rng.index[slot], 4);
         for k in 0..19 {
             assert_eq!(after.rng_word(slot, k), mt.state[k], "slot {slot} word {k}");
         }

@@ -156,21 +156,21 @@ fn free_lists_follow_births_and_deaths(device: &Device) {
     ])
     .unwrap();
     let s = sim.snapshot().unwrap();
-    assert_eq!(s.free_counts, [1, 68, 30]);
+    assert_eq!(s.free.count, [1, 68, 30]);
     let enemies_free: Vec<u32> = (32..102).filter(|&i| i != 40 && i != 41).collect();
-    assert_eq!(s.free_list[32..100], enemies_free[..]);
+    assert_eq!(s.free.list[32..100], enemies_free[..]);
     sim.step().unwrap();
     let s = sim.snapshot().unwrap();
-    assert_eq!(s.alive[128], 0, "the shot died on the enemy");
-    assert_eq!(s.energy[40], 100 - spec.kinds[2].damage);
-    assert_eq!(s.free_counts, [1, 68, 31]);
+    assert_eq!(s.bodies.alive[128], 0, "the shot died on the enemy");
+    assert_eq!(s.bodies.energy[40], 100 - spec.kinds[2].damage);
+    assert_eq!(s.free.count, [1, 68, 31]);
     let shots_free: Vec<u32> = (128..161).filter(|&i| i != 130 && i != 160).collect();
-    assert_eq!(s.free_list[128..159], shots_free[..]);
+    assert_eq!(s.free.list[128..159], shots_free[..]);
     // New shots take the lowest free slots: 128 again, then 129, 131.
     sim.scatter(2, 3, 1.0).unwrap();
     let s = sim.snapshot().unwrap();
-    assert!([128, 129, 131].iter().all(|&i| s.alive[i] == 1));
-    assert_eq!(s.free_counts, [1, 68, 28]);
+    assert!([128, 129, 131].iter().all(|&i| s.bodies.alive[i] == 1));
+    assert_eq!(s.free.count, [1, 68, 28]);
 }
 
 fn placing_into_padding_or_missing_slots_is_an_error(device: &Device) {

@@ -44,9 +44,13 @@ use proptest::prelude::*;
 fn assert_invariants(spec: &WorldSpec, s: &Snapshot) {
     let layout = Layout::new(spec);
     assert_eq!(s.slots(), layout.slots as usize, "slots");
-    assert_eq!(s.kind, layout.slot_kinds(), "every slot keeps its kind");
     assert_eq!(
-        s.free_counts.len(),
+        s.bodies.kind,
+        layout.slot_kinds(),
+        "every slot keeps its kind"
+    );
+    assert_eq!(
+        s.free.count.len(),
         spec.kinds.len(),
         "one free count per kind"
     );
@@ -54,46 +58,50 @@ fn assert_invariants(spec: &WorldSpec, s: &Snapshot) {
         let (start, end) = (range.start as usize, range.end() as usize);
         let padded = start + range.capacity.next_multiple_of(32) as usize;
         assert!(
-            s.alive[end..padded].iter().all(|&a| a == 0),
+            s.bodies.alive[end..padded].iter().all(|&a| a == 0),
             "kind {k}: a padding slot is alive"
         );
         let free: Vec<u32> = (start..end)
-            .filter(|&i| s.alive[i] == 0)
+            .filter(|&i| s.bodies.alive[i] == 0)
             .map(|i| i as u32)
             .collect();
         let alive = range.capacity as usize - free.len();
         assert_eq!(
-            alive + s.free_counts[k] as usize,
+            alive + s.free.count[k] as usize,
             range.capacity as usize,
             "kind {k}: {alive} alive and {} free in {} slots",
-            s.free_counts[k],
+            s.free.count[k],
             range.capacity
         );
         assert_eq!(
-            &s.free_list[start..start + free.len()],
+            &s.free.list[start..start + free.len()],
             free.as_slice(),
             "kind {k}'s free list"
         );
     }
     for slot in s.live() {
-        let (p, v) = (s.pos[slot], s.vel[slot]);
+        let (p, v) = (s.bodies.pos[slot], s.bodies.vel[slot]);
         assert!(
             p.is_finite() && v.is_finite(),
             "slot {slot}: position {p}, velocity {v}"
         );
         assert!(
-            s.force[slot].is_finite() && s.dir[slot].is_finite(),
+            s.bodies.force[slot].is_finite() && s.bodies.dir[slot].is_finite(),
             "slot {slot}: force {}, facing {}",
-            s.force[slot],
-            s.dir[slot]
+            s.bodies.force[slot],
+            s.bodies.dir[slot]
         );
         let inside = match spec.boundary {
             Boundary::Clamp => p.cmpge(Vec2::ZERO).all() && p.cmple(spec.size).all(),
             Boundary::Wrap => p.cmpge(Vec2::ZERO).all() && p.cmplt(spec.size).all(),
         };
         assert!(inside, "slot {slot} at {p} is outside {}", spec.size);
-        let mass = spec.kinds[s.kind[slot] as usize].mass;
-        assert_eq!(s.mass[slot].to_bits(), mass.to_bits(), "slot {slot}'s mass");
+        let mass = spec.kinds[s.bodies.kind[slot] as usize].mass;
+        assert_eq!(
+            s.bodies.mass[slot].to_bits(),
+            mass.to_bits(),
+            "slot {slot}'s mass"
+        );
     }
 }
 
@@ -101,8 +109,8 @@ fn assert_invariants(spec: &WorldSpec, s: &Snapshot) {
 /// overflow f32).
 fn kinetic(s: &Snapshot) -> f64 {
     s.live()
-        .filter(|&i| s.mass[i].is_finite())
-        .map(|i| 0.5 * f64::from(s.mass[i]) * s.vel[i].as_dvec2().length_squared())
+        .filter(|&i| s.bodies.mass[i].is_finite())
+        .map(|i| 0.5 * f64::from(s.bodies.mass[i]) * s.bodies.vel[i].as_dvec2().length_squared())
         .sum()
 }
 
@@ -110,8 +118,8 @@ fn kinetic(s: &Snapshot) -> f64 {
 /// against which rounding is judged).
 fn momentum(s: &Snapshot) -> (DVec2, f64) {
     s.live()
-        .filter(|&i| s.mass[i].is_finite())
-        .map(|i| f64::from(s.mass[i]) * s.vel[i].as_dvec2())
+        .filter(|&i| s.bodies.mass[i].is_finite())
+        .map(|i| f64::from(s.bodies.mass[i]) * s.bodies.vel[i].as_dvec2())
         .fold((DVec2::ZERO, 0.0), |(p, size), m| {
             (p + m, size + m.length())
         })
@@ -185,7 +193,7 @@ fn offset(spec: &WorldSpec, a: Vec2, b: Vec2) -> DVec2 {
 /// ambiguous.)
 fn circle_contacts(spec: &WorldSpec, s: &Snapshot) -> Vec<u32> {
     let masks = spec.collision_masks();
-    let radius = |slot: usize| match spec.kinds[s.kind[slot] as usize].shape {
+    let radius = |slot: usize| match spec.kinds[s.bodies.kind[slot] as usize].shape {
         Shape::Circle { radius } => f64::from(radius),
         Shape::Rect { .. } => panic!("circles only"),
     };
@@ -193,12 +201,12 @@ fn circle_contacts(spec: &WorldSpec, s: &Snapshot) -> Vec<u32> {
     let mut count = vec![0u32; s.slots()];
     for &a in &live {
         for &b in &live {
-            let (ka, kb) = (s.kind[a] as usize, s.kind[b] as usize);
+            let (ka, kb) = (s.bodies.kind[a] as usize, s.bodies.kind[b] as usize);
             if a == b || masks[ka] & (1 << kb) == 0 {
                 continue;
             }
             let reach = radius(a) + radius(b);
-            let dist2 = offset(spec, s.pos[a], s.pos[b]).length_squared();
+            let dist2 = offset(spec, s.bodies.pos[a], s.bodies.pos[b]).length_squared();
             let gap = (dist2 - reach * reach).abs();
             assert!(
                 gap == 0.0 || gap > 4e-7 * reach * reach,
@@ -345,11 +353,11 @@ fn ball_at_a_wall(
     let s = sim.snapshot().unwrap();
     assert_invariants(&spec, &s);
     assert_eq!(
-        s.pos[wall_slot as usize],
+        s.bodies.pos[wall_slot as usize],
         Vec2::new(WALL_X, 500.0),
         "the wall moved"
     );
-    (s.pos[0], s.vel[0], s.state_hash())
+    (s.bodies.pos[0], s.bodies.vel[0], s.state_hash())
 }
 
 /// Tunnelling, measured: a ball of radius 1 at 3,000 units/s (50 units a step, 33 times the
@@ -508,7 +516,7 @@ fn a_crowded_cell_is_bounded_by_the_cap(device: &Device) {
             let (count, push) = crowd_push(slot, n, cap, averaged, relaxation);
             let i = slot as usize;
             assert_eq!(s.contacts[i], count, "slot {slot}'s contacts");
-            let moved = s.pos[i] - CROWD_AT;
+            let moved = s.bodies.pos[i] - CROWD_AT;
             let expected = Vec2::new(push, 0.0);
             assert!(
                 (moved - expected).length() <= 1e-3,
@@ -537,10 +545,10 @@ fn a_crowded_cell_is_bounded_by_the_cap(device: &Device) {
     // not approach), so each step moves a body at most half the largest push (r / 2).
     let spread = same_everywhere(device, |device| {
         let s = crowd(device, 32, true, 0.5, 10);
-        assert!(s.vel.iter().all(|&v| v == Vec2::ZERO));
+        assert!(s.bodies.vel.iter().all(|&v| v == Vec2::ZERO));
         let spread = s
             .live()
-            .map(|i| (s.pos[i] - CROWD_AT).length())
+            .map(|i| (s.bodies.pos[i] - CROWD_AT).length())
             .fold(0.0f32, f32::max);
         (s.state_hash(), spread.to_bits())
     });
@@ -721,13 +729,13 @@ fn bodies_on_one_spot_part_deterministically(device: &Device) {
             assert_invariants(&spec, &first);
             for i in 0..n {
                 let expected = spot + Vec2::new(r * (2.0 * i as f32 - n as f32 + 1.0), 0.0);
-                assert_eq!(first.pos[i as usize], expected, "n {n}, slot {i}");
+                assert_eq!(first.bodies.pos[i as usize], expected, "n {n}, slot {i}");
                 assert_eq!(first.contacts[i as usize], n - 1);
             }
             sim.step().unwrap();
             let second = sim.snapshot().unwrap();
             assert!(second.contacts.iter().all(|&c| c == 0), "n {n}");
-            assert_eq!(second.pos, first.pos, "n {n}: the row moved");
+            assert_eq!(second.bodies.pos, first.bodies.pos, "n {n}: the row moved");
             second.state_hash()
         });
     }
@@ -752,7 +760,11 @@ fn bodies_on_one_spot_part_deterministically(device: &Device) {
         sim.step().unwrap();
         let s = sim.snapshot().unwrap();
         assert_invariants(&spec, &s);
-        let places = [s.pos[0], s.pos[rects as usize], s.pos[rects as usize + 1]];
+        let places = [
+            s.bodies.pos[0],
+            s.bodies.pos[rects as usize],
+            s.bodies.pos[rects as usize + 1],
+        ];
         for (a, pa) in places.iter().enumerate() {
             for pb in &places[a + 1..] {
                 assert!(pa.distance(*pb) > 1.0, "{places:?}");
@@ -801,7 +813,10 @@ fn extreme_masses_stay_finite(device: &Device) {
             touched += s.contacts.iter().sum::<u32>();
             for slot in immovable.start..immovable.end() {
                 let slot = slot as usize;
-                assert_eq!(s.vel[slot], start.vel[slot], "immovable slot {slot}");
+                assert_eq!(
+                    s.bodies.vel[slot], start.bodies.vel[slot],
+                    "immovable slot {slot}"
+                );
             }
         }
         assert!(touched > 1000, "{touched} contacts");
@@ -827,8 +842,12 @@ fn extreme_masses_stay_finite(device: &Device) {
     sim.step().unwrap();
     let s = sim.snapshot().unwrap();
     assert_invariants(&spec, &s);
-    assert_eq!(s.vel[0], Vec2::new(u, 0.0), "the heavy body was deflected");
-    let v = s.vel[light_slot as usize];
+    assert_eq!(
+        s.bodies.vel[0],
+        Vec2::new(u, 0.0),
+        "the heavy body was deflected"
+    );
+    let v = s.bodies.vel[light_slot as usize];
     assert!(
         (v - Vec2::new((1.0 + e) * u, 0.0)).length() <= 1e-4 * u,
         "the light body leaves at {v}"
@@ -889,7 +908,7 @@ fn a_full_world_refuses_more_bodies(device: &Device) {
     sim.scatter(1, 3, 10.0).unwrap();
     let full = sim.snapshot().unwrap();
     assert_invariants(&spec, &full);
-    assert_eq!(full.free_counts, vec![0, 0]);
+    assert_eq!(full.free.count, vec![0, 0]);
     for kind in 0..2 {
         let refused = sim.scatter(kind, 1, 10.0).unwrap_err().to_string();
         assert!(refused.contains("0 of its"), "{refused}");
@@ -1027,7 +1046,7 @@ fn waves_larger_than_capacity_spawn_only_into_free_slots(device: &Device) {
         let mut before = game.snapshot().unwrap();
         let (mut filled, mut refilled) = (vec![false; world.kinds.len()], 0u32);
         for step in 0..240u32 {
-            let mut free = before.free_counts.clone();
+            let mut free = before.free.count.clone();
             let mut births = 0;
             for (k, count) in due(step) {
                 let n = count.min(free[k]);
@@ -1039,7 +1058,7 @@ fn waves_larger_than_capacity_spawn_only_into_free_slots(device: &Device) {
             assert_eq!(status.events.spawned, births, "step {step}'s births");
             let s = game.snapshot().unwrap();
             assert_invariants(world, &s);
-            let alive = |k: usize| world.kinds[k].capacity - s.free_counts[k];
+            let alive = |k: usize| world.kinds[k].capacity - s.free.count[k];
             let enemies: u32 = (0..world.kinds.len())
                 .filter(|&k| k != ship && k != shot)
                 .map(alive)
@@ -1047,7 +1066,7 @@ fn waves_larger_than_capacity_spawn_only_into_free_slots(device: &Device) {
             assert_eq!(status.enemies_alive, enemies, "step {step}");
             assert_eq!(status.shots_alive, alive(shot), "step {step}");
             for (k, f) in filled.iter_mut().enumerate() {
-                *f |= s.free_counts[k] == 0;
+                *f |= s.free.count[k] == 0;
             }
             if births > 0 && step > 0 {
                 refilled += 1;
@@ -1157,7 +1176,7 @@ fn soak_an_hour_of_paper() {
             if played.is_multiple_of(check_every) || end {
                 let s = game.snapshot().unwrap();
                 assert_invariants(world, &s);
-                let alive = |k: usize| world.kinds[k].capacity - s.free_counts[k];
+                let alive = |k: usize| world.kinds[k].capacity - s.free.count[k];
                 let enemies: u32 = (0..world.kinds.len())
                     .filter(|&k| k != ship && k != shot)
                     .map(alive)

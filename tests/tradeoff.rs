@@ -11,6 +11,9 @@ use std::process::Command;
 use glam::{DVec2, Vec2};
 use gpuwars::benchmark::tradeoff::reference::Reference;
 use gpuwars::benchmark::tradeoff::{PhysicsRow, TradeoffSummary, crowd};
+use gpuwars::kernels::rng::RngStreams;
+use gpuwars::kernels::sim::Bodies;
+use gpuwars::kernels::sim::free_list::FreeSlots;
 use gpuwars::sim::{Physics, Snapshot};
 
 /// Runs the quick matrix on `backend`; the summary it printed, checked against its files.
@@ -149,21 +152,29 @@ fn snapshot(spec_bodies: u32, bodies: &[(Vec2, Vec2)]) -> Snapshot {
     }
     Snapshot {
         steps: 0,
-        pos,
-        vel,
-        force: vec![Vec2::ZERO; n],
-        dir: vec![Vec2::X; n],
-        kind: vec![0; n],
-        energy: vec![1; n],
-        mass: vec![1.0; n],
-        alive,
-        state: vec![0; n],
-        age: vec![0; n],
-        rng_words: Vec::new(),
-        rng_index: Vec::new(),
+        bodies: Bodies {
+            pos,
+            vel,
+            force: vec![Vec2::ZERO; n],
+            dir: vec![Vec2::X; n],
+            kind: vec![0; n],
+            energy: vec![1; n],
+            mass: vec![1.0; n],
+            alive,
+            state: vec![0; n],
+            age: vec![0; n],
+            frozen: vec![0],
+            rng: RngStreams {
+                params: Vec::new(),
+                words: Vec::new(),
+                index: Vec::new(),
+            },
+        },
         contacts: vec![0; n],
-        free_counts: Vec::new(),
-        free_list: Vec::new(),
+        free: FreeSlots {
+            list: Vec::new(),
+            count: Vec::new(),
+        },
     }
 }
 

@@ -7,14 +7,15 @@
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr::NonNull;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Mutex, MutexGuard};
 
-use gpuwars_kernels::{Kernel, KernelArgs, Thread};
+use gpuwars_kernels::{KernelArgs, Thread};
 use rand::rngs::StdRng;
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
 
-use super::{Element, Error};
+use super::{Element, Error, Launch};
 
 /// The order in which the emulator runs a launch's blocks and a block's threads.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -38,6 +39,9 @@ pub(super) struct Emulator {
     schedule: Schedule,
     /// Launches so far, so that each shuffled launch gets its own order.
     launches: AtomicU64,
+    /// Held by whatever touches the device's memory (a plan's run, a copy, a read-back), so
+    /// that they happen one after another, as on the GPU's stream.
+    order: Mutex<()>,
 }
 
 impl Emulator {
@@ -51,6 +55,7 @@ impl Emulator {
             pool,
             schedule,
             launches: AtomicU64::new(0),
+            order: Mutex::new(()),
         })
     }
 
@@ -65,13 +70,21 @@ impl Emulator {
         self.pool.install(work)
     }
 
-    pub(super) fn launch<A: KernelArgs>(
-        &self,
-        kernel: Kernel<A>,
-        grid: u32,
-        block: u32,
-        args: &A,
-    ) -> Result<(), Error> {
+    /// Waits for the device's memory to be free of other work, and keeps it until the guard
+    /// goes: the emulator's stream order.
+    pub(super) fn in_order(&self) -> MutexGuard<'_, ()> {
+        self.order.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Runs every thread of `launch` and returns when all are done (the caller holds the
+    /// order).
+    pub(super) fn launch<A: KernelArgs>(&self, launch: &Launch<A>) -> Result<(), Error> {
+        let Launch {
+            kernel,
+            grid,
+            block,
+            ref args,
+        } = *launch;
         let thread = |t: u32, b: u32| Thread {
             thread: t,
             block: b,
@@ -155,14 +168,24 @@ impl<T: Element> HostBuffer<T> {
         self.ptr.as_ptr() as u64
     }
 
-    pub(super) fn as_slice(&self) -> &[T] {
-        // SAFETY: `len` initialised elements; launches are synchronous, so no kernel writes
-        // while the host reads.
+    /// The elements.
+    ///
+    /// # Safety
+    /// Nothing writes them while the slice lives: the caller holds the emulator's order, so
+    /// no launch runs.
+    pub(super) unsafe fn as_slice(&self) -> &[T] {
+        // SAFETY: `len` initialised elements; no writer (the caller's promise).
         unsafe { std::slice::from_raw_parts(self.ptr.as_ptr(), self.len) }
     }
 
-    pub(super) fn as_mut_slice(&mut self) -> &mut [T] {
-        // SAFETY: as above, and `&mut self` excludes other host borrows.
+    /// The elements, for writing.
+    ///
+    /// # Safety
+    /// As for [`HostBuffer::as_slice`], and nothing else reads them while the slice lives
+    /// (the caller has the buffer's only host handle mutably).
+    #[allow(clippy::mut_from_ref)]
+    pub(super) unsafe fn as_mut_slice(&self) -> &mut [T] {
+        // SAFETY: as above, the caller's promise.
         unsafe { std::slice::from_raw_parts_mut(self.ptr.as_ptr(), self.len) }
     }
 }

@@ -22,10 +22,10 @@ use cudarc::driver::{
     DriverError, LaunchConfig, PushKernelArg, result, sys,
 };
 use cudarc::nvrtc::Ptx;
-use gpuwars_kernels::{Kernel, KernelArgs, registry};
+use gpuwars_kernels::{KernelArgs, registry};
 use serde::Serialize;
 
-use super::{Element, Error};
+use super::{Element, Error, Launch};
 use crate::ptx;
 
 /// What the driver reports about the GPU.
@@ -329,15 +329,17 @@ impl Gpu {
             .map_err(self.failed("copying on the device"))
     }
 
+    /// Queues `launch` on the device's stream (or the capture this thread records).
+    ///
     /// # Safety
-    /// See [`super::Device::launch`].
-    pub(super) unsafe fn launch<A: KernelArgs>(
-        &self,
-        kernel: Kernel<A>,
-        grid: u32,
-        block: u32,
-        args: &A,
-    ) -> Result<(), Error> {
+    /// See [`super::Op::launch`].
+    pub(super) unsafe fn launch<A: KernelArgs>(&self, launch: &Launch<A>) -> Result<(), Error> {
+        let Launch {
+            kernel,
+            grid,
+            block,
+            args,
+        } = *launch;
         let function = self.functions.get(kernel.name).ok_or_else(|| {
             Error::Invalid(format!("kernel `{}` is not in the PTX module", kernel.name))
         })?;
@@ -346,7 +348,7 @@ impl Gpu {
             block_dim: (block, 1, 1),
             shared_mem_bytes: 0,
         };
-        let param = Param(*args);
+        let param = Param(args);
         let stream = self.launch_stream();
         let mut launch = stream.launch_builder(function);
         launch.arg(&param);

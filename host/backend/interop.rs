@@ -90,7 +90,12 @@ impl Device {
 impl GlBuffer {
     /// Maps the buffer, lends its memory to `write` as a slice of `T` (for launches on the
     /// same device), and unmaps it; GL draws see what the launches wrote.
-    pub fn with_mapped<T: Element, R>(
+    ///
+    /// # Safety
+    /// `write` uses the view only as an argument of launches it queues on this device (see
+    /// [`super::Op::launch`]), and keeps no copy of it: after the unmap the address means
+    /// nothing.
+    pub unsafe fn with_mapped<T: Element, R>(
         &mut self,
         write: impl FnOnce(DevSlice<T>) -> Result<R, Error>,
     ) -> Result<R, Error> {

@@ -15,16 +15,18 @@ use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::fmt;
 use std::marker::PhantomData;
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
 
-use gpuwars_kernels::{DevSlice, Kernel, KernelArgs};
+pub use gpuwars_kernels::data::Element;
+use gpuwars_kernels::data::{Build, Convert, Store};
+use gpuwars_kernels::{DevSlice, KernelArgs};
 use serde::Serialize;
 
 pub use cpu::Schedule;
 pub use cuda::GpuProperties;
 pub use interop::GlBuffer;
-pub use plan::{Op, Plan};
+pub use plan::{Binder, Launch, Op, Plan};
 pub use ring::Ring;
 
 /// The largest block the GPU accepts; the emulator enforces it too, so that a launch that runs
@@ -124,11 +126,6 @@ pub enum BackendRequest {
     Cpu,
 }
 
-/// Plain-data element types that buffers can hold: any `bytemuck::Pod` type that is not
-/// zero-sized (numbers, `glam::Vec2`, the kernels' `#[repr(C)]` structs).
-pub trait Element: bytemuck::Pod + Send + Sync {}
-impl<T: bytemuck::Pod + Send + Sync> Element for T {}
-
 /// An open backend: where buffers live and kernels run.
 pub struct Device {
     imp: Imp,
@@ -145,22 +142,69 @@ enum Imp {
 }
 
 /// A buffer of `T` in the device's memory (host memory under the emulator).
+///
+/// The host reads and writes it through the [`Device`] (`write`, `download`, `copy`), and
+/// kernels through the views a [`Binder`] makes for an [`Op`]. The memory is shared with the
+/// ops that view it ([`Buffer::hold`]): it is freed when the buffer and every op and plan
+/// made with it are gone, not before.
+///
+/// Safe code cannot see the memory any other way: a buffer hands out no view of itself, so
+/// this does not compile (a view would outlive the buffer it was made from, and read memory
+/// the next upload reuses).
+/// ```compile_fail,E0599
+/// let dev = gpuwars::Device::cpu(Some(1), "probe").unwrap();
+/// let view = dev.upload(&[7u32; 1024]).unwrap().view(); // the Buffer is dropped here
+/// let _other = dev.upload(&[9u32; 1024]).unwrap();
+/// println!("{}", view.get(0));
+/// ```
 pub struct Buffer<T: Element> {
-    imp: BufferImp<T>,
+    imp: Arc<BufferImp<T>>,
+}
+
+/// A share in a buffer's memory that keeps it allocated and gives no access to it: what an
+/// [`Op`] holds of each buffer its arguments view.
+#[derive(Clone)]
+pub struct Hold {
+    _memory: Arc<dyn Send + Sync>,
 }
 
 enum BufferImp<T: Element> {
     Cpu(cpu::HostBuffer<T>),
-    /// Bytes on the GPU; `T` is the type the bytes hold.
-    Cuda(cudarc::driver::CudaSlice<u8>, PhantomData<T>),
+    /// Bytes on the GPU, `len` elements at `addr`; `T` is the type the bytes hold. cudarc's
+    /// copies want the slice exclusively, which the lock gives while ops share the
+    /// allocation.
+    Cuda {
+        bytes: Mutex<cudarc::driver::CudaSlice<u8>>,
+        addr: u64,
+        len: usize,
+        _element: PhantomData<T>,
+    },
+}
+
+impl<T: Element> BufferImp<T> {
+    fn cuda(bytes: cudarc::driver::CudaSlice<u8>) -> Self {
+        BufferImp::Cuda {
+            addr: cuda::address(&bytes),
+            len: bytes.len() / size_of::<T>(),
+            bytes: Mutex::new(bytes),
+            _element: PhantomData,
+        }
+    }
+}
+
+/// The GPU bytes of a buffer, locked for a copy.
+fn locked(
+    bytes: &Mutex<cudarc::driver::CudaSlice<u8>>,
+) -> std::sync::MutexGuard<'_, cudarc::driver::CudaSlice<u8>> {
+    bytes.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 impl<T: Element> Buffer<T> {
     /// Number of elements.
     pub fn len(&self) -> usize {
-        match &self.imp {
+        match &*self.imp {
             BufferImp::Cpu(b) => b.len(),
-            BufferImp::Cuda(s, _) => s.len() / size_of::<T>(),
+            BufferImp::Cuda { len, .. } => *len,
         }
     }
 
@@ -169,23 +213,68 @@ impl<T: Element> Buffer<T> {
         self.len() == 0
     }
 
-    /// The whole buffer as a kernel argument.
-    ///
-    /// The view carries a raw address: passing it to [`Device::launch`] is what is unsafe.
-    pub fn view(&self) -> DevSlice<T> {
-        self.view_prefix(self.len() as u32)
+    /// A share in the buffer's memory, keeping it allocated for as long as it lives.
+    pub fn hold(&self) -> Hold {
+        Hold {
+            _memory: self.imp.clone(),
+        }
     }
 
-    /// The first `len` elements as a kernel argument (clamped to the buffer's length).
-    pub fn view_prefix(&self, len: u32) -> DevSlice<T> {
-        let len = len.min(self.len() as u32);
-        let addr = match &self.imp {
+    /// The device address of the first element (a host address under the emulator).
+    fn addr(&self) -> u64 {
+        match &*self.imp {
             BufferImp::Cpu(b) => b.addr(),
-            BufferImp::Cuda(s, _) => cuda::address(s),
-        };
-        // SAFETY: `addr` holds `len` elements of this buffer, which outlives the view's use
-        // in any launch that the borrow of `self` spans (the caller of `launch` promises it).
-        unsafe { DevSlice::from_raw_parts(addr, len) }
+            BufferImp::Cuda { addr, .. } => *addr,
+        }
+    }
+
+    /// The first `len` elements (clamped to the buffer's length) as a kernel argument.
+    ///
+    /// # Safety
+    /// The view must be used only by launches that run while the memory is allocated, and in
+    /// the device's order (see [`Binder`], the one caller).
+    unsafe fn view_prefix(&self, len: u32) -> DevSlice<T> {
+        let len = len.min(self.len() as u32);
+        // SAFETY: `len` elements of this buffer from its start; the caller keeps its use in
+        // the buffer's life.
+        unsafe { DevSlice::from_raw_parts(self.addr(), len) }
+    }
+}
+
+/// A group's arrays held as [`Buffer`]s on a device: `Group<Buffers>` for any group the
+/// kernels declare with `device_data!`.
+#[derive(Clone, Copy, Debug)]
+pub struct Buffers;
+
+impl Store for Buffers {
+    type Array<T: Element> = Buffer<T>;
+}
+
+/// A group's arrays read back to the host: `Group<Vecs>`.
+#[derive(Clone, Copy, Debug)]
+pub struct Vecs;
+
+impl Store for Vecs {
+    type Array<T: Element> = Vec<T>;
+}
+
+/// Allocates a group's arrays, zeroed, on a device: `Group::<Buffers>::build(&mut device.zeroed(), ..)`.
+pub struct Zeroed<'d>(&'d Device);
+
+impl Build<Buffers> for Zeroed<'_> {
+    type Error = Error;
+    fn array<T: Element>(&mut self, _: &'static str, len: usize) -> Result<Buffer<T>, Error> {
+        self.0.alloc_zeroed(len)
+    }
+}
+
+/// Reads a group's arrays back: `group.convert(&mut device.reader())`.
+pub struct Reader<'d>(&'d Device);
+
+impl Convert<Buffers, Vecs> for Reader<'_> {
+    type Error = Error;
+    fn array<T: Element>(&mut self, _: &'static str, array: &Buffer<T>) -> Result<Vec<T>, Error> {
+        self.0.download(array)
     }
 }
 
@@ -269,15 +358,25 @@ impl Device {
         }
     }
 
+    /// Allocates groups of buffers, zeroed (see [`Zeroed`]).
+    pub fn zeroed(&self) -> Zeroed<'_> {
+        Zeroed(self)
+    }
+
+    /// Reads groups of buffers back (see [`Reader`]).
+    pub fn reader(&self) -> Reader<'_> {
+        Reader(self)
+    }
+
     /// A buffer of `len` zeroed elements.
     pub fn alloc_zeroed<T: Element>(&self, len: usize) -> Result<Buffer<T>, Error> {
         check_len::<T>(len)?;
         self.note_allocation::<T>(len);
         let imp = match &self.imp {
             Imp::Cpu(_) => BufferImp::Cpu(cpu::HostBuffer::zeroed(len)),
-            Imp::Cuda(gpu) => BufferImp::Cuda(gpu.alloc_zeroed(len * size_of::<T>())?, PhantomData),
+            Imp::Cuda(gpu) => BufferImp::cuda(gpu.alloc_zeroed(len * size_of::<T>())?),
         };
-        Ok(Buffer { imp })
+        Ok(Buffer { imp: Arc::new(imp) })
     }
 
     /// A buffer holding a copy of `data`.
@@ -286,9 +385,9 @@ impl Device {
         self.note_allocation::<T>(data.len());
         let imp = match &self.imp {
             Imp::Cpu(_) => BufferImp::Cpu(cpu::HostBuffer::from_slice(data)),
-            Imp::Cuda(gpu) => BufferImp::Cuda(gpu.upload(data)?, PhantomData),
+            Imp::Cuda(gpu) => BufferImp::cuda(gpu.upload(data)?),
         };
-        Ok(Buffer { imp })
+        Ok(Buffer { imp: Arc::new(imp) })
     }
 
     /// Overwrites the start of `buffer` with `data`.
@@ -300,33 +399,43 @@ impl Device {
                 buffer.len()
             )));
         }
-        match (&self.imp, &mut buffer.imp) {
-            (Imp::Cpu(_), BufferImp::Cpu(b)) => {
-                b.as_mut_slice()[..data.len()].copy_from_slice(data);
+        match (&self.imp, &*buffer.imp) {
+            (Imp::Cpu(emu), BufferImp::Cpu(b)) => {
+                let _order = emu.in_order();
+                // SAFETY: in the device's order (no launch runs), and `&mut buffer` excludes
+                // the other host borrows.
+                let slice = unsafe { b.as_mut_slice() };
+                slice[..data.len()].copy_from_slice(data);
                 Ok(())
             }
-            (Imp::Cuda(gpu), BufferImp::Cuda(s, _)) => gpu.write(s, data),
+            (Imp::Cuda(gpu), BufferImp::Cuda { bytes, .. }) => gpu.write(&mut locked(bytes), data),
             _ => Err(foreign_buffer()),
         }
     }
 
     /// Copies the whole buffer back to the host (waits for the work queued before).
     pub fn download<T: Element>(&self, buffer: &Buffer<T>) -> Result<Vec<T>, Error> {
-        match (&self.imp, &buffer.imp) {
-            (Imp::Cpu(_), BufferImp::Cpu(b)) => Ok(b.as_slice().to_vec()),
-            (Imp::Cuda(gpu), BufferImp::Cuda(s, _)) => gpu.download(s),
+        match (&self.imp, &*buffer.imp) {
+            (Imp::Cpu(emu), BufferImp::Cpu(b)) => {
+                let _order = emu.in_order();
+                // SAFETY: in the device's order: no launch writes meanwhile.
+                Ok(unsafe { b.as_slice() }.to_vec())
+            }
+            (Imp::Cuda(gpu), BufferImp::Cuda { bytes, .. }) => gpu.download(&locked(bytes)),
             _ => Err(foreign_buffer()),
         }
     }
 
     /// Sets every element of `buffer` to zero.
     pub fn zero<T: Element>(&self, buffer: &mut Buffer<T>) -> Result<(), Error> {
-        match (&self.imp, &mut buffer.imp) {
-            (Imp::Cpu(_), BufferImp::Cpu(b)) => {
-                b.as_mut_slice().fill(T::zeroed());
+        match (&self.imp, &*buffer.imp) {
+            (Imp::Cpu(emu), BufferImp::Cpu(b)) => {
+                let _order = emu.in_order();
+                // SAFETY: as in `write`.
+                unsafe { b.as_mut_slice() }.fill(T::zeroed());
                 Ok(())
             }
-            (Imp::Cuda(gpu), BufferImp::Cuda(s, _)) => gpu.zero(s),
+            (Imp::Cuda(gpu), BufferImp::Cuda { bytes, .. }) => gpu.zero(&mut locked(bytes)),
             _ => Err(foreign_buffer()),
         }
     }
@@ -340,49 +449,39 @@ impl Device {
                 dst.len()
             )));
         }
-        match (&self.imp, &src.imp, &mut dst.imp) {
-            (Imp::Cpu(_), BufferImp::Cpu(s), BufferImp::Cpu(d)) => {
-                d.as_mut_slice()[..s.len()].copy_from_slice(s.as_slice());
+        match (&self.imp, &*src.imp, &*dst.imp) {
+            (Imp::Cpu(emu), BufferImp::Cpu(s), BufferImp::Cpu(d)) => {
+                let _order = emu.in_order();
+                // SAFETY: as in `write`; two buffers are two allocations.
+                unsafe { d.as_mut_slice()[..s.len()].copy_from_slice(s.as_slice()) };
                 Ok(())
             }
-            (Imp::Cuda(gpu), BufferImp::Cuda(s, _), BufferImp::Cuda(d, _)) => gpu.copy(s, d),
+            (
+                Imp::Cuda(gpu),
+                BufferImp::Cuda { bytes: s, .. },
+                BufferImp::Cuda { bytes: d, .. },
+            ) => gpu.copy(&locked(s), &mut locked(d)),
             _ => Err(foreign_buffer()),
         }
     }
 
-    /// Runs `kernel` on `grid` blocks of `block` threads. A grid of zero blocks launches
-    /// nothing. On the GPU the launch is queued; [`Device::synchronize`] waits for it.
-    ///
-    /// # Safety
-    /// Every [`DevSlice`] in `args` must view a live buffer of this device that nothing else
-    /// touches until the launch completes, and the sizes in `args` must be the ones the
-    /// kernel's documentation asks for (its bounds checks turn a mistake into
-    /// [`Error::KernelFault`], not into memory corruption, only where the views are right).
-    pub unsafe fn launch<A: KernelArgs>(
-        &self,
-        kernel: Kernel<A>,
-        grid: u32,
-        block: u32,
-        args: &A,
-    ) -> Result<(), Error> {
-        if grid > 0 {
-            self.count([kernel.name]);
-        }
-        // SAFETY: forwarded from the caller.
-        unsafe { self.issue(kernel, grid, block, args) }
+    /// Runs one op now: queued on the GPU ([`Device::synchronize`] waits for it), done
+    /// when it returns on the CPU. A launch of zero blocks does nothing.
+    pub fn launch(&self, op: Op) -> Result<(), Error> {
+        self.run(&self.plan(vec![op], false)?)
     }
 
-    /// [`Device::launch`] without counting it.
+    /// Issues `launch` on this device's backend, uncounted.
     ///
     /// # Safety
-    /// As for [`Device::launch`].
-    unsafe fn issue<A: KernelArgs>(
-        &self,
-        kernel: Kernel<A>,
-        grid: u32,
-        block: u32,
-        args: &A,
-    ) -> Result<(), Error> {
+    /// As for [`Op::launch`], and the caller holds the emulator's order (see `Emulator::in_order`).
+    unsafe fn issue<A: KernelArgs>(&self, launch: &Launch<A>) -> Result<(), Error> {
+        let Launch {
+            kernel,
+            grid,
+            block,
+            ..
+        } = *launch;
         if block == 0 || block > MAX_BLOCK {
             return Err(Error::Invalid(format!(
                 "kernel `{}`: block of {block} threads (allowed 1..={MAX_BLOCK})",
@@ -393,9 +492,9 @@ impl Device {
             return Ok(());
         }
         match &self.imp {
-            Imp::Cpu(emu) => emu.launch(kernel, grid, block, args),
+            Imp::Cpu(emu) => emu.launch(launch),
             // SAFETY: forwarded from the caller.
-            Imp::Cuda(gpu) => unsafe { gpu.launch(kernel, grid, block, args) },
+            Imp::Cuda(gpu) => unsafe { gpu.launch(launch) },
         }
     }
 
@@ -465,15 +564,14 @@ impl Device {
     /// Queues the zeroing of every element `view` covers.
     ///
     /// # Safety
-    /// `view` views a live buffer of this device that nothing else touches until the clear
-    /// is done.
-    pub unsafe fn clear<T: Element>(&self, view: DevSlice<T>) -> Result<(), Error> {
+    /// As for [`Op::clear`], and the caller holds the emulator's order.
+    unsafe fn clear<T: Element>(&self, view: DevSlice<T>) -> Result<(), Error> {
         let bytes = view.len() as usize * size_of::<T>();
         if bytes == 0 {
             return Ok(());
         }
         match &self.imp {
-            // SAFETY: forwarded from the caller; launches are synchronous, so no kernel runs.
+            // SAFETY: forwarded from the caller; in the device's order, so no kernel runs.
             Imp::Cpu(_) => unsafe {
                 std::ptr::write_bytes(view.addr() as *mut u8, 0, bytes);
                 Ok(())

@@ -1,15 +1,89 @@
 //! Launch plans: a step's kernel launches and clears, made once with their arguments and
 //! issued again every step: in order on the CPU emulation, from inside its pool, and on the
 //! GPU either one by one on the stream or replayed as a CUDA graph.
+//!
+//! An op owns a share ([`Hold`]) of every buffer its arguments view, taken by the [`Binder`]
+//! that made the views, so a plan keeps its buffers allocated for as long as it exists,
+//! whatever happened to the handles it was made from. What keeps the memory a launch uses
+//! from being freed *while it runs* is the device's order: every launch, copy, clear and
+//! free of a device happens in one order, on the GPU that of its one stream (cudarc frees a
+//! buffer on the stream it was allocated on, after the work queued before), on the CPU under
+//! the emulator's order lock, each operation done before the next begins.
 
 use std::sync::Arc;
 use std::time::Instant;
 
 use cudarc::driver::CudaGraph;
+use gpuwars_kernels::data::{Convert, View};
 use gpuwars_kernels::{DevSlice, Kernel, KernelArgs};
 
 use super::cuda::Fence;
-use super::{Device, Element, Error, Imp};
+use super::{Buffer, Buffers, Device, Element, Error, Hold, Imp};
+
+/// One kernel launch: the kernel, `grid` blocks of `block` threads, and its arguments.
+#[derive(Clone, Copy, Debug)]
+pub struct Launch<A> {
+    /// The kernel.
+    pub kernel: Kernel<A>,
+    /// Blocks (a launch of none does nothing).
+    pub grid: u32,
+    /// Threads per block (1 to [`super::MAX_BLOCK`]).
+    pub block: u32,
+    /// The kernel's argument struct.
+    pub args: A,
+}
+
+/// Makes the views of buffers that go into one op's arguments, and takes a [`Hold`] of
+/// each, which the op keeps: views and holds go together.
+///
+/// Making one is the unsafe step, since safe code could read through its views; this does
+/// not compile:
+/// ```compile_fail,E0133
+/// let dev = gpuwars::Device::cpu(Some(1), "probe").unwrap();
+/// let buffer = dev.upload(&[7u32; 1024]).unwrap();
+/// let view = gpuwars::backend::Binder::new().view(&buffer);
+/// println!("{}", view.get(0));
+/// ```
+pub struct Binder {
+    holds: Vec<Hold>,
+}
+
+impl Binder {
+    /// A binder with no view made yet.
+    ///
+    /// # Safety
+    /// Every view it makes goes into the arguments of ops made with it ([`Op::launch`],
+    /// [`Op::clear`]) and nowhere else: read on the host, a view would reach memory the
+    /// host must not touch (device memory on the GPU, memory a kernel may be writing on the
+    /// CPU), and outside its op nothing holds its buffer.
+    pub unsafe fn new() -> Binder {
+        Binder { holds: Vec::new() }
+    }
+
+    /// The whole of `buffer`.
+    pub fn view<T: Element>(&mut self, buffer: &Buffer<T>) -> DevSlice<T> {
+        self.view_prefix(buffer, u32::MAX)
+    }
+
+    /// The first `len` elements of `buffer` (clamped to its length).
+    pub fn view_prefix<T: Element>(&mut self, buffer: &Buffer<T>, len: u32) -> DevSlice<T> {
+        self.holds.push(buffer.hold());
+        // SAFETY: the view goes only into this binder's ops (`new`'s contract), which hold
+        // the buffer (pushed above).
+        unsafe { buffer.view_prefix(len) }
+    }
+}
+
+impl Convert<Buffers, View> for Binder {
+    type Error = std::convert::Infallible;
+    fn array<T: Element>(
+        &mut self,
+        _: &'static str,
+        array: &Buffer<T>,
+    ) -> Result<DevSlice<T>, Self::Error> {
+        Ok(self.view(array))
+    }
+}
 
 /// What an [`Op`] does.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -18,11 +92,11 @@ enum OpKind {
     Clear,
 }
 
-/// How an op is issued: on the device it runs on.
+/// How an op is issued: on the device it runs on, in the device's order.
 type Issue = Arc<dyn Fn(&Device) -> Result<(), Error> + Send + Sync>;
 
 /// One operation of a plan: a kernel launch or a clear of a buffer, its arguments fixed
-/// when it was made.
+/// when it was made, holding the buffers they view.
 #[derive(Clone)]
 pub struct Op {
     name: &'static str,
@@ -31,45 +105,47 @@ pub struct Op {
     grid: u32,
     bytes: u64,
     issue: Issue,
+    /// The buffers the arguments view.
+    _holds: Arc<[Hold]>,
 }
 
 impl Op {
-    /// A launch of `kernel` on `grid` blocks of `block` threads with `args`, which moves
-    /// about `bytes` bytes of device memory (the caller's count, for the profile).
+    /// `launch`, which moves about `bytes` bytes of device memory (the caller's count, for
+    /// the profile); its views come from `binder`, whose holds the op keeps.
     ///
     /// # Safety
-    /// Every [`DevSlice`] in `args` must view a buffer of the device that will run the op,
-    /// allocated for as long as the op or a [`Plan`] made of it exists, and touched by
-    /// nothing else while it runs; the sizes in `args` must be those the kernel's
-    /// documentation asks for.
-    pub unsafe fn launch<A: KernelArgs>(
-        kernel: Kernel<A>,
-        grid: u32,
-        block: u32,
-        args: A,
-        bytes: u64,
-    ) -> Op {
+    /// Every [`DevSlice`] in the arguments was made by `binder` from a buffer of the device
+    /// that will run the op, or views memory of that device that no buffer owns (an OpenGL
+    /// buffer mapped for CUDA) and that stays valid, and untouched by the host, for every
+    /// run of the op; their sizes, and which of them may be the same buffer, are
+    /// those the kernel's documentation asks for (its promise that no two threads write
+    /// one element holds only then; its bounds checks turn a wrong size into
+    /// [`Error::KernelFault`]).
+    pub unsafe fn launch<A: KernelArgs>(launch: Launch<A>, binder: Binder, bytes: u64) -> Op {
         Op {
-            name: kernel.name,
+            name: launch.kernel.name,
             kind: OpKind::Launch,
-            grid,
+            grid: launch.grid,
             bytes,
-            // SAFETY: the caller's promise covers every run of the op.
-            issue: Arc::new(move |device| unsafe { device.issue(kernel, grid, block, &args) }),
+            _holds: binder.holds.into(),
+            // SAFETY: the caller's promise covers every run of the op, and the op holds the
+            // buffers its views are of.
+            issue: Arc::new(move |device| unsafe { device.issue(&launch) }),
         }
     }
 
     /// Zeroes every element of `view`.
     ///
     /// # Safety
-    /// As for [`Op::launch`], for `view`.
-    pub unsafe fn clear<T: Element>(view: DevSlice<T>) -> Op {
+    /// `view` was made by `binder` from a buffer of the device that will run the op.
+    pub unsafe fn clear<T: Element>(view: DevSlice<T>, binder: Binder) -> Op {
         Op {
             name: "clear",
             kind: OpKind::Clear,
             grid: 0,
             bytes: u64::from(view.len()) * size_of::<T>() as u64,
-            // SAFETY: the caller's promise covers every run of the op.
+            _holds: binder.holds.into(),
+            // SAFETY: as in `launch`.
             issue: Arc::new(move |device| unsafe { device.clear(view) }),
         }
     }
@@ -92,10 +168,10 @@ impl Op {
 
 /// Ops issued in order; on the GPU, optionally captured once as a CUDA graph and replayed.
 pub struct Plan {
-    ops: Vec<Op>,
-    /// The ops recorded as a CUDA graph (GPU only). It holds the same device addresses as
-    /// the ops, so the plan's owner must drop it before the buffers they view.
+    /// The ops recorded as a CUDA graph (GPU only), with the device addresses of the
+    /// buffers the ops hold: declared first, so that it goes before they may.
     graph: Option<CudaGraph>,
+    ops: Vec<Op>,
 }
 
 impl Plan {
@@ -158,7 +234,7 @@ impl Device {
             }
             _ => None,
         };
-        Ok(Plan { ops, graph })
+        Ok(Plan { graph, ops })
     }
 
     /// Queues one run of `plan`.
@@ -169,6 +245,7 @@ impl Device {
             (Imp::Cuda(_), None) => plan.ops.iter().try_for_each(|op| (op.issue)(self)),
             // From inside the pool, each launch starts its blocks at once.
             (Imp::Cpu(emu), _) => {
+                let _order = emu.in_order();
                 let ops = &plan.ops;
                 emu.run(|| ops.iter().try_for_each(|op| (op.issue)(self)))
             }

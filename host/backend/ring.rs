@@ -82,14 +82,14 @@ impl<I: Element, O: Element> Ring<I, O> {
     pub fn send(&mut self, device: &Device, input: I, dst: &Buffer<I>) -> Result<(), Error> {
         self.check_room()?;
         let slot = self.slot();
-        let view = dst.view();
-        if view.is_empty() {
+        if dst.is_empty() {
             return Err(Error::Invalid("sending into an empty buffer".into()));
         }
         match (&self.staging, &device.imp) {
-            (Staging::Host, Imp::Cpu(_)) => {
-                // SAFETY: element 0 of a live host buffer; no launch is running.
-                unsafe { (view.addr() as *mut I).write(input) };
+            (Staging::Host, Imp::Cpu(emu)) => {
+                let _order = emu.in_order();
+                // SAFETY: element 0 of a live host buffer, in the device's order.
+                unsafe { (dst.addr() as *mut I).write(input) };
                 Ok(())
             }
             (Staging::Pinned { inputs, .. }, Imp::Cuda(gpu)) => {
@@ -99,7 +99,7 @@ impl<I: Element, O: Element> Ring<I, O> {
                 // for before the slot is written again.
                 unsafe {
                     at.write_unaligned(input);
-                    gpu.upload_async(at.cast(), view.addr(), size_of::<I>())
+                    gpu.upload_async(at.cast(), dst.addr(), size_of::<I>())
                 }
             }
             _ => Err(Error::Invalid("a ring of another backend".into())),
@@ -111,14 +111,14 @@ impl<I: Element, O: Element> Ring<I, O> {
     pub fn receive(&mut self, device: &Device, src: &Buffer<O>) -> Result<(), Error> {
         self.check_room()?;
         let slot = self.slot();
-        let view = src.view();
-        if view.is_empty() {
+        if src.is_empty() {
             return Err(Error::Invalid("receiving from an empty buffer".into()));
         }
         match (&mut self.staging, &device.imp) {
-            (Staging::Host, Imp::Cpu(_)) => {
-                // SAFETY: element 0 of a live host buffer; the step has run.
-                self.outputs[slot] = unsafe { (view.addr() as *const O).read() };
+            (Staging::Host, Imp::Cpu(emu)) => {
+                let _order = emu.in_order();
+                // SAFETY: element 0 of a live host buffer, in the device's order.
+                self.outputs[slot] = unsafe { (src.addr() as *const O).read() };
             }
             (
                 Staging::Pinned {
@@ -129,7 +129,7 @@ impl<I: Element, O: Element> Ring<I, O> {
                 let at = outputs.ptr.cast::<O>().wrapping_add(slot);
                 // SAFETY: nothing reads the slot until its fence, recorded after the copy,
                 // has been waited for.
-                unsafe { gpu.download_async(view.addr(), at.cast(), size_of::<O>())? };
+                unsafe { gpu.download_async(src.addr(), at.cast(), size_of::<O>())? };
                 gpu.record(&mut fences[slot])?;
             }
             _ => return Err(Error::Invalid("a ring of another backend".into())),

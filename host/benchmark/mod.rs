@@ -27,7 +27,7 @@ use crate::game::demo::device_name;
 
 /// Where and when a benchmark ran.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Machine {
+pub struct Provenance {
     /// `cuda` or `cpu`.
     pub backend: String,
     /// The GPU's name, or the CPU emulation and its threads.
@@ -40,10 +40,10 @@ pub struct Machine {
     pub command: String,
 }
 
-impl Machine {
-    /// The machine `device` is on, now.
+impl Provenance {
+    /// Where `device` is, now.
     pub fn now(device: &Device) -> Self {
-        Machine {
+        Provenance {
             backend: device.kind().to_string(),
             device: device_name(device),
             commit: env!("GPUWARS_COMMIT").to_string(),

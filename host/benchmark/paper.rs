@@ -9,7 +9,7 @@ use anyhow::Context as _;
 use glium::Surface;
 use serde::{Deserialize, Serialize};
 
-use super::{Machine, Outputs, Spread, plot, progress, write_csv, write_json};
+use super::{Outputs, Provenance, Spread, plot, progress, write_csv, write_json};
 use crate::Device;
 use crate::game::scene::built_in;
 use crate::game::{Game, Options};
@@ -58,7 +58,7 @@ pub struct PaperSummary {
     /// Always "paper".
     pub benchmark: String,
     /// Where and when.
-    pub machine: Machine,
+    pub machine: Provenance,
     /// The renderer.
     pub renderer: Renderer,
     /// The frames' width and height.
@@ -144,7 +144,7 @@ impl Drawer {
 pub fn run(device: &Device, options: &PaperOptions) -> anyhow::Result<PaperSummary> {
     let outputs = Outputs::in_dir(&options.out, "paper")?;
     let scene = built_in("paper").expect("a built-in scene")?;
-    let machine = Machine::now(device);
+    let machine = Provenance::now(device);
     let mut game = Game::with_options(device, &scene, options.seed, Options::default())?;
     let mut drawer = Drawer::new(options.renderer, &game, options.size)?;
     let seconds = options.duration.as_secs().max(1) as usize;
@@ -195,7 +195,7 @@ pub fn run(device: &Device, options: &PaperOptions) -> anyhow::Result<PaperSumma
 pub fn run_in_window(device: &Device, options: &PaperOptions) -> anyhow::Result<PaperSummary> {
     let outputs = Outputs::in_dir(&options.out, "paper")?;
     let scene = built_in("paper").expect("a built-in scene")?;
-    let machine = Machine::now(device);
+    let machine = Provenance::now(device);
     let play = PlayOptions {
         seed: options.seed,
         pilot: Pilot::Auto,
@@ -215,7 +215,7 @@ pub fn run_in_window(device: &Device, options: &PaperOptions) -> anyhow::Result<
 /// The summary of `counter`'s seconds, written with them and their plot.
 fn finish(
     options: &PaperOptions,
-    machine: Machine,
+    machine: Provenance,
     counter: &Seconds,
     sim_only: f64,
     game_over: bool,

@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context as _, bail};
 use serde::{Deserialize, Serialize};
 
-use super::{Machine, Outputs, plot, progress, write_csv, write_json};
+use super::{Outputs, Provenance, plot, progress, write_csv, write_json};
 use crate::files::thousands;
 use crate::game::scene::built_in;
 use crate::game::{Game, Options, Scene};
@@ -71,7 +71,7 @@ pub struct ScaleSummary {
     /// Always "scale".
     pub benchmark: String,
     /// Where and when.
-    pub machine: Machine,
+    pub machine: Provenance,
     /// A device-to-device copy's bytes (read plus written) per second, measured in the run.
     pub copy_bandwidth: f64,
     /// The frames' width and height.
@@ -155,7 +155,7 @@ pub fn scene(enemies: u64) -> anyhow::Result<Scene> {
 /// Runs the sizes on `device` and writes the files; returns the summary.
 pub fn run(device: &Device, options: &ScaleOptions) -> anyhow::Result<ScaleSummary> {
     let outputs = Outputs::in_dir(&options.out, "scale")?;
-    let machine = Machine::now(device);
+    let machine = Provenance::now(device);
     let copy_bandwidth = device.copy_bandwidth()?;
     let sizes = sizes(options.max);
     let bar = progress(sizes.len() as u64, options.progress, "bench scale");

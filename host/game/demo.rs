@@ -157,7 +157,7 @@ pub fn device_name(device: &Device) -> String {
 /// Who flies the ship in a demo.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Pilot {
+pub enum DemoPilot {
     /// The autopilot.
     #[default]
     Auto,
@@ -195,7 +195,7 @@ impl Frames {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RunOptions {
     /// Who flies the ship (`demo` only; a replay flies its recorded inputs).
-    pub pilot: Pilot,
+    pub pilot: DemoPilot,
     /// Lag and graphs.
     pub game: Options,
     /// Time every stage of every step (steps then run stage by stage and wait).
@@ -403,8 +403,8 @@ pub fn demo(
     let mut game = Game::with_options(device, scene, seed, options.game)?;
     let setup_s = start.elapsed().as_secs_f64();
     let pilot = match options.pilot {
-        Pilot::Auto => None,
-        Pilot::None => Some(Input::default()),
+        DemoPilot::Auto => None,
+        DemoPilot::None => Some(Input::default()),
     };
     let (report, inputs, state_hash) = play(&mut game, setup_s, seed, steps, options, |_| pilot)?;
     let replay = Replay {

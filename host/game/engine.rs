@@ -14,9 +14,9 @@ use super::looks;
 use super::spec::{Behaviour, EffectsSpec, GameSpec, Machine, Scene};
 use crate::backend::Ring;
 use crate::graphics::camera::Camera;
-use crate::pipeline::{Frame, GameConfig, PARTICLE_BYTES, Pipeline, Profile, mind_slots};
-use crate::sim::layout::{self, Layout, steps};
-use crate::sim::{Snapshot, WorldSpec, state};
+use crate::pipeline::{Frame, GameConfig, Pipeline, Profile, bytes_needed, mind_slots};
+use crate::sim::layout::{Layout, steps};
+use crate::sim::{Snapshot, WorldSpec};
 use crate::{Device, Error};
 
 /// How a game runs on its device.
@@ -74,11 +74,10 @@ fn vision(scene: &Scene, b: &Behaviour) -> f32 {
 /// allocates anything.
 pub fn footprint(scene: &Scene) -> (u32, u64) {
     let world = game_world(scene);
-    let layout = Layout::new(&world);
-    let space = layout::space(&world);
-    let bytes = state::bytes_needed(&layout, &space, world.kinds.len());
-    let particles = particles(&world, &scene.game) * PARTICLE_BYTES;
-    (layout.slots, bytes + particles)
+    let particles = u32::try_from(particles(&world, &scene.game)).unwrap_or(u32::MAX);
+    let game = (particles, waves(scene).len());
+    let bytes = bytes_needed(&world, Some(game));
+    (Layout::new(&world).slots, bytes)
 }
 
 /// How many explosion particles a game of `world` and `game` has: every enemy slot (from
@@ -210,7 +209,7 @@ impl<'d> Game<'d> {
                 .as_ref()
                 .map(|e| burst(e, scene.world.dt)),
         };
-        let pipeline = Pipeline::new(device, &world, seed, Some(game), options.graphs)?;
+        let pipeline = Pipeline::configured(device, &world, seed, Some(game), options.graphs)?;
         Ok(Game {
             ring: device.ring(options.lag)?,
             pipeline,
@@ -321,7 +320,9 @@ impl<'d> Game<'d> {
     /// the steps the game played (steps queued after the game ended change nothing).
     pub fn snapshot(&mut self) -> Result<Snapshot, Error> {
         self.settle()?;
-        self.pipeline.snapshot_at(u64::from(self.last.step))
+        let mut snapshot = self.pipeline.snapshot()?;
+        snapshot.steps = u64::from(self.last.step);
+        Ok(snapshot)
     }
 
     /// What the device is asked for a `width × height` frame through `camera`, `dt`

@@ -411,11 +411,12 @@ impl BodyRenderer {
         let looks = &self.looks;
         match &mut self.feed {
             Feed::Interop(buffer) => {
-                // SAFETY: the mapped buffer holds one vertex per slot (made so above) and
-                // only these launches touch it until the unmap.
-                buffer.with_mapped(|vertices| unsafe {
-                    pipeline.write_vertices(lens, looks, vertices)
-                })?;
+                // SAFETY: the view goes only into the launches `write_vertices` queues; the
+                // mapped buffer holds one vertex per slot (made so above) and only these
+                // launches touch it until the unmap.
+                unsafe {
+                    buffer.with_mapped(|vertices| pipeline.write_vertices(lens, looks, vertices))
+                }?;
             }
             Feed::Upload(buffer) => {
                 pipeline.vertices_into(lens, looks, buffer)?;
@@ -451,9 +452,9 @@ impl BodyRenderer {
             }
         }
         if let Ok(Some(image)) = &mut self.radar_device {
-            // SAFETY: the mapped buffer holds the radar's box and only this launch touches
-            // it until the unmap.
-            image.set(|pixels| unsafe { pipeline.radar_into(pixels) })?;
+            // SAFETY: the view goes only into the launch `radar_into` queues; the mapped
+            // buffer holds the radar's box and only this launch touches it until the unmap.
+            unsafe { image.set(|pixels| pipeline.radar_into(pixels)) }?;
             return Ok(());
         }
         let image = Frame {

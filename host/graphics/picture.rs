@@ -94,11 +94,15 @@ impl DeviceImage {
 
     /// Lets `write` fill the pixel buffer (row 0 the image's top) with launches on the
     /// device, then copies it into the texture on the GPU.
-    pub fn set(
+    ///
+    /// # Safety
+    /// As for [`GlBuffer::with_mapped`](crate::backend::GlBuffer::with_mapped).
+    pub unsafe fn set(
         &mut self,
         write: impl FnOnce(DevSlice<u32>) -> Result<(), Error>,
     ) -> Result<&Texture2d, Error> {
-        self.registered.with_mapped(write)?;
+        // SAFETY: forwarded.
+        unsafe { self.registered.with_mapped(write) }?;
         let (width, height) = self.size();
         self.texture.main_level().raw_upload_from_pixel_buffer(
             self.pixels.as_slice(),

@@ -14,8 +14,10 @@ use gpuwars_kernels::render::{
 use gpuwars_kernels::{DevSlice, registry};
 use xxhash_rust::xxh3::xxh3_64;
 
-use super::{Pipeline, op};
+use super::Pipeline;
+use crate::backend::Binder;
 use crate::files::FileError;
+use crate::primitives::threads;
 use crate::{Buffer, Error, Op};
 
 /// Largest image side, in pixels.
@@ -125,9 +127,7 @@ fn check_lens(lens: &Lens) -> Result<(), Error> {
 impl Pipeline<'_> {
     /// The ship's slot, for [`Lens::ship`]: [`camera::NO_SHIP`] in a world without a game.
     pub fn ship(&self) -> u32 {
-        self.game
-            .as_ref()
-            .map_or(camera::NO_SHIP, |g| g.config.rules.ship.start)
+        (self.world.game.as_ref()).map_or(camera::NO_SHIP, |g| g.config.rules.ship.start)
     }
 
     /// Draws every live body as the camera of `lens` shows the world, each kind as `looks`
@@ -159,9 +159,11 @@ impl Pipeline<'_> {
     /// the radar's counts. Waits for them.
     pub fn radar_image(&self, radar: RadarBox) -> Result<Vec<u32>, Error> {
         let canvas = self.canvas()?;
-        // SAFETY: the canvas's radar image holds the largest radar's box, and only this
-        // launch touches it until `download` has waited for it.
-        unsafe { self.radar_into(canvas.radar_image.view()) }?;
+        // SAFETY: the view goes into this op only.
+        let mut b = unsafe { Binder::new() };
+        let image = b.view(&canvas.radar_image);
+        // SAFETY: the canvas's radar image holds the largest radar's box.
+        self.device.launch(unsafe { self.radar_op(image, b) }?)?;
         let mut pixels = self.device.download(&canvas.radar_image)?;
         pixels.truncate((radar.width * radar.height) as usize);
         Ok(pixels)
@@ -176,20 +178,28 @@ impl Pipeline<'_> {
     /// buffer) that holds the frame's radar box and that nothing else touches until the
     /// launch completes.
     pub unsafe fn radar_into(&self, image: DevSlice<u32>) -> Result<(), Error> {
+        // SAFETY: the binder's views go into this op only; the caller vouches for `image`.
+        let op = unsafe { self.radar_op(image, Binder::new()) }?;
+        self.device.launch(op)
+    }
+
+    /// The launch that writes the radar's pixels into `image`, its views made by `b`.
+    ///
+    /// # Safety
+    /// `image` was made by `b`, or is memory as [`Pipeline::radar_into`] asks.
+    unsafe fn radar_op(&self, image: DevSlice<u32>, mut b: Binder) -> Result<Op, Error> {
         let canvas = self.canvas()?;
         let args = RadarImageArgs {
-            looks: canvas.looks.view(),
-            shown: canvas.shown.view(),
-            radar: canvas.radar(),
+            looks: b.view(&canvas.looks),
+            shown: b.view(&canvas.shown),
+            radar: canvas.radar(&mut b),
             image,
-            stride: radar::stride(self.layout.slots),
+            stride: radar::stride(self.world.layout.slots),
             reserved: 0,
         };
-        // SAFETY: the views are this pipeline's, sized as the kernel's contract asks; the
-        // caller vouches for `image`; one thread per pixel of the largest box.
-        let ops = unsafe { vec![op(registry::RADAR_IMAGE, RADAR_BOX as u32, args, 12)] };
-        let device = self.device;
-        device.run(&device.plan(ops, false)?)
+        // SAFETY: the canvas's buffers, sized as the kernel asks; the caller vouches for
+        // `image`; one thread per pixel of the largest box.
+        Ok(unsafe { threads(registry::RADAR_IMAGE, RADAR_BOX as u32, args, b, 12) })
     }
 
     fn canvas(&self) -> Result<&Canvas, Error> {
@@ -235,7 +245,7 @@ impl Pipeline<'_> {
     /// returns the frame's first ops: the camera, then the radar's counts.
     fn prepare(&mut self, lens: &Lens, looks: &[Look]) -> Result<Vec<Op>, Error> {
         check_lens(lens)?;
-        let kinds = self.spec.kinds.len();
+        let kinds = self.world.spec.kinds.len();
         if looks.len() != kinds {
             return Err(Error::Invalid(format!(
                 "{} looks for a world of {kinds} kinds",
@@ -265,45 +275,43 @@ impl Pipeline<'_> {
                     counts: device.alloc_zeroed(RADAR_CELLS)?,
                     top: device.alloc_zeroed(RADAR_CELLS)?,
                     radar_image: device.alloc_zeroed(RADAR_BOX)?,
-                    large: device.alloc_zeroed(self.layout.slots as usize)?,
+                    large: device.alloc_zeroed(self.world.layout.slots as usize)?,
                     large_count: device.alloc_zeroed(1)?,
                 })
             }
         }
         let canvas = self.canvas.as_mut().expect("made above");
         device.write(&mut canvas.looks, looks)?;
-        let bodies = self.state.bodies();
+        let (world, slots) = (&self.world, self.world.layout.slots);
+        // SAFETY (both binders): the views go into the op made with each.
+        let mut b = unsafe { Binder::new() };
+        let input = world.game.as_ref().map(|g| &g.data.input);
         let camera = CameraArgs {
-            bodies,
-            input: self
-                .game
-                .as_ref()
-                .map_or(DevSlice::EMPTY, |g| g.input.view()),
-            state: canvas.camera.view(),
-            shown: canvas.shown.view(),
+            bodies: world.state.bodies(&mut b),
+            input: input.map_or(DevSlice::EMPTY, |input| b.view(input)),
+            state: b.view(&canvas.camera),
+            shown: b.view(&canvas.shown),
             lens: *lens,
         };
-        let stride = radar::stride(self.layout.slots);
-        let radar = RadarArgs {
-            bodies,
-            looks: canvas.looks.view(),
-            shown: canvas.shown.view(),
-            radar: canvas.radar(),
-            stride,
-            reserved: 0,
-        };
-        // SAFETY: the views are of this pipeline's buffers, sized for the world's slots,
-        // one camera state and one `Shown`, and the largest radar; the ops run (and are
-        // dropped) before the caller's borrow ends.
-        Ok(unsafe {
-            let mut ops = vec![op(registry::CAMERA, 1, camera, 64)];
-            // A frame without a radar (the whole field) has nothing to count.
-            if lens.radar != 0 {
-                let samples = self.layout.slots.div_ceil(stride);
-                ops.push(op(registry::RADAR_BODIES, samples, radar, 24));
-            }
-            ops
-        })
+        // SAFETY (both ops): the world's and the canvas's buffers, sized for the world's
+        // slots, one camera state and one `Shown`, and the largest radar.
+        let mut ops = vec![unsafe { threads(registry::CAMERA, 1, camera, b, 64) }];
+        // A frame without a radar (the whole field) has nothing to count.
+        if lens.radar != 0 {
+            let stride = radar::stride(slots);
+            let mut b = unsafe { Binder::new() };
+            let radar = RadarArgs {
+                bodies: world.state.bodies(&mut b),
+                looks: b.view(&canvas.looks),
+                shown: b.view(&canvas.shown),
+                radar: canvas.radar(&mut b),
+                stride,
+                reserved: 0,
+            };
+            let samples = slots.div_ceil(stride);
+            ops.push(unsafe { threads(registry::RADAR_BODIES, samples, radar, b, 24) });
+        }
+        Ok(ops)
     }
 
     /// # Safety
@@ -316,44 +324,59 @@ impl Pipeline<'_> {
     ) -> Result<(), Error> {
         let mut ops = self.prepare(lens, looks)?;
         let canvas = self.canvas.as_ref().expect("made by prepare");
-        let splat = SplatArgs {
-            bodies: self.state.bodies(),
-            kinds: self.state.kinds.view(),
-            looks: canvas.looks.view(),
-            shown: canvas.shown.view(),
-            keys: canvas.keys.view(),
-            large: canvas.large.view(),
-            large_count: canvas.large_count.view(),
+        let (world, slots) = (&self.world, self.world.layout.slots);
+        let splat = |b: &mut Binder| SplatArgs {
+            bodies: world.state.bodies(b),
+            kinds: b.view(&world.state.tables.info),
+            looks: b.view(&canvas.looks),
+            shown: b.view(&canvas.shown),
+            keys: b.view(&canvas.keys),
+            large: b.view(&canvas.large),
+            large_count: b.view(&canvas.large_count),
         };
-        let resolve = ResolveArgs {
-            looks: canvas.looks.view(),
-            keys: canvas.keys.view(),
-            image: image.unwrap_or_else(|| canvas.image.view()),
-            shown: canvas.shown.view(),
-            radar: canvas.radar(),
-            stride: radar::stride(self.layout.slots),
-            reserved: 0,
-        };
-        let pixels = lens.width * lens.height;
-        // SAFETY: the views are of this pipeline's buffers (or the caller's image), sized
-        // for the world's slots and the frame's pixels, and the ops run (and are dropped)
-        // before this borrow ends.
+        // SAFETY (every binder below): the views go into the op made with it. (Every op
+        // below): the world's and the canvas's buffers, sized for the world's slots and the
+        // frame's pixels, or the caller's image (see `render_into`).
         unsafe {
-            ops.push(Op::clear(canvas.large_count.view()));
-            ops.push(op(registry::SPLAT_BODIES, self.layout.slots, splat, 64));
-            let large = (self.layout.slots * LARGE_LANES).min(LARGE_THREADS);
-            ops.push(op(registry::SPLAT_LARGE, large, splat, 0));
-            if let Some((particles, lifetime)) = self.particle_view() {
+            let mut b = Binder::new();
+            let large_count = b.view(&canvas.large_count);
+            ops.push(Op::clear(large_count, b));
+            let mut b = Binder::new();
+            let args = splat(&mut b);
+            ops.push(threads(registry::SPLAT_BODIES, slots, args, b, 64));
+            let large = (slots * LARGE_LANES).min(LARGE_THREADS);
+            let mut b = Binder::new();
+            let args = splat(&mut b);
+            ops.push(threads(registry::SPLAT_LARGE, large, args, b, 0));
+            let mut b = Binder::new();
+            if let Some((particles, lifetime)) = world.particles(&mut b) {
                 let args = ParticleSplatArgs {
                     particles,
-                    shown: canvas.shown.view(),
-                    keys: canvas.keys.view(),
+                    shown: b.view(&canvas.shown),
+                    keys: b.view(&canvas.keys),
                     lifetime,
                     reserved: 0,
                 };
-                ops.push(op(registry::SPLAT_PARTICLES, particles.len(), args, 24));
+                ops.push(threads(
+                    registry::SPLAT_PARTICLES,
+                    particles.len(),
+                    args,
+                    b,
+                    24,
+                ));
             }
-            ops.push(op(registry::RESOLVE_PIXELS, pixels, resolve, 12));
+            let mut b = Binder::new();
+            let resolve = ResolveArgs {
+                looks: b.view(&canvas.looks),
+                keys: b.view(&canvas.keys),
+                image: image.unwrap_or_else(|| b.view(&canvas.image)),
+                shown: b.view(&canvas.shown),
+                radar: canvas.radar(&mut b),
+                stride: radar::stride(slots),
+                reserved: 0,
+            };
+            let pixels = lens.width * lens.height;
+            ops.push(threads(registry::RESOLVE_PIXELS, pixels, resolve, b, 12));
         }
         let device = self.device;
         device.run(&device.plan(ops, false)?)
@@ -361,11 +384,11 @@ impl Pipeline<'_> {
 }
 
 impl Canvas {
-    /// Views of the radar's counts.
-    fn radar(&self) -> RadarCounts {
+    /// The radar's counts, made by `b`.
+    fn radar(&self, b: &mut Binder) -> RadarCounts {
         RadarCounts {
-            counts: self.counts.view(),
-            top: self.top.view(),
+            counts: b.view(&self.counts),
+            top: b.view(&self.top),
         }
     }
 }
@@ -374,8 +397,9 @@ impl Pipeline<'_> {
     /// The number of vertices [`Pipeline::write_vertices`] writes: one per slot, the
     /// backdrop's, and one per explosion particle.
     pub fn vertex_count(&self) -> u32 {
-        let particles = self.particle_view().map_or(0, |(p, _)| p.len());
-        self.layout.slots + 1 + particles
+        let particles = self.world.game.as_ref().and_then(|g| g.effects.as_ref());
+        let particles = particles.map_or(0, |(_, burst)| burst.particles());
+        self.world.layout.slots + 1 + particles
     }
 
     /// Queues, after the steps queued before and without waiting: the camera of `lens`,
@@ -394,40 +418,61 @@ impl Pipeline<'_> {
         looks: &[Look],
         vertices: DevSlice<BodyVertex>,
     ) -> Result<(), Error> {
-        let (slots, count) = (self.layout.slots, self.vertex_count());
-        if vertices.len() < count {
+        // SAFETY: forwarded.
+        unsafe { self.vertices_to(lens, looks, Vertices::Mapped(vertices)) }
+    }
+
+    /// [`Pipeline::write_vertices`] into a mapped view or a buffer.
+    ///
+    /// # Safety
+    /// As for [`Pipeline::write_vertices`], for a mapped view.
+    unsafe fn vertices_to(
+        &mut self,
+        lens: &Lens,
+        looks: &[Look],
+        target: Vertices<'_>,
+    ) -> Result<(), Error> {
+        let (slots, count) = (self.world.layout.slots, self.vertex_count());
+        let len = match target {
+            Vertices::Mapped(view) => view.len(),
+            Vertices::Buffer(buffer) => buffer.len() as u32,
+        };
+        // Each op views a buffer through its own binder, which holds it.
+        let vertices = |b: &mut Binder| match target {
+            Vertices::Mapped(view) => view,
+            Vertices::Buffer(buffer) => b.view(buffer),
+        };
+        if len < count {
             return Err(Error::Invalid(format!(
-                "a vertex buffer of {} vertices for {count} (of {slots} slots)",
-                vertices.len(),
+                "a vertex buffer of {len} vertices for {count} (of {slots} slots)",
             )));
         }
         let mut ops = self.prepare(lens, looks)?;
-        let canvas = self.canvas.as_ref().expect("made by prepare");
-        let args = VertexArgs {
-            bodies: self.state.bodies(),
-            kinds: self.state.kinds.view(),
-            looks: canvas.looks.view(),
-            shown: canvas.shown.view(),
-            vertices: vertices.range(0, slots + 1),
-        };
-        // SAFETY: the body and particle views are this pipeline's; the caller vouches for
-        // `vertices`, which holds them all (checked above).
+        let (canvas, world) = (self.canvas.as_ref().expect("made by prepare"), &self.world);
+        // SAFETY (both binders): the views go into the op made with each. (Both ops): the
+        // world's and the canvas's buffers; the caller vouches for `vertices`, which holds
+        // them all (checked above).
         unsafe {
-            ops.push(op(registry::WRITE_VERTICES, slots + 1, args, 40));
-            if let Some((particles, lifetime)) = self.particle_view() {
+            let mut b = Binder::new();
+            let args = VertexArgs {
+                bodies: world.state.bodies(&mut b),
+                kinds: b.view(&world.state.tables.info),
+                looks: b.view(&canvas.looks),
+                shown: b.view(&canvas.shown),
+                vertices: vertices(&mut b).range(0, slots + 1),
+            };
+            ops.push(threads(registry::WRITE_VERTICES, slots + 1, args, b, 40));
+            let mut b = Binder::new();
+            if let Some((particles, lifetime)) = world.particles(&mut b) {
                 let args = ParticleVertexArgs {
                     particles,
-                    shown: canvas.shown.view(),
-                    vertices: vertices.range(slots + 1, particles.len()),
+                    shown: b.view(&canvas.shown),
+                    vertices: vertices(&mut b).range(slots + 1, particles.len()),
                     lifetime,
                     reserved: 0,
                 };
-                ops.push(op(
-                    registry::WRITE_PARTICLE_VERTICES,
-                    particles.len(),
-                    args,
-                    60,
-                ));
+                let n = particles.len();
+                ops.push(threads(registry::WRITE_PARTICLE_VERTICES, n, args, b, 60));
             }
         }
         let device = self.device;
@@ -442,8 +487,14 @@ impl Pipeline<'_> {
         looks: &[Look],
         vertices: &mut Buffer<BodyVertex>,
     ) -> Result<(), Error> {
-        // SAFETY: the buffer is borrowed mutably for the launch, which `run` completes on
-        // the CPU and orders before any later use of the buffer on the GPU's one stream.
-        unsafe { self.write_vertices(lens, looks, vertices.view()) }
+        // SAFETY: a buffer, viewed by each op's binder.
+        unsafe { self.vertices_to(lens, looks, Vertices::Buffer(vertices)) }
     }
+}
+
+/// Where vertices are written: memory mapped from OpenGL, or a buffer.
+#[derive(Clone, Copy)]
+enum Vertices<'a> {
+    Mapped(DevSlice<BodyVertex>),
+    Buffer(&'a Buffer<BodyVertex>),
 }

@@ -2,7 +2,7 @@
 
 use serde::Serialize;
 
-use super::Stage;
+use super::StagePlan;
 
 /// Time, launches and bytes of one stage, summed over the profiled steps.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
@@ -29,12 +29,16 @@ pub struct Profile {
 
 impl Profile {
     /// Adds `seconds` of one step to `stage`'s entry.
-    pub(super) fn add(&mut self, stage: &Stage, seconds: f64) {
-        let entry = match self.stages.iter_mut().position(|s| s.stage == stage.name) {
+    pub(super) fn add(&mut self, stage: &StagePlan, seconds: f64) {
+        let entry = match self
+            .stages
+            .iter_mut()
+            .position(|s| s.stage == stage.stage.name())
+        {
             Some(i) => &mut self.stages[i],
             None => {
                 self.stages.push(StageTimes {
-                    stage: stage.name,
+                    stage: stage.stage.name(),
                     launches: stage.launches(),
                     bytes: stage.bytes(),
                     seconds: 0.0,

@@ -1,53 +1,187 @@
-//! The simulation-only configuration of the pipeline: a world of bodies without a game.
+//! The world's data on a device: its description, its state and scratch buffers, and the
+//! game's. The stages' ops view these buffers; each op holds those it views.
+//!
+//! Every buffer is allocated once in [`World::new`] for the sizes the kernels' contracts
+//! ask (a slot's arrays for every slot, a bucket's for every bucket plus the total, a
+//! kind's for every kind) and never replaced, which is what each stage's `SAFETY` note
+//! relies on.
 
-use std::ops::{Deref, DerefMut};
+use gpuwars_kernels::Kernel;
+use gpuwars_kernels::data::{Sizes, Unmade};
+use gpuwars_kernels::game::GameData;
+use gpuwars_kernels::game::effects::{Burst, Particles};
+use gpuwars_kernels::game::master::MasterArgs;
+use gpuwars_kernels::registry;
+use gpuwars_kernels::sim::Space;
+use gpuwars_kernels::sim::broad::CellIndex;
+use gpuwars_kernels::sim::narrow::CollideArgs;
 
-use super::Pipeline;
-use crate::sim::{Snapshot, WorldSpec};
+use super::GameConfig;
+use crate::backend::{Binder, Buffers};
+use crate::sim::layout::{self, Layout};
+use crate::sim::state::{self, Scratch, WorldState, made};
+use crate::sim::{SpecError, WorldSpec};
 use crate::{Device, Error};
 
-/// A world on a device, stepped by the pipeline's physics stages only (broad phase, narrow
-/// phase, integration, free lists); a scene's game adds the rest (`crate::game::Game`).
-pub struct Simulation<'d> {
-    pipeline: Pipeline<'d>,
+/// What a world's scene makes its step launch.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Config {
+    /// The narrow phase's kernel, if anything collides.
+    pub collide: Option<Kernel<CollideArgs>>,
+    /// Whether the grid is built (something collides, looks around, or the autopilot may fly).
+    pub grid: bool,
 }
 
-impl<'d> Simulation<'d> {
-    /// An empty world (every slot free) for `spec`, its generators seeded from `seed`; the
-    /// step replays as a CUDA graph on the GPU.
-    pub fn new(device: &'d Device, spec: &WorldSpec, seed: u32) -> Result<Self, Error> {
-        Ok(Simulation {
-            pipeline: Pipeline::new(device, spec, seed, None, true)?,
+/// The game's buffers on the device.
+pub(crate) struct GameState {
+    pub config: GameConfig,
+    pub data: GameData<Buffers>,
+    /// The explosions' particles and how kills burst, if the scene has explosions.
+    pub effects: Option<(Particles<Buffers>, Burst)>,
+}
+
+/// A world on a device: description, buffers, and the game's if it plays one.
+pub(crate) struct World {
+    pub spec: WorldSpec,
+    pub layout: Layout,
+    pub space: Space,
+    pub config: Config,
+    pub state: WorldState,
+    pub scratch: Scratch,
+    pub game: Option<GameState>,
+}
+
+/// Bytes of device memory a world of `spec` takes, with a game of `waves` waves whose
+/// explosions have `particles` particles, if `game` is `Some((particles, waves))`.
+pub fn bytes_needed(spec: &WorldSpec, game: Option<(u32, usize)>) -> u64 {
+    let layout = Layout::new(spec);
+    let kinds = spec.kinds.len();
+    let mut sizes = Sizes::default();
+    if let Some((particles, waves)) = game {
+        made(GameData::<Unmade>::build(&mut sizes, kinds, waves));
+        made(Particles::<Unmade>::build(&mut sizes, particles as usize));
+    }
+    state::bytes_needed(&layout, &layout::space(spec), kinds) + sizes.bytes
+}
+
+impl World {
+    /// A world of `spec` with every slot free, its generators seeded from `seed`, and the
+    /// game `game` if given. Fails with [`Error::OutOfMemory`] before allocating anything
+    /// if its buffers do not fit the device.
+    pub fn new(
+        device: &Device,
+        spec: &WorldSpec,
+        seed: u32,
+        game: Option<GameConfig>,
+    ) -> Result<Self, Error> {
+        spec.validate().map_err(invalid_world)?;
+        let layout = Layout::new(spec);
+        let space = layout::space(spec);
+        let kinds = spec.kinds.len();
+        let mut game = game;
+        if let Some(g) = game.as_mut() {
+            let slots = g.mind_slots(&layout).unwrap_or((0, 0));
+            if let Some(burst) = g.effects.as_mut() {
+                (burst.first_slot, burst.end_slot) = slots;
+            }
+        }
+        let sized = game
+            .as_ref()
+            .map(|g| (g.effects.map_or(0, |b| b.particles()), g.waves.len()));
+        device.check_fits(
+            &format!(
+                "a world of {} slots on a {}x{} grid",
+                layout.slots, space.cols, space.rows
+            ),
+            bytes_needed(spec, sized),
+        )?;
+        let collides = spec.collision_masks().iter().any(|&m| m != 0);
+        let config = Config {
+            collide: collides.then_some(if spec.has_rects() {
+                registry::COLLIDE
+            } else {
+                // No rectangles: the narrow phase without the rectangle tests.
+                registry::COLLIDE_CIRCLES
+            }),
+            // A game's autopilot looks through the grid whenever it flies.
+            grid: collides || game.is_some(),
+        };
+        let state = WorldState::new(device, spec, &layout, seed)?;
+        let scratch = Scratch::new(device, &layout, &space, kinds)?;
+        let game = match game {
+            Some(config) => {
+                let mut data = GameData::build(&mut device.zeroed(), kinds, config.waves.len())?;
+                device.write(&mut data.brains, &config.brains)?;
+                device.write(&mut data.waves, &config.waves)?;
+                let effects = match config.effects {
+                    Some(burst) => Some((
+                        Particles::build(&mut device.zeroed(), burst.particles() as usize)?,
+                        burst,
+                    )),
+                    None => None,
+                };
+                Some(GameState {
+                    config,
+                    data,
+                    effects,
+                })
+            }
+            None => None,
+        };
+        Ok(World {
+            spec: spec.clone(),
+            layout,
+            space,
+            config,
+            state,
+            scratch,
+            game,
         })
     }
 
-    /// Advances the world by one time step and waits for it.
-    pub fn step(&mut self) -> Result<(), Error> {
-        self.pipeline.step()?;
-        self.pipeline.device().synchronize()
+    /// The grid as the world's queries see it (capped as its physics says), made by `b`.
+    pub fn cells(&self, b: &mut Binder) -> CellIndex {
+        self.scratch.cell_index(b, self.spec.physics.neighbour_cap)
     }
 
-    /// A copy of the whole state, read back from the device.
-    pub fn snapshot(&self) -> Result<Snapshot, Error> {
-        self.pipeline.snapshot_at(self.pipeline.steps())
+    /// The master's and the tally's arguments, made by `b`, in games.
+    pub fn master_args(&self, b: &mut Binder) -> Option<MasterArgs> {
+        let game = self.game.as_ref()?;
+        let data = &game.data;
+        Some(MasterArgs {
+            bodies: self.state.bodies(b),
+            kinds: b.view(&self.state.tables.info),
+            ranges: b.view(&self.state.tables.ranges),
+            free: self.state.free(b),
+            contacts: self.scratch.contacts(b),
+            status: b.view(&data.status),
+            input: b.view(&data.input),
+            spawned: b.view(&data.spawned),
+            births: b.view(&data.births),
+            birth_speed: b.view(&data.birth_speed),
+            waves: b.view(&data.waves),
+            space: self.space,
+            rules: game.config.rules,
+            reserved: 0,
+        })
     }
 
-    /// The state hash after the steps so far (see [`Snapshot::state_hash`]).
-    pub fn state_hash(&self) -> Result<u64, Error> {
-        Ok(self.snapshot()?.state_hash())
+    /// The game's buffers, or an error for a world without a game.
+    pub fn game(&self) -> Result<&GameState, Error> {
+        self.game
+            .as_ref()
+            .ok_or_else(|| Error::Invalid("this world plays no game".into()))
+    }
+
+    /// The kernels' view of the explosions' particles, made by `b`, and their lifetime in
+    /// steps, if the world has any particles.
+    pub fn particles(&self, b: &mut Binder) -> Option<(Particles, u32)> {
+        let (p, burst) = self.game.as_ref()?.effects.as_ref()?;
+        (burst.particles() > 0).then(|| (made(p.convert(b)), burst.lifetime))
     }
 }
 
-impl<'d> Deref for Simulation<'d> {
-    type Target = Pipeline<'d>;
-
-    fn deref(&self) -> &Self::Target {
-        &self.pipeline
-    }
-}
-
-impl DerefMut for Simulation<'_> {
-    fn deref_mut(&mut self) -> &mut Self::Target {
-        &mut self.pipeline
-    }
+/// A world description that breaks a rule, as the backend's error.
+fn invalid_world(e: SpecError) -> Error {
+    Error::Invalid(format!("invalid world: {e}"))
 }

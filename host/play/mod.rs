@@ -385,10 +385,10 @@ fn show_kernel_frame(
         }
     }
     if let Ok(Some(image)) = &mut screen.device_image {
-        // SAFETY: the mapped pixel buffer holds `width × height` pixels and only these
-        // launches touch it until the unmap.
+        // SAFETY: the view goes only into the launches `render_into` queues; the mapped
+        // pixel buffer holds `width × height` pixels and only they touch it until the unmap.
         let texture =
-            image.set(|pixels| unsafe { game.render_into(width, height, camera, dt, pixels) })?;
+            unsafe { image.set(|pixels| game.render_into(width, height, camera, dt, pixels)) }?;
         screen
             .blit
             .draw(frame, texture, true, (0, 0), height, false)?;

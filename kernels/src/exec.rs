@@ -6,10 +6,12 @@
 //! the emulator calls the same body for every thread of the grid.
 //!
 //! Device memory is reached through [`DevSlice`], a bounds-checked view made of a raw address
-//! and a length. Building one is `unsafe` (the host promises the memory is valid for the whole
-//! launch); using one is not, because every access checks its index. What no type can check
-//! is the kernel's own promise that two threads of one launch never write the same element
-//! (except through atomics): every kernel states how it keeps it.
+//! and a length. Building one is `unsafe` (the host promises the memory is valid for every
+//! launch that uses it; its backend makes views only for the ops that hold their buffers, and
+//! hands none to safe code); using one inside a kernel is not, because every access checks
+//! its index. What no type can check is the kernel's own promise that two threads of one
+//! launch never write the same element (except through atomics): every kernel states how it
+//! keeps it.
 
 use core::marker::PhantomData;
 use core::sync::atomic::{AtomicU32, Ordering};

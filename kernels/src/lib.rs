@@ -16,6 +16,7 @@
 )]
 #![warn(missing_docs)]
 
+pub mod data;
 pub mod exec;
 pub mod game;
 pub mod primitives;

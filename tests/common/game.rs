@@ -112,7 +112,7 @@ pub fn play<'d>(
 /// `fire`.
 pub fn aim_at(snapshot: &Snapshot, ship: usize, target: Vec2, fire: bool) -> Input {
     Input {
-        aim: Input::aim_towards(target - snapshot.pos[ship]),
+        aim: Input::aim_towards(target - snapshot.bodies.pos[ship]),
         fire: u32::from(fire),
         ..Input::default()
     }
@@ -122,7 +122,7 @@ pub fn aim_at(snapshot: &Snapshot, ship: usize, target: Vec2, fire: bool) -> Inp
 pub fn live_of(snapshot: &Snapshot, kind: u32) -> Vec<usize> {
     snapshot
         .live()
-        .filter(|&s| snapshot.kind[s] == kind)
+        .filter(|&s| snapshot.bodies.kind[s] == kind)
         .collect()
 }
 
@@ -148,7 +148,7 @@ pub fn mean_nearest(snapshot: &Snapshot, slots: &[usize], size: f32, wrap: bool)
             slots
                 .iter()
                 .filter(|&&b| b != a)
-                .map(|&b| gap(snapshot.pos[a], snapshot.pos[b]))
+                .map(|&b| gap(snapshot.bodies.pos[a], snapshot.bodies.pos[b]))
                 .fold(f32::INFINITY, f32::min)
         })
         .sum();

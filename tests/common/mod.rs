@@ -105,3 +105,38 @@ pub fn sort_pairs(keys: &[u32]) -> (Vec<u32>, Vec<u32>) {
     pairs.sort_unstable();
     pairs.into_iter().unzip()
 }
+
+/// A histogram of the first `n` of `keys` into `counts`, on `grid` blocks of `block` threads,
+/// as an op that holds both buffers.
+pub fn histogram_op(
+    keys: &gpuwars::Buffer<u32>,
+    counts: &gpuwars::Buffer<u32>,
+    n: u32,
+    grid: u32,
+    block: u32,
+) -> gpuwars::Op {
+    use gpuwars::backend::{Binder, Launch};
+    use gpuwars::kernels::{primitives::histogram::HistogramArgs, registry};
+    // SAFETY: the views go into this op only.
+    let mut b = unsafe { Binder::new() };
+    let args = HistogramArgs {
+        keys: b.view(keys),
+        counts: b.view(counts),
+        n,
+        reserved: 0,
+    };
+    let kernel = registry::HISTOGRAM;
+    // SAFETY: two buffers of this binder; a wrong `n` is caught by the bounds checks.
+    unsafe {
+        gpuwars::Op::launch(
+            Launch {
+                kernel,
+                grid,
+                block,
+                args,
+            },
+            b,
+            0,
+        )
+    }
+}

@@ -114,21 +114,24 @@ pub fn brute_force(spec: &WorldSpec, space: &Space, before: &Snapshot) -> Expect
     };
     let live: Vec<usize> = before.live().collect();
     for &a in &live {
-        let ka = &kinds[before.kind[a] as usize];
+        let ka = &kinds[before.bodies.kind[a] as usize];
         for &b in &live {
-            let kb = &kinds[before.kind[b] as usize];
-            if a == b || !ka.collides_with(before.kind[b]) {
+            let kb = &kinds[before.bodies.kind[b] as usize];
+            if a == b || !ka.collides_with(before.bodies.kind[b]) {
                 continue;
             }
-            let d = space.offset(before.pos[a], before.pos[b]);
+            let d = space.offset(before.bodies.pos[a], before.bodies.pos[b]);
             let Some(c) = contact(ka.bound(), kb.bound(), d, tie_break(a as u32, b as u32)) else {
                 continue;
             };
             let r = respond(
                 c.normal,
                 c.depth,
-                (inverse_mass(before.mass[a]), inverse_mass(before.mass[b])),
-                (before.vel[a], before.vel[b]),
+                (
+                    inverse_mass(before.bodies.mass[a]),
+                    inverse_mass(before.bodies.mass[b]),
+                ),
+                (before.bodies.vel[a], before.bodies.vel[b]),
                 ka.restitution.max(kb.restitution),
             );
             e.count[a] += 1;

@@ -100,7 +100,7 @@ fn constant_force(device: &Device, dt: f32, integrator: Integrator) -> anyhow::R
     let t = f64::from(n) * f64::from(dt);
     let g = field.gravity.as_dvec2();
     let exact = x0.as_dvec2() + v0.as_dvec2() * t + g * (t * t / 2.0);
-    Ok((sim.snapshot()?.pos[0].as_dvec2() - exact).length())
+    Ok((sim.snapshot()?.bodies.pos[0].as_dvec2() - exact).length())
 }
 
 /// Masses 1 and 3 meeting head-on at ±50 units/s with restitution 0.5: the largest error of
@@ -129,8 +129,8 @@ fn head_on(device: &Device, dt: f32, integrator: Integrator) -> anyhow::Result<f
     let p = m1 * v1 + m2 * v2;
     let after1 = (p - m2 * e * (v1 - v2)) / (m1 + m2);
     let after2 = (p + m1 * e * (v1 - v2)) / (m1 + m2);
-    let got1 = s.vel[0].as_dvec2() - DVec2::new(after1, 0.0);
-    let got2 = s.vel[b as usize].as_dvec2() - DVec2::new(after2, 0.0);
+    let got1 = s.bodies.vel[0].as_dvec2() - DVec2::new(after1, 0.0);
+    let got2 = s.bodies.vel[b as usize].as_dvec2() - DVec2::new(after2, 0.0);
     Ok(got1.length().max(got2.length()))
 }
 
@@ -166,7 +166,7 @@ fn orbit(device: &Device, dt: f32, integrator: Integrator) -> anyhow::Result<f64
     for _ in 0..steps(5.0 * period, dt).div_ceil(8) {
         advance(&mut sim, 8)?;
         let s = sim.snapshot()?;
-        worst = worst.max(((energy(s.pos[0], s.vel[0]) - start) / start).abs());
+        worst = worst.max(((energy(s.bodies.pos[0], s.bodies.vel[0]) - start) / start).abs());
     }
     Ok(worst)
 }

@@ -24,9 +24,9 @@ use anyhow::Context as _;
 use glam::Vec2;
 use serde::{Deserialize, Serialize};
 
-use super::{Machine, Outputs, plot, progress, write_csv, write_json};
+use super::{Outputs, Provenance, plot, progress, write_csv, write_json};
 use crate::files::write_atomically;
-use crate::game::spec::Machine as Brain;
+use crate::game::spec::Machine;
 use crate::game::{Game, Options, Scene};
 use crate::pipeline::{Pipeline, Profile, Simulation};
 use crate::sim::{Boundary, Field, Integrator, KindSpec, Physics, Shape, WorldSpec};
@@ -187,7 +187,7 @@ pub struct TradeoffSummary {
     /// Always "tradeoff".
     pub benchmark: String,
     /// Where and when.
-    pub machine: Machine,
+    pub machine: Provenance,
     /// Whether it was a quick run.
     pub quick: bool,
     /// The sizes it ran.
@@ -328,7 +328,7 @@ fn crowd_error(
         .slots
         .iter()
         .zip(&truth.pos)
-        .map(|(&slot, &p)| (end.pos[slot].as_dvec2() - p).length_squared())
+        .map(|(&slot, &p)| (end.bodies.pos[slot].as_dvec2() - p).length_squared())
         .sum();
     let rms = (sum / truth.slots.len().max(1) as f64).sqrt();
     Ok((rms, missed as f64 / contacts.max(1) as f64))
@@ -434,7 +434,7 @@ fn feature_choices(scene: &Scene) -> Vec<(String, Scene)> {
         .kinds
         .iter()
         .zip(&scene.game.behaviours)
-        .filter(|(_, b)| b.is_some_and(|b| b.machine == Brain::Tricky))
+        .filter(|(_, b)| b.is_some_and(|b| b.machine == Machine::Tricky))
         .map(|(k, _)| k.name.clone())
         .collect();
     if !tricky.is_empty() {
@@ -504,7 +504,7 @@ fn game_row(
 /// Runs the whole matrix and writes `bench-tradeoff.{csv,md,png,json}`.
 pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<TradeoffSummary> {
     let outputs = Outputs::in_dir(&options.out, "tradeoff")?;
-    let machine = Machine::now(device);
+    let machine = Provenance::now(device);
     let sizes = Sizes::new(device, options.quick);
     let choices = crowd_choices();
     let games = game_choices(options.scene.world.physics);

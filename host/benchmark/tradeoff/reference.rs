@@ -52,16 +52,16 @@ impl Reference {
             masks: Vec::new(),
         };
         for slot in snapshot.live() {
-            let kind = snapshot.kind[slot];
+            let kind = snapshot.bodies.kind[slot];
             let spec_kind = &spec.kinds[kind as usize];
             let Shape::Circle { radius } = spec_kind.shape else {
                 anyhow::bail!("the f64 reference models circles only");
             };
             r.slots.push(slot);
-            r.pos.push(snapshot.pos[slot].as_dvec2());
-            r.vel.push(snapshot.vel[slot].as_dvec2());
-            r.force.push(snapshot.force[slot].as_dvec2());
-            r.inv_mass.push(1.0 / f64::from(snapshot.mass[slot]));
+            r.pos.push(snapshot.bodies.pos[slot].as_dvec2());
+            r.vel.push(snapshot.bodies.vel[slot].as_dvec2());
+            r.force.push(snapshot.bodies.force[slot].as_dvec2());
+            r.inv_mass.push(1.0 / f64::from(snapshot.bodies.mass[slot]));
             r.radius.push(f64::from(radius));
             r.restitution.push(f64::from(spec_kind.restitution));
             r.max_speed.push(f64::from(spec_kind.max_speed));

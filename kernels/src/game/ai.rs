@@ -16,7 +16,7 @@ use super::fsm::{Machine, Percept, State, next_state};
 use super::rules::Brain;
 use crate::sim::broad::{CellIndex, kind_bit};
 use crate::sim::{Bodies, Contacts, KindInfo, Space};
-use crate::{DevSlice, KernelArgs, Thread};
+use crate::{DevSlice, Thread, kernel_args};
 
 /// Seconds a steering force takes to bring the velocity to the wanted one.
 pub const STEER_TIME: f32 = 0.25;
@@ -31,33 +31,31 @@ pub const WANDER_TURN: f32 = 0.2;
 /// Bodies of a group keep this many radii apart.
 pub const PERSONAL_SPACE_RADII: f32 = 3.0;
 
-/// Arguments of [`think`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct ThinkArgs {
-    /// The bodies (force, state, energy and liveness of the enemies are written).
-    pub bodies: Bodies,
-    /// Kind table.
-    pub kinds: DevSlice<KindInfo>,
-    /// The world and its grid.
-    pub space: Space,
-    /// This step's grid.
-    pub grid: CellIndex,
-    /// This step's narrow-phase results (the hits).
-    pub contacts: Contacts,
-    /// Each kind's brain (machine 0 for kinds without one).
-    pub brains: DevSlice<Brain>,
-    /// The first slot of the first kind with a machine.
-    pub first_slot: u32,
-    /// One past the last slot of the last kind with a machine.
-    pub end_slot: u32,
-    /// The ship's slot.
-    pub ship: u32,
-    /// The kind of the ship's shots.
-    pub shot_kind: u32,
+kernel_args! {
+    /// Arguments of [`think`].
+    pub struct ThinkArgs {
+        /// The bodies (force, state, energy and liveness of the enemies are written).
+        pub bodies: Bodies,
+        /// Kind table.
+        pub kinds: DevSlice<KindInfo>,
+        /// The world and its grid.
+        pub space: Space,
+        /// This step's grid.
+        pub grid: CellIndex,
+        /// This step's narrow-phase results (the hits).
+        pub contacts: Contacts,
+        /// Each kind's brain (machine 0 for kinds without one).
+        pub brains: DevSlice<Brain>,
+        /// The first slot of the first kind with a machine.
+        pub first_slot: u32,
+        /// One past the last slot of the last kind with a machine.
+        pub end_slot: u32,
+        /// The ship's slot.
+        pub ship: u32,
+        /// The kind of the ship's shots.
+        pub shot_kind: u32,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for ThinkArgs {}
 
 /// What a body sees within its vision radius.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

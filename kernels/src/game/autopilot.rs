@@ -15,31 +15,29 @@ use super::control::{Command, Input};
 use super::rules::Rules;
 use crate::sim::broad::{CellIndex, kind_bit};
 use crate::sim::{Bodies, KindInfo, Space};
-use crate::{DevSlice, KernelArgs, Thread, warp};
+use crate::{DevSlice, Thread, kernel_args, warp};
 
-/// Arguments of [`autopilot`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct AutopilotArgs {
-    /// The bodies (read only).
-    pub bodies: Bodies,
-    /// Kind table (which kinds are enemies).
-    pub kinds: DevSlice<KindInfo>,
-    /// The world.
-    pub space: Space,
-    /// The previous step's grid.
-    pub grid: CellIndex,
-    /// The host's command for this step (one element).
-    pub command: DevSlice<Command>,
-    /// Output: the input for this step (one element).
-    pub input: DevSlice<Input>,
-    /// The scene's rules.
-    pub rules: Rules,
-    /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
-    pub reserved: u32,
+kernel_args! {
+    /// Arguments of [`autopilot`].
+    pub struct AutopilotArgs {
+        /// The bodies (read only).
+        pub bodies: Bodies,
+        /// Kind table (which kinds are enemies).
+        pub kinds: DevSlice<KindInfo>,
+        /// The world.
+        pub space: Space,
+        /// The previous step's grid.
+        pub grid: CellIndex,
+        /// The host's command for this step (one element).
+        pub command: DevSlice<Command>,
+        /// Output: the input for this step (one element).
+        pub input: DevSlice<Input>,
+        /// The scene's rules.
+        pub rules: Rules,
+        /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
+        pub reserved: u32,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for AutopilotArgs {}
 
 /// Fraction of the sight within which an edge of a clamping world pushes the ship back.
 pub const EDGE_MARGIN: f32 = 1.0;

@@ -16,25 +16,25 @@ use glam::Vec2;
 
 use super::rules::Brain;
 use crate::sim::{Bodies, SlotRange};
-use crate::{DevSlice, KernelArgs, Thread};
+use crate::{DevSlice, Thread, device_data, kernel_args};
 
 /// Most particles one kill makes.
 pub const MAX_PER_KILL: u32 = 64;
 /// Most particles a world has.
 pub const MAX_PARTICLES: u32 = 1 << 24;
 
-/// The particles, structure of arrays, one element each.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct Particles {
-    /// World position.
-    pub pos: DevSlice<Vec2>,
-    /// Velocity, in units per second.
-    pub vel: DevSlice<Vec2>,
-    /// Steps left to live; 0 for a particle that is not shown.
-    pub life: DevSlice<u32>,
-    /// Kind of the enemy whose death made it (its colour).
-    pub kind: DevSlice<u32>,
+device_data! {
+    /// The particles, structure of arrays, one element each.
+    pub struct Particles(count) {
+        /// World position.
+        pos: [Vec2; count],
+        /// Velocity, in units per second.
+        vel: [Vec2; count],
+        /// Steps left to live; 0 for a particle that is not shown.
+        life: [u32; count],
+        /// Kind of the enemy whose death made it (its colour).
+        kind: [u32; count],
+    }
 }
 
 impl Particles {
@@ -81,25 +81,23 @@ impl Burst {
     }
 }
 
-/// Arguments of [`burst_and_fade`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct EffectsArgs {
-    /// The bodies (read only).
-    pub bodies: Bodies,
-    /// Slot range of each kind.
-    pub ranges: DevSlice<SlotRange>,
-    /// Each kind's brain: only kinds with a machine burst.
-    pub brains: DevSlice<Brain>,
-    /// The free-list flags of the previous step (1: the slot was free), not yet rebuilt.
-    pub was_free: DevSlice<u32>,
-    /// The particles: born, moved and aged.
-    pub particles: Particles,
-    /// How kills burst.
-    pub burst: Burst,
+kernel_args! {
+    /// Arguments of [`burst_and_fade`].
+    pub struct EffectsArgs {
+        /// The bodies (read only).
+        pub bodies: Bodies,
+        /// Slot range of each kind.
+        pub ranges: DevSlice<SlotRange>,
+        /// Each kind's brain: only kinds with a machine burst.
+        pub brains: DevSlice<Brain>,
+        /// The free-list flags of the previous step (1: the slot was free), not yet rebuilt.
+        pub was_free: DevSlice<u32>,
+        /// The particles: born, moved and aged.
+        pub particles: Particles,
+        /// How kills burst.
+        pub burst: Burst,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for EffectsArgs {}
 
 /// Whether the body in `slot` died this step: an enemy (a kind with a machine) in a usable
 /// slot that held a body after the last step and holds none now.

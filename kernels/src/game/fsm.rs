@@ -75,7 +75,7 @@ impl State {
     }
 }
 
-/// Which machine drives a kind (`KindInfo::machine`).
+/// Which machine drives a kind (`Brain::machine` of [`crate::game::rules::Brain`]).
 #[repr(u32)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Machine {

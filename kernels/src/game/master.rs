@@ -24,43 +24,41 @@ use super::rules::{Rules, Wave};
 use crate::sim::free_list::FreeSlots;
 use crate::sim::scatter::{Place, birth, random_place};
 use crate::sim::{Bodies, Contacts, KindInfo, SlotRange, Space};
-use crate::{DevSlice, KernelArgs, Thread, warp};
+use crate::{DevSlice, Thread, kernel_args, warp};
 
-/// Arguments of [`master`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct MasterArgs {
-    /// The bodies (the ship and new shots are written).
-    pub bodies: Bodies,
-    /// Kind table.
-    pub kinds: DevSlice<KindInfo>,
-    /// Slot range of each kind.
-    pub ranges: DevSlice<SlotRange>,
-    /// Free slots after the previous step.
-    pub free: FreeSlots,
-    /// This step's contacts (the ship's hits, for [`tally`]).
-    pub contacts: Contacts,
-    /// The game's state: read, advanced, written back (one element).
-    pub status: DevSlice<Status>,
-    /// This step's input (one element).
-    pub input: DevSlice<Input>,
-    /// Enemies spawned so far, per kind.
-    pub spawned: DevSlice<u32>,
-    /// Output: enemies to spawn this step, per kind (for [`births`]).
-    pub births: DevSlice<u32>,
-    /// Output: birth velocity deviation per kind, from the last due wave of the kind.
-    pub birth_speed: DevSlice<f32>,
-    /// The spawn schedule.
-    pub waves: DevSlice<Wave>,
-    /// The world.
-    pub space: Space,
-    /// The scene's rules.
-    pub rules: Rules,
-    /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
-    pub reserved: u32,
+kernel_args! {
+    /// Arguments of [`master`].
+    pub struct MasterArgs {
+        /// The bodies (the ship and new shots are written).
+        pub bodies: Bodies,
+        /// Kind table.
+        pub kinds: DevSlice<KindInfo>,
+        /// Slot range of each kind.
+        pub ranges: DevSlice<SlotRange>,
+        /// Free slots after the previous step.
+        pub free: FreeSlots,
+        /// This step's contacts (the ship's hits, for [`tally`]).
+        pub contacts: Contacts,
+        /// The game's state: read, advanced, written back (one element).
+        pub status: DevSlice<Status>,
+        /// This step's input (one element).
+        pub input: DevSlice<Input>,
+        /// Enemies spawned so far, per kind.
+        pub spawned: DevSlice<u32>,
+        /// Output: enemies to spawn this step, per kind (for [`births`]).
+        pub births: DevSlice<u32>,
+        /// Output: birth velocity deviation per kind, from the last due wave of the kind.
+        pub birth_speed: DevSlice<f32>,
+        /// The spawn schedule.
+        pub waves: DevSlice<Wave>,
+        /// The world.
+        pub space: Space,
+        /// The scene's rules.
+        pub rules: Rules,
+        /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
+        pub reserved: u32,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for MasterArgs {}
 
 /// The master warp before the physics:
 /// 1. at step 0, the ship is born in the middle of the world;
@@ -354,31 +352,29 @@ fn fire(args: &MasterArgs, input: &Input) {
     birth(b, &args.space, slot, place, shot.energy);
 }
 
-/// Arguments of [`births`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct BirthArgs {
-    /// The bodies.
-    pub bodies: Bodies,
-    /// Kind table (birth energies).
-    pub kinds: DevSlice<KindInfo>,
-    /// Slot range of each kind.
-    pub ranges: DevSlice<SlotRange>,
-    /// The free lists the master thread counted from.
-    pub free: FreeSlots,
-    /// Bodies to spawn per kind (from [`master`]).
-    pub births: DevSlice<u32>,
-    /// Birth velocity deviation per kind (from [`master`]).
-    pub birth_speed: DevSlice<f32>,
-    /// The world.
-    pub space: Space,
-    /// The ship's slot and the spawn distance.
-    pub rules: Rules,
-    /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
-    pub reserved: u32,
+kernel_args! {
+    /// Arguments of [`births`].
+    pub struct BirthArgs {
+        /// The bodies.
+        pub bodies: Bodies,
+        /// Kind table (birth energies).
+        pub kinds: DevSlice<KindInfo>,
+        /// Slot range of each kind.
+        pub ranges: DevSlice<SlotRange>,
+        /// The free lists the master thread counted from.
+        pub free: FreeSlots,
+        /// Bodies to spawn per kind (from [`master`]).
+        pub births: DevSlice<u32>,
+        /// Birth velocity deviation per kind (from [`master`]).
+        pub birth_speed: DevSlice<f32>,
+        /// The world.
+        pub space: Space,
+        /// The ship's slot and the spawn distance.
+        pub rules: Rules,
+        /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
+        pub reserved: u32,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for BirthArgs {}
 
 /// Tries at a position far enough from the ship before the last one is taken as it is.
 pub const PLACE_TRIES: u32 = 8;

@@ -22,3 +22,29 @@ pub mod effects;
 pub mod fsm;
 pub mod master;
 pub mod rules;
+
+use control::{Command, Input, Status};
+use rules::{Brain, Wave};
+
+crate::device_data! {
+    /// The game's own buffers: the scene's tables, what crosses between host and device, and
+    /// the spawn counters.
+    pub struct GameData(kinds, waves) {
+        /// Each kind's brain (machine 0 for kinds that have none).
+        brains: [Brain; kinds],
+        /// The spawn schedule.
+        waves: [Wave; waves],
+        /// What the step leaves for the host: score, events, game over.
+        status: [Status; 1],
+        /// The host's command for the next step.
+        command: [Command; 1],
+        /// The ship's input the step uses: the player's, or the autopilot's.
+        input: [Input; 1],
+        /// Enemies spawned so far, per kind.
+        spawned: [u32; kinds],
+        /// Enemies the master ordered born this step, per kind.
+        births: [u32; kinds],
+        /// The speed they are born with, per kind.
+        birth_speed: [f32; kinds],
+    }
+}

@@ -1,23 +1,21 @@
 //! Histogram by atomics: how many keys fall in each bin (e.g. bodies per grid cell).
 
-use crate::{DevSlice, KernelArgs, Thread};
+use crate::{DevSlice, Thread, kernel_args};
 
-/// Arguments of [`count_keys`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct HistogramArgs {
-    /// The keys, `n` of them used.
-    pub keys: DevSlice<u32>,
-    /// One counter per bin, zeroed by the host before the launch. Keys not below
-    /// `counts.len()` are not counted.
-    pub counts: DevSlice<u32>,
-    /// Number of keys.
-    pub n: u32,
-    /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
-    pub reserved: u32,
+kernel_args! {
+    /// Arguments of [`count_keys`].
+    pub struct HistogramArgs {
+        /// The keys, `n` of them used.
+        pub keys: DevSlice<u32>,
+        /// One counter per bin, zeroed by the host before the launch. Keys not below
+        /// `counts.len()` are not counted.
+        pub counts: DevSlice<u32>,
+        /// Number of keys.
+        pub n: u32,
+        /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
+        pub reserved: u32,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for HistogramArgs {}
 
 /// Thread `i` adds one to the bin of key `i`. Counters are only touched through atomic adds,
 /// whose final sums do not depend on the order of arrival.

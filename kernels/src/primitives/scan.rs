@@ -9,7 +9,7 @@
 //! adds up the sums of the tiles before its own (a warp collective) and scans its own, so
 //! the scan takes two launches.
 
-use crate::{DevSlice, KernelArgs, Thread, warp};
+use crate::{DevSlice, Thread, kernel_args, warp};
 
 /// Elements per thread. 32 keeps a tile in one 128-byte line and leaves 2^19 threads at n = 2^24.
 pub const TILE: u32 = 32;
@@ -23,21 +23,19 @@ pub const fn tiles(n: u32) -> u32 {
     n.div_ceil(TILE)
 }
 
-/// Arguments of [`reduce_tiles`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct ReduceArgs {
-    /// The values to sum, `n` of them used.
-    pub input: DevSlice<u32>,
-    /// One sum per tile: `tiles(n)` elements.
-    pub tile_sums: DevSlice<u32>,
-    /// Number of input elements.
-    pub n: u32,
-    /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
-    pub reserved: u32,
+kernel_args! {
+    /// Arguments of [`reduce_tiles`].
+    pub struct ReduceArgs {
+        /// The values to sum, `n` of them used.
+        pub input: DevSlice<u32>,
+        /// One sum per tile: `tiles(n)` elements.
+        pub tile_sums: DevSlice<u32>,
+        /// Number of input elements.
+        pub n: u32,
+        /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
+        pub reserved: u32,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for ReduceArgs {}
 
 /// Thread `t` writes the wrapping sum of tile `t` of the input. Each thread writes one element.
 #[inline(always)]
@@ -54,24 +52,22 @@ pub fn reduce_tiles(t: Thread, args: &ReduceArgs) {
     args.tile_sums.set(tile, sum);
 }
 
-/// Arguments of [`scan_tiles`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct ScanArgs {
-    /// The values to scan, `n` of them used.
-    pub input: DevSlice<u32>,
-    /// Exclusive scan of the tile sums (the value each tile starts from), or empty when the
-    /// input is a single tile, which then starts from zero.
-    pub tile_offsets: DevSlice<u32>,
-    /// Receives the exclusive prefix sums; may be the same memory as `input`.
-    pub output: DevSlice<u32>,
-    /// Number of elements.
-    pub n: u32,
-    /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
-    pub reserved: u32,
+kernel_args! {
+    /// Arguments of [`scan_tiles`].
+    pub struct ScanArgs {
+        /// The values to scan, `n` of them used.
+        pub input: DevSlice<u32>,
+        /// Exclusive scan of the tile sums (the value each tile starts from), or empty when the
+        /// input is a single tile, which then starts from zero.
+        pub tile_offsets: DevSlice<u32>,
+        /// Receives the exclusive prefix sums; may be the same memory as `input`.
+        pub output: DevSlice<u32>,
+        /// Number of elements.
+        pub n: u32,
+        /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
+        pub reserved: u32,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for ScanArgs {}
 
 /// Thread `t` writes the exclusive prefix sums of tile `t`, starting from its tile offset.
 /// Each thread reads an element before writing it and touches only its own tile, so scanning

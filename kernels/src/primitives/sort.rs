@@ -13,7 +13,7 @@
 //!
 //! A sort of keys below `2^b` takes `⌈b / DIGIT_BITS⌉` such passes.
 
-use crate::{DevSlice, KernelArgs, Thread};
+use crate::{DevSlice, Thread, kernel_args};
 
 /// Bits of the key sorted by one pass.
 pub const DIGIT_BITS: u32 = 4;
@@ -45,21 +45,19 @@ fn digit(key: u32, shift: u32) -> u32 {
     (key >> shift) & (RADIX - 1)
 }
 
-/// Arguments of [`count_digits`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct CountArgs {
-    /// The keys of this pass, `n` of them used.
-    pub keys: DevSlice<u32>,
-    /// Digit-major count matrix: `RADIX · tiles(n)` elements.
-    pub counts: DevSlice<u32>,
-    /// Number of keys.
-    pub n: u32,
-    /// Position of this pass's digit in the key.
-    pub shift: u32,
+kernel_args! {
+    /// Arguments of [`count_digits`].
+    pub struct CountArgs {
+        /// The keys of this pass, `n` of them used.
+        pub keys: DevSlice<u32>,
+        /// Digit-major count matrix: `RADIX · tiles(n)` elements.
+        pub counts: DevSlice<u32>,
+        /// Number of keys.
+        pub n: u32,
+        /// Position of this pass's digit in the key.
+        pub shift: u32,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for CountArgs {}
 
 /// Thread `t` writes column `t` of the count matrix: how many keys of tile `t` have each digit.
 #[inline(always)]
@@ -81,28 +79,26 @@ pub fn count_digits(t: Thread, args: &CountArgs) {
     }
 }
 
-/// Arguments of [`scatter_digits`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct ScatterArgs {
-    /// The keys of this pass.
-    pub keys_in: DevSlice<u32>,
-    /// The indices travelling with the keys, or empty on the first pass, where the index of a
-    /// key is its position.
-    pub indices_in: DevSlice<u32>,
-    /// The exclusive prefix sum of [`count_digits`]'s matrix.
-    pub offsets: DevSlice<u32>,
-    /// Receives the keys, stably sorted by this pass's digit.
-    pub keys_out: DevSlice<u32>,
-    /// Receives the indices in the same order as `keys_out`.
-    pub indices_out: DevSlice<u32>,
-    /// Number of keys.
-    pub n: u32,
-    /// Position of this pass's digit in the key.
-    pub shift: u32,
+kernel_args! {
+    /// Arguments of [`scatter_digits`].
+    pub struct ScatterArgs {
+        /// The keys of this pass.
+        pub keys_in: DevSlice<u32>,
+        /// The indices travelling with the keys, or empty on the first pass, where the index of a
+        /// key is its position.
+        pub indices_in: DevSlice<u32>,
+        /// The exclusive prefix sum of [`count_digits`]'s matrix.
+        pub offsets: DevSlice<u32>,
+        /// Receives the keys, stably sorted by this pass's digit.
+        pub keys_out: DevSlice<u32>,
+        /// Receives the indices in the same order as `keys_out`.
+        pub indices_out: DevSlice<u32>,
+        /// Number of keys.
+        pub n: u32,
+        /// Position of this pass's digit in the key.
+        pub shift: u32,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for ScatterArgs {}
 
 /// Thread `t` moves the pairs of tile `t` to their slots, in order. The offsets give every
 /// (digit, tile) a disjoint range of slots, so no two threads write the same element.

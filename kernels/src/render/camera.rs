@@ -12,7 +12,7 @@ use super::radar::{self, RadarBox};
 use super::{Shown, View};
 use crate::game::control::Input;
 use crate::sim::Bodies;
-use crate::{DevSlice, KernelArgs, Thread};
+use crate::{DevSlice, Thread, kernel_args};
 
 /// [`Lens::mode`]: the view follows the ship (the field when there is none).
 pub const FOLLOW: u32 = 0;
@@ -157,24 +157,22 @@ pub fn advance(lens: &Lens, ship: Option<Vec2>, state: CameraState) -> (CameraSt
     (next, view)
 }
 
-/// Arguments of [`camera`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct CameraArgs {
-    /// The bodies (read only: the ship's position).
-    pub bodies: Bodies,
-    /// The last step's input (the ship's aim), one element; empty in a world without a
-    /// game.
-    pub input: DevSlice<Input>,
-    /// The camera between frames (one element): read and advanced.
-    pub state: DevSlice<CameraState>,
-    /// Output: what this frame shows (one element), for the drawing kernels.
-    pub shown: DevSlice<Shown>,
-    /// The host's request.
-    pub lens: Lens,
+kernel_args! {
+    /// Arguments of [`camera`].
+    pub struct CameraArgs {
+        /// The bodies (read only: the ship's position).
+        pub bodies: Bodies,
+        /// The last step's input (the ship's aim), one element; empty in a world without a
+        /// game.
+        pub input: DevSlice<Input>,
+        /// The camera between frames (one element): read and advanced.
+        pub state: DevSlice<CameraState>,
+        /// Output: what this frame shows (one element), for the drawing kernels.
+        pub shown: DevSlice<Shown>,
+        /// The host's request.
+        pub lens: Lens,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for CameraArgs {}
 
 /// Thread 0 advances the camera towards the ship (see [`advance`]) and writes the frame's
 /// [`Shown`].

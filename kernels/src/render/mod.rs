@@ -38,7 +38,7 @@ use glam::Vec2;
 
 use crate::sim::kinds::SHAPE_RECT;
 use crate::sim::{Bodies, KindInfo};
-use crate::{DevSlice, KernelArgs, Thread};
+use crate::{DevSlice, Thread, kernel_args};
 use radar::{RadarBox, RadarCounts};
 use shapes::{DISC, RECT};
 
@@ -327,28 +327,26 @@ pub fn shade_at(sprite: &Sprite, d: Vec2) -> Option<u32> {
     None
 }
 
-/// Arguments of [`splat_bodies`] and [`splat_large`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct SplatArgs {
-    /// The bodies (read only).
-    pub bodies: Bodies,
-    /// Kind table (shapes and sizes).
-    pub kinds: DevSlice<KindInfo>,
-    /// Each kind's look.
-    pub looks: DevSlice<Look>,
-    /// What the image shows (one element, from the camera).
-    pub shown: DevSlice<Shown>,
-    /// One key per pixel, row-major; [`EMPTY`] before the first body draws there.
-    pub keys: DevSlice<u32>,
-    /// The slots of the bodies too large for one thread, for [`splat_large`]; room for
-    /// every slot.
-    pub large: DevSlice<u32>,
-    /// How many of [`SplatArgs::large`] are filled (one element, 0 before the launch).
-    pub large_count: DevSlice<u32>,
+kernel_args! {
+    /// Arguments of [`splat_bodies`] and [`splat_large`].
+    pub struct SplatArgs {
+        /// The bodies (read only).
+        pub bodies: Bodies,
+        /// Kind table (shapes and sizes).
+        pub kinds: DevSlice<KindInfo>,
+        /// Each kind's look.
+        pub looks: DevSlice<Look>,
+        /// What the image shows (one element, from the camera).
+        pub shown: DevSlice<Shown>,
+        /// One key per pixel, row-major; [`EMPTY`] before the first body draws there.
+        pub keys: DevSlice<u32>,
+        /// The slots of the bodies too large for one thread, for [`splat_large`]; room for
+        /// every slot.
+        pub large: DevSlice<u32>,
+        /// How many of [`SplatArgs::large`] are filled (one element, 0 before the launch).
+        pub large_count: DevSlice<u32>,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for SplatArgs {}
 
 /// A sprite spanning more rows than this on the image is drawn by [`splat_large`], a warp
 /// of threads a body, instead of by its own thread.
@@ -527,27 +525,25 @@ fn cover_rows(
     }
 }
 
-/// Arguments of [`resolve_pixels`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct ResolveArgs {
-    /// Each kind's look.
-    pub looks: DevSlice<Look>,
-    /// The keys of [`splat_bodies`]; cleared to [`EMPTY`] on the way.
-    pub keys: DevSlice<u32>,
-    /// Output: one RGBA8 colour per pixel, row-major.
-    pub image: DevSlice<u32>,
-    /// What the image shows (one element, from the camera).
-    pub shown: DevSlice<Shown>,
-    /// The radar's counts (cleared on the way).
-    pub radar: RadarCounts,
-    /// The stride the radar was sampled with.
-    pub stride: u32,
-    /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
-    pub reserved: u32,
+kernel_args! {
+    /// Arguments of [`resolve_pixels`].
+    pub struct ResolveArgs {
+        /// Each kind's look.
+        pub looks: DevSlice<Look>,
+        /// The keys of [`splat_bodies`]; cleared to [`EMPTY`] on the way.
+        pub keys: DevSlice<u32>,
+        /// Output: one RGBA8 colour per pixel, row-major.
+        pub image: DevSlice<u32>,
+        /// What the image shows (one element, from the camera).
+        pub shown: DevSlice<Shown>,
+        /// The radar's counts (cleared on the way).
+        pub radar: RadarCounts,
+        /// The stride the radar was sampled with.
+        pub stride: u32,
+        /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
+        pub reserved: u32,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for ResolveArgs {}
 
 /// Thread `p` colours pixel `p` from its key, or from the radar where it lies, and clears
 /// the key.
@@ -618,24 +614,22 @@ pub struct BodyVertex {
     pub flags: u32,
 }
 
-/// Arguments of [`write_vertices`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct VertexArgs {
-    /// The bodies (read only).
-    pub bodies: Bodies,
-    /// Kind table (sizes and energies at birth).
-    pub kinds: DevSlice<KindInfo>,
-    /// Each kind's look (silhouettes).
-    pub looks: DevSlice<Look>,
-    /// What the image shows (one element, from the camera).
-    pub shown: DevSlice<Shown>,
-    /// Output: one vertex per slot, then the backdrop's (the GL vertex buffer, mapped, on
-    /// the GPU).
-    pub vertices: DevSlice<BodyVertex>,
+kernel_args! {
+    /// Arguments of [`write_vertices`].
+    pub struct VertexArgs {
+        /// The bodies (read only).
+        pub bodies: Bodies,
+        /// Kind table (sizes and energies at birth).
+        pub kinds: DevSlice<KindInfo>,
+        /// Each kind's look (silhouettes).
+        pub looks: DevSlice<Look>,
+        /// What the image shows (one element, from the camera).
+        pub shown: DevSlice<Shown>,
+        /// Output: one vertex per slot, then the backdrop's (the GL vertex buffer, mapped, on
+        /// the GPU).
+        pub vertices: DevSlice<BodyVertex>,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for VertexArgs {}
 
 /// The vertex the GL renderer draws the backdrop from (see [`backdrop::on_grid`]):
 /// `centre` is the view's origin, `facing` the field's size, `radius` the view's scale;

@@ -11,7 +11,7 @@ use super::{
     BodyVertex, Shown, VERTEX_ALIVE, VERTEX_LEVEL_SHIFT, VERTEX_PARTICLE, View, cover, particle_key,
 };
 use crate::game::effects::{Particles, fade_level};
-use crate::{DevSlice, KernelArgs, Thread};
+use crate::{DevSlice, Thread, kernel_args};
 
 /// A particle's radius in world units (times the view's scale: its radius in pixels).
 pub const SIZE: f32 = 1.5;
@@ -36,23 +36,21 @@ fn level(particles: &Particles, lifetime: u32, p: u32) -> u32 {
     fade_level(particles.life.get(p), lifetime, super::PARTICLE_LEVELS)
 }
 
-/// Arguments of [`splat_particles`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct ParticleSplatArgs {
-    /// The particles (read only).
-    pub particles: Particles,
-    /// What the image shows (one element, from the camera).
-    pub shown: DevSlice<Shown>,
-    /// One key per pixel, row-major (see `splat_bodies`).
-    pub keys: DevSlice<u32>,
-    /// Steps a particle lives at most: how its age becomes a fade level.
-    pub lifetime: u32,
-    /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
-    pub reserved: u32,
+kernel_args! {
+    /// Arguments of [`splat_particles`].
+    pub struct ParticleSplatArgs {
+        /// The particles (read only).
+        pub particles: Particles,
+        /// What the image shows (one element, from the camera).
+        pub shown: DevSlice<Shown>,
+        /// One key per pixel, row-major (see `splat_bodies`).
+        pub keys: DevSlice<u32>,
+        /// Steps a particle lives at most: how its age becomes a fade level.
+        pub lifetime: u32,
+        /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
+        pub reserved: u32,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for ParticleSplatArgs {}
 
 /// Thread `p` draws particle `p`, if shown: every pixel whose centre lies in its disc, and
 /// the pixel under its centre, keyed by [`particle_key`] (under every body).
@@ -75,23 +73,21 @@ pub fn splat_particles(t: Thread, args: &ParticleSplatArgs) {
     });
 }
 
-/// Arguments of [`write_particle_vertices`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct ParticleVertexArgs {
-    /// The particles (read only).
-    pub particles: Particles,
-    /// What the image shows (one element, from the camera).
-    pub shown: DevSlice<Shown>,
-    /// Output: one vertex per particle (after the bodies' in the GL vertex buffer).
-    pub vertices: DevSlice<BodyVertex>,
-    /// Steps a particle lives at most.
-    pub lifetime: u32,
-    /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
-    pub reserved: u32,
+kernel_args! {
+    /// Arguments of [`write_particle_vertices`].
+    pub struct ParticleVertexArgs {
+        /// The particles (read only).
+        pub particles: Particles,
+        /// What the image shows (one element, from the camera).
+        pub shown: DevSlice<Shown>,
+        /// Output: one vertex per particle (after the bodies' in the GL vertex buffer).
+        pub vertices: DevSlice<BodyVertex>,
+        /// Steps a particle lives at most.
+        pub lifetime: u32,
+        /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
+        pub reserved: u32,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for ParticleVertexArgs {}
 
 /// Thread `p` writes particle `p`'s vertex: a disc of its kind, flagged
 /// [`VERTEX_PARTICLE`] with its fade level (flags 0 when it is not shown).

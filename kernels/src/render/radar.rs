@@ -18,7 +18,7 @@ use glam::Vec2;
 
 use super::{Look, Shown, key, unkey};
 use crate::sim::Bodies;
-use crate::{DevSlice, KernelArgs, Thread};
+use crate::{DevSlice, Thread, kernel_args};
 
 /// Most slots sampled per frame (see [`stride`]).
 pub const SAMPLES: u32 = 262_144;
@@ -124,25 +124,23 @@ pub struct RadarCounts {
     pub top: DevSlice<u32>,
 }
 
-/// Arguments of [`radar_bodies`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct RadarArgs {
-    /// The bodies (read only).
-    pub bodies: Bodies,
-    /// Each kind's look (which kinds the radar shows).
-    pub looks: DevSlice<Look>,
-    /// What the frame shows (the radar's box, the field, the ship), from the camera.
-    pub shown: DevSlice<Shown>,
-    /// Output: counts and top kinds, zero before the launch.
-    pub radar: RadarCounts,
-    /// Thread `i` samples slot `i × stride` (see [`stride`]).
-    pub stride: u32,
-    /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
-    pub reserved: u32,
+kernel_args! {
+    /// Arguments of [`radar_bodies`].
+    pub struct RadarArgs {
+        /// The bodies (read only).
+        pub bodies: Bodies,
+        /// Each kind's look (which kinds the radar shows).
+        pub looks: DevSlice<Look>,
+        /// What the frame shows (the radar's box, the field, the ship), from the camera.
+        pub shown: DevSlice<Shown>,
+        /// Output: counts and top kinds, zero before the launch.
+        pub radar: RadarCounts,
+        /// Thread `i` samples slot `i × stride` (see [`stride`]).
+        pub stride: u32,
+        /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
+        pub reserved: u32,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for RadarArgs {}
 
 /// Thread `i` counts the body in slot `i × stride`, if one lives there, its kind is shown
 /// on the radar ([`Look::radar`]) and it is not the ship.
@@ -227,25 +225,23 @@ pub fn radar_colour(
     Some(dimmed(looks.get(kind).colour, level))
 }
 
-/// Arguments of [`radar_image`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct RadarImageArgs {
-    /// Each kind's look.
-    pub looks: DevSlice<Look>,
-    /// What the frame shows, from the camera.
-    pub shown: DevSlice<Shown>,
-    /// The counts of [`radar_bodies`]; cleared on the way.
-    pub radar: RadarCounts,
-    /// Output: the radar's box, row-major from its top-left corner.
-    pub image: DevSlice<u32>,
-    /// The stride [`radar_bodies`] sampled with.
-    pub stride: u32,
-    /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
-    pub reserved: u32,
+kernel_args! {
+    /// Arguments of [`radar_image`].
+    pub struct RadarImageArgs {
+        /// Each kind's look.
+        pub looks: DevSlice<Look>,
+        /// What the frame shows, from the camera.
+        pub shown: DevSlice<Shown>,
+        /// The counts of [`radar_bodies`]; cleared on the way.
+        pub radar: RadarCounts,
+        /// Output: the radar's box, row-major from its top-left corner.
+        pub image: DevSlice<u32>,
+        /// The stride [`radar_bodies`] sampled with.
+        pub stride: u32,
+        /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
+        pub reserved: u32,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for RadarImageArgs {}
 
 /// Thread `p` writes pixel `p` of the radar's box (for a renderer that shows the radar
 /// over a frame of its own).

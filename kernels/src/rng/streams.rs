@@ -7,18 +7,18 @@
 //! whole state.
 
 use super::mt607::{self, Mt607Params};
-use crate::{DevSlice, KernelArgs, Thread};
+use crate::{DevSlice, Thread, device_data, kernel_args};
 
-/// The generators of every slot: parameters, state words and positions.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct RngStreams {
-    /// dcmt parameters, one set per slot.
-    pub params: DevSlice<Mt607Params>,
-    /// State words, word-major: `mt607::N · slots` elements.
-    pub words: DevSlice<u32>,
-    /// Position of each slot's oldest word (< 19).
-    pub index: DevSlice<u32>,
+device_data! {
+    /// The generators of every slot: parameters, state words and positions.
+    pub struct RngStreams(slots) {
+        /// dcmt parameters, one set per slot.
+        params: [Mt607Params; slots],
+        /// State words, word-major: `mt607::N · slots` elements.
+        words: [u32; mt607::N * slots],
+        /// Position of each slot's oldest word (< 19).
+        index: [u32; slots],
+    }
 }
 
 impl RngStreams {
@@ -87,19 +87,17 @@ impl Drop for SlotRng<'_> {
     }
 }
 
-/// Arguments of [`seed_streams`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct SeedArgs {
-    /// Output: every slot's generator.
-    pub streams: RngStreams,
-    /// Each slot's seed.
-    pub seeds: DevSlice<u32>,
-    /// The parameter sets; slot `i` takes set `i mod len`.
-    pub table: DevSlice<Mt607Params>,
+kernel_args! {
+    /// Arguments of [`seed_streams`].
+    pub struct SeedArgs {
+        /// Output: every slot's generator.
+        pub streams: RngStreams,
+        /// Each slot's seed.
+        pub seeds: DevSlice<u32>,
+        /// The parameter sets; slot `i` takes set `i mod len`.
+        pub table: DevSlice<Mt607Params>,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for SeedArgs {}
 
 /// Thread `i` sets up slot `i`'s generator: parameter set `i mod len`, the state
 /// [`mt607::seed_state`] makes from its seed, at position 0. Start-up work that grows with

@@ -2,40 +2,41 @@
 
 use glam::Vec2;
 
-use crate::DevSlice;
+use crate::device_data;
 use crate::rng::RngStreams;
 
-/// Every per-body array, as one kernel argument. Slots of dead bodies keep their kind, mass
-/// and generator; only [`Bodies::alive`] says whether the rest means anything.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct Bodies {
-    /// Position.
-    pub pos: DevSlice<Vec2>,
-    /// Velocity.
-    pub vel: DevSlice<Vec2>,
-    /// Force applied during the next integration (set by the AI and the master thread).
-    pub force: DevSlice<Vec2>,
-    /// Unit direction the body faces: that of its velocity while it moves.
-    pub dir: DevSlice<Vec2>,
-    /// Kind index (fixed per slot range).
-    pub kind: DevSlice<u32>,
-    /// Energy; the body dies when it reaches zero.
-    pub energy: DevSlice<i32>,
-    /// Mass; `f32::INFINITY` makes a body immovable.
-    pub mass: DevSlice<f32>,
-    /// 1 for a live body, 0 for a free slot.
-    pub alive: DevSlice<u32>,
-    /// State of the body's finite-state machine (0 at birth).
-    pub state: DevSlice<u32>,
-    /// Steps lived since birth (bodies of kinds with a lifetime die when it is reached).
-    pub age: DevSlice<u32>,
-    /// The slot's random number generator.
-    pub rng: RngStreams,
-    /// One element, non-zero once the world is frozen (the game is over): from then on the
-    /// kernels that advance bodies leave every one as it is, so that steps the host queued
-    /// before it learnt of the end change nothing.
-    pub frozen: DevSlice<u32>,
+device_data! {
+    /// Every per-body array, one element per slot. Slots of dead bodies keep their kind, mass
+    /// and generator; only [`Bodies::alive`] says whether the rest means anything.
+    pub struct Bodies(slots) {
+        /// Position.
+        pos: [Vec2; slots],
+        /// Velocity.
+        vel: [Vec2; slots],
+        /// Force applied during the next integration (set by the AI and the master thread).
+        force: [Vec2; slots],
+        /// Unit direction the body faces: that of its velocity while it moves.
+        dir: [Vec2; slots],
+        /// Kind index (fixed per slot range).
+        kind: [u32; slots],
+        /// Energy; the body dies when it reaches zero.
+        energy: [i32; slots],
+        /// Mass; `f32::INFINITY` makes a body immovable.
+        mass: [f32; slots],
+        /// 1 for a live body, 0 for a free slot.
+        alive: [u32; slots],
+        /// State of the body's finite-state machine (0 at birth).
+        state: [u32; slots],
+        /// Steps lived since birth (bodies of kinds with a lifetime die when it is reached).
+        age: [u32; slots],
+        /// One element, non-zero once the world is frozen (the game is over): from then on
+        /// the kernels that advance bodies leave every one as it is, so that steps the host
+        /// queued before it learnt of the end change nothing.
+        frozen: [u32; 1],
+    } nested {
+        /// The slot's random number generator.
+        rng: RngStreams(slots),
+    }
 }
 
 impl Bodies {
@@ -58,16 +59,16 @@ impl Bodies {
     }
 }
 
-/// What the narrow phase tells the integrator about each slot.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct Contacts {
-    /// Displacement that separates the body from those it overlaps.
-    pub push: DevSlice<Vec2>,
-    /// Velocity change from the collision impulses.
-    pub kick: DevSlice<Vec2>,
-    /// Number of bodies it touched this step.
-    pub count: DevSlice<u32>,
-    /// Energy it lost to those contacts this step.
-    pub damage: DevSlice<i32>,
+device_data! {
+    /// What the narrow phase tells the integrator about each slot.
+    pub struct Contacts(slots) {
+        /// Displacement that separates the body from those it overlaps.
+        push: [Vec2; slots],
+        /// Velocity change from the collision impulses.
+        kick: [Vec2; slots],
+        /// Number of bodies it touched this step.
+        count: [u32; slots],
+        /// Energy it lost to those contacts this step.
+        damage: [i32; slots],
+    }
 }

@@ -24,28 +24,45 @@ use glam::Vec2;
 
 use super::Space;
 use super::bodies::Bodies;
-use crate::{DevSlice, KernelArgs, Thread};
+use crate::{DevSlice, Thread, device_data, kernel_args};
+
+device_data! {
+    /// The grid's arrays: what the broad phase builds each step and [`CellIndex`] queries.
+    pub struct Grid(slots, buckets) {
+        /// Each slot's bucket, or [`NO_BUCKET`].
+        keys: [u32; slots],
+        /// Each slot's arrival rank in its bucket; the merge passes' runs afterwards.
+        ranks: [u32; slots],
+        /// Bodies per bucket, scanned in place into each bucket's first entry; one more
+        /// element for the total.
+        start: [u32; buckets],
+        /// Slots by bucket, in arrival order.
+        unordered: [u32; slots],
+        /// Slots by bucket, in slot order.
+        slots: [u32; slots],
+        /// Each entry's position.
+        pos: [Vec2; slots],
+    }
+}
 
 /// The key of a slot without a live body: in no bucket.
 pub const NO_BUCKET: u32 = u32::MAX;
 
-/// Arguments of [`count_cells`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct CountArgs {
-    /// The bodies (positions, kinds and liveness are read).
-    pub bodies: Bodies,
-    /// The world and its grid.
-    pub space: Space,
-    /// Output: each slot's bucket, or [`NO_BUCKET`].
-    pub keys: DevSlice<u32>,
-    /// Output: each live slot's arrival rank inside its bucket.
-    pub ranks: DevSlice<u32>,
-    /// Bodies per bucket, zeroed before; `kinds · cells` buckets.
-    pub counts: DevSlice<u32>,
+kernel_args! {
+    /// Arguments of [`count_cells`].
+    pub struct CountArgs {
+        /// The bodies (positions, kinds and liveness are read).
+        pub bodies: Bodies,
+        /// The world and its grid.
+        pub space: Space,
+        /// Output: each slot's bucket, or [`NO_BUCKET`].
+        pub keys: DevSlice<u32>,
+        /// Output: each live slot's arrival rank inside its bucket.
+        pub ranks: DevSlice<u32>,
+        /// Bodies per bucket, zeroed before; `kinds · cells` buckets.
+        pub counts: DevSlice<u32>,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for CountArgs {}
 
 /// Thread `i` keys slot `i` by its bucket and counts it there.
 #[inline(always)]
@@ -64,21 +81,19 @@ pub fn count_cells(t: Thread, args: &CountArgs) {
     args.ranks.set(slot, args.counts.atomic_add(key, 1));
 }
 
-/// Arguments of [`place_in_cells`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct PlaceArgs {
-    /// Each slot's bucket (from [`count_cells`]).
-    pub keys: DevSlice<u32>,
-    /// Each live slot's rank inside its bucket (from [`count_cells`]).
-    pub ranks: DevSlice<u32>,
-    /// Each bucket's first entry: the exclusive prefix sums of the counts.
-    pub start: DevSlice<u32>,
-    /// Output: the slots grouped by bucket, in arrival order inside a bucket.
-    pub unordered: DevSlice<u32>,
+kernel_args! {
+    /// Arguments of [`place_in_cells`].
+    pub struct PlaceArgs {
+        /// Each slot's bucket (from [`count_cells`]).
+        pub keys: DevSlice<u32>,
+        /// Each live slot's rank inside its bucket (from [`count_cells`]).
+        pub ranks: DevSlice<u32>,
+        /// Each bucket's first entry: the exclusive prefix sums of the counts.
+        pub start: DevSlice<u32>,
+        /// Output: the slots grouped by bucket, in arrival order inside a bucket.
+        pub unordered: DevSlice<u32>,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for PlaceArgs {}
 
 /// Thread `i` writes slot `i` into its bucket: each entry has exactly one writer, since the
 /// ranks of a bucket are distinct.
@@ -95,34 +110,32 @@ pub fn place_in_cells(t: Thread, args: &PlaceArgs) {
     }
 }
 
-/// Arguments of [`order_cells`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct OrderArgs {
-    /// The bodies' positions.
-    pub pos: DevSlice<Vec2>,
-    /// Each slot's bucket.
-    pub keys: DevSlice<u32>,
-    /// Each bucket's first entry; the last element is the number of live bodies.
-    pub start: DevSlice<u32>,
-    /// The slots of each bucket in arrival order (from [`place_in_cells`]).
-    pub unordered: DevSlice<u32>,
-    /// Output: the same slots in increasing order inside each bucket.
-    pub slots: DevSlice<u32>,
-    /// Output: each entry's position, so that a query reads its neighbours' places in a
-    /// row instead of one scattered load per neighbour.
-    pub entry_pos: DevSlice<Vec2>,
-    /// Output when `bounded`: the entries of buckets larger than [`RUN`], each run of
-    /// [`RUN`] entries in slot order, for [`merge_runs`] to merge.
-    pub runs: DevSlice<u32>,
-    /// Non-zero: buckets larger than [`RUN`] are ordered run by run (then merged), so that
-    /// a crowded cell costs `O(n log n)`, not `O(n²)`.
-    pub bounded: u32,
-    /// Keeps the struct free of implicit padding.
-    pub reserved: u32,
+kernel_args! {
+    /// Arguments of [`order_cells`].
+    pub struct OrderArgs {
+        /// The bodies' positions.
+        pub pos: DevSlice<Vec2>,
+        /// Each slot's bucket.
+        pub keys: DevSlice<u32>,
+        /// Each bucket's first entry; the last element is the number of live bodies.
+        pub start: DevSlice<u32>,
+        /// The slots of each bucket in arrival order (from [`place_in_cells`]).
+        pub unordered: DevSlice<u32>,
+        /// Output: the same slots in increasing order inside each bucket.
+        pub slots: DevSlice<u32>,
+        /// Output: each entry's position, so that a query reads its neighbours' places in a
+        /// row instead of one scattered load per neighbour.
+        pub entry_pos: DevSlice<Vec2>,
+        /// Output when `bounded`: the entries of buckets larger than [`RUN`], each run of
+        /// [`RUN`] entries in slot order, for [`merge_runs`] to merge.
+        pub runs: DevSlice<u32>,
+        /// Non-zero: buckets larger than [`RUN`] are ordered run by run (then merged), so that
+        /// a crowded cell costs `O(n log n)`, not `O(n²)`.
+        pub bounded: u32,
+        /// Keeps the struct free of implicit padding.
+        pub reserved: u32,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for OrderArgs {}
 
 /// Entries of a bucket [`order_cells`] orders by counting when the order is bounded; larger
 /// buckets are ordered in runs of this many and merged by [`merge_runs`].
@@ -167,30 +180,28 @@ pub fn order_cells(t: Thread, args: &OrderArgs) {
     args.entry_pos.set(first + rank, args.pos.get(slot));
 }
 
-/// Arguments of [`merge_runs`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct MergeArgs {
-    /// The bodies' positions.
-    pub pos: DevSlice<Vec2>,
-    /// Each bucket's first entry; the last element is the number of live bodies.
-    pub start: DevSlice<u32>,
-    /// The large buckets' entries, in sorted runs of `run`.
-    pub src: DevSlice<u32>,
-    /// Output: the same, in sorted runs of `2 · run`, and [`DONE`] for the entries of
-    /// buckets that are finished.
-    pub dst: DevSlice<u32>,
-    /// Output: the grid's slots, for the buckets this pass finishes.
-    pub slots: DevSlice<u32>,
-    /// Output: the grid's entry positions, likewise.
-    pub entry_pos: DevSlice<Vec2>,
-    /// Length of the sorted runs in `src`.
-    pub run: u32,
-    /// Keeps the struct free of implicit padding.
-    pub reserved: u32,
+kernel_args! {
+    /// Arguments of [`merge_runs`].
+    pub struct MergeArgs {
+        /// The bodies' positions.
+        pub pos: DevSlice<Vec2>,
+        /// Each bucket's first entry; the last element is the number of live bodies.
+        pub start: DevSlice<u32>,
+        /// The large buckets' entries, in sorted runs of `run`.
+        pub src: DevSlice<u32>,
+        /// Output: the same, in sorted runs of `2 · run`, and [`DONE`] for the entries of
+        /// buckets that are finished.
+        pub dst: DevSlice<u32>,
+        /// Output: the grid's slots, for the buckets this pass finishes.
+        pub slots: DevSlice<u32>,
+        /// Output: the grid's entry positions, likewise.
+        pub entry_pos: DevSlice<Vec2>,
+        /// Length of the sorted runs in `src`.
+        pub run: u32,
+        /// Keeps the struct free of implicit padding.
+        pub reserved: u32,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for MergeArgs {}
 
 /// The bucket holding entry `j`: the last bucket whose first entry is at most `j` (empty
 /// buckets share their first entry with the next).

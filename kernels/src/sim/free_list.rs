@@ -11,31 +11,39 @@
 
 use super::bodies::Bodies;
 use super::kinds::SlotRange;
-use crate::{DevSlice, KernelArgs, Thread};
+use crate::{DevSlice, Thread, device_data, kernel_args};
 
-/// Each kind's free slots, as the free-list rebuild leaves them.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct FreeSlots {
-    /// Kind `k`'s free slots in order, from its range's start.
-    pub list: DevSlice<u32>,
-    /// Free slots per kind.
-    pub count: DevSlice<u32>,
+device_data! {
+    /// Each kind's free slots, as the free-list rebuild leaves them.
+    pub struct FreeSlots(slots, kinds) {
+        /// Kind `k`'s free slots in order, from its range's start.
+        list: [u32; slots],
+        /// Free slots per kind.
+        count: [u32; kinds],
+    }
 }
 
-/// Arguments of [`mark_free`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct MarkArgs {
-    /// The bodies (kinds and liveness are read).
-    pub bodies: Bodies,
-    /// Slot range of each kind.
-    pub ranges: DevSlice<SlotRange>,
-    /// Output: 1 for a free usable slot, else 0; one per slot.
-    pub flags: DevSlice<u32>,
+device_data! {
+    /// The rebuild's own arrays, remade every step.
+    pub struct FreeMarks(slots) {
+        /// 1 for a free usable slot, else 0 (written by [`mark_free`]).
+        flags: [u32; slots],
+        /// The flags' exclusive prefix sums.
+        ranks: [u32; slots],
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for MarkArgs {}
+
+kernel_args! {
+    /// Arguments of [`mark_free`].
+    pub struct MarkArgs {
+        /// The bodies (kinds and liveness are read).
+        pub bodies: Bodies,
+        /// Slot range of each kind.
+        pub ranges: DevSlice<SlotRange>,
+        /// Output: 1 for a free usable slot, else 0; one per slot.
+        pub flags: DevSlice<u32>,
+    }
+}
 
 /// Whether `slot`, of kind `range`, is usable (not padding).
 #[inline(always)]
@@ -55,26 +63,24 @@ pub fn mark_free(t: Thread, args: &MarkArgs) {
     args.flags.set(slot, free as u32);
 }
 
-/// Arguments of [`gather_free`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct GatherArgs {
-    /// Kind of each slot.
-    pub kind: DevSlice<u32>,
-    /// Slot range of each kind.
-    pub ranges: DevSlice<SlotRange>,
-    /// The flags of [`mark_free`].
-    pub flags: DevSlice<u32>,
-    /// Their exclusive prefix sums.
-    pub ranks: DevSlice<u32>,
-    /// Output: the free slots of kind `k` at `list[start_k ..][.. count_k]`; one per slot.
-    pub list: DevSlice<u32>,
-    /// Output: the number of free slots of each kind. A kind without slots has no writer: its
-    /// count stays the 0 it was allocated with.
-    pub count: DevSlice<u32>,
+kernel_args! {
+    /// Arguments of [`gather_free`].
+    pub struct GatherArgs {
+        /// Kind of each slot.
+        pub kind: DevSlice<u32>,
+        /// Slot range of each kind.
+        pub ranges: DevSlice<SlotRange>,
+        /// The flags of [`mark_free`].
+        pub flags: DevSlice<u32>,
+        /// Their exclusive prefix sums.
+        pub ranks: DevSlice<u32>,
+        /// Output: the free slots of kind `k` at `list[start_k ..][.. count_k]`; one per slot.
+        pub list: DevSlice<u32>,
+        /// Output: the number of free slots of each kind. A kind without slots has no writer: its
+        /// count stays the 0 it was allocated with.
+        pub count: DevSlice<u32>,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for GatherArgs {}
 
 /// Thread `i`: a free slot writes itself at its rank inside its range's list; the last usable
 /// slot of a range writes the range's count. Every element has one writer.

@@ -12,7 +12,7 @@ use super::bodies::{Bodies, Contacts};
 use super::kinds::KindInfo;
 use super::narrow::inverse_mass;
 use super::space::Space;
-use crate::{DevSlice, KernelArgs, Thread};
+use crate::{DevSlice, Thread, kernel_args};
 
 /// The paper's order, velocity then position: semi-implicit (symplectic) Euler.
 pub const SEMI_IMPLICIT_EULER: u32 = 0;
@@ -56,31 +56,29 @@ impl Field {
     }
 }
 
-/// Arguments of [`integrate`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct IntegrateArgs {
-    /// The bodies, advanced in place.
-    pub bodies: Bodies,
-    /// Kind table (speed limits).
-    pub kinds: DevSlice<KindInfo>,
-    /// The narrow phase's response for each slot.
-    pub contacts: Contacts,
-    /// The world (size, boundary rule).
-    pub space: Space,
-    /// The force field.
-    pub field: Field,
-    /// Time step of this substep.
-    pub dt: f32,
-    /// One of [`SEMI_IMPLICIT_EULER`], [`EXPLICIT_EULER`], [`VELOCITY_VERLET`].
-    pub integrator: u32,
-    /// Which substep of the step this is: bodies age and die in substep 0 only.
-    pub substep: u32,
-    /// Keeps the struct free of implicit padding.
-    pub reserved: u32,
+kernel_args! {
+    /// Arguments of [`integrate`].
+    pub struct IntegrateArgs {
+        /// The bodies, advanced in place.
+        pub bodies: Bodies,
+        /// Kind table (speed limits).
+        pub kinds: DevSlice<KindInfo>,
+        /// The narrow phase's response for each slot.
+        pub contacts: Contacts,
+        /// The world (size, boundary rule).
+        pub space: Space,
+        /// The force field.
+        pub field: Field,
+        /// Time step of this substep.
+        pub dt: f32,
+        /// One of [`SEMI_IMPLICIT_EULER`], [`EXPLICIT_EULER`], [`VELOCITY_VERLET`].
+        pub integrator: u32,
+        /// Which substep of the step this is: bodies age and die in substep 0 only.
+        pub substep: u32,
+        /// Keeps the struct free of implicit padding.
+        pub reserved: u32,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for IntegrateArgs {}
 
 /// One semi-implicit Euler step of a body with acceleration `accel`: `v' = v + a dt`,
 /// limited to `max_speed`, then `x' = x + v' dt` (the velocity updated first, as the paper

@@ -98,3 +98,13 @@ impl SlotRange {
         self.start + self.capacity
     }
 }
+
+crate::device_data! {
+    /// The kind tables every stage reads: one element per kind.
+    pub struct KindTables(kinds) {
+        /// What the bodies of each kind share.
+        info: [KindInfo; kinds],
+        /// Each kind's slots.
+        ranges: [SlotRange; kinds],
+    }
+}

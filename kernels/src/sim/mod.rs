@@ -30,5 +30,5 @@ pub mod scatter;
 pub mod space;
 
 pub use bodies::{Bodies, Contacts};
-pub use kinds::{KindInfo, SlotRange};
+pub use kinds::{KindInfo, KindTables, SlotRange};
 pub use space::Space;

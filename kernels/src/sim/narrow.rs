@@ -14,29 +14,29 @@ use super::broad::CellIndex;
 use super::contact::{contact, tie_break};
 use super::kinds::{Bound, KindInfo};
 use super::space::Space;
-use crate::{DevSlice, KernelArgs, Thread};
+use crate::{DevSlice, Thread, kernel_args};
 
-/// Arguments of [`collide`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct CollideArgs {
-    /// The bodies; energy is updated in place, the rest is read.
-    pub bodies: Bodies,
-    /// Kind table.
-    pub kinds: DevSlice<KindInfo>,
-    /// The world and its grid.
-    pub space: Space,
-    /// The sorted grid of this step.
-    pub grid: CellIndex,
-    /// Output: each slot's response (zero for free slots).
-    pub contacts: Contacts,
-    /// How much of the summed push is applied.
-    pub relax: Relaxation,
-    /// Which substep of the step this is: energy is lost, and contacts and damage are
-    /// counted, in substep 0 only (contact damage is per step).
-    pub substep: u32,
-    /// Keeps the struct free of implicit padding.
-    pub reserved: u32,
+kernel_args! {
+    /// Arguments of [`collide`].
+    pub struct CollideArgs {
+        /// The bodies; energy is updated in place, the rest is read.
+        pub bodies: Bodies,
+        /// Kind table.
+        pub kinds: DevSlice<KindInfo>,
+        /// The world and its grid.
+        pub space: Space,
+        /// The sorted grid of this step.
+        pub grid: CellIndex,
+        /// Output: each slot's response (zero for free slots).
+        pub contacts: Contacts,
+        /// How much of the summed push is applied.
+        pub relax: Relaxation,
+        /// Which substep of the step this is: energy is lost, and contacts and damage are
+        /// counted, in substep 0 only (contact damage is per step).
+        pub substep: u32,
+        /// Keeps the struct free of implicit padding.
+        pub reserved: u32,
+    }
 }
 
 /// How a body's pushes are combined: today's full sum by default. Every pair of a crowd is
@@ -70,8 +70,6 @@ impl Relaxation {
         push * self.fraction
     }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for CollideArgs {}
 
 /// `1 / mass`; zero for an immovable (infinitely heavy) body.
 #[inline(always)]

@@ -4,25 +4,23 @@ use glam::Vec2;
 
 use super::bodies::Bodies;
 use super::space::Space;
-use crate::{DevSlice, KernelArgs, Thread};
+use crate::{DevSlice, Thread, kernel_args};
 
-/// Arguments of [`scatter`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct ScatterArgs {
-    /// The bodies; the chosen slots are (re)initialised.
-    pub bodies: Bodies,
-    /// The slots to fill: `count` distinct free slots (a prefix of a free list).
-    pub slots: DevSlice<u32>,
-    /// The world (size and boundary rule).
-    pub space: Space,
-    /// Standard deviation of each velocity component.
-    pub speed: f32,
-    /// Initial energy.
-    pub energy: i32,
+kernel_args! {
+    /// Arguments of [`scatter`].
+    pub struct ScatterArgs {
+        /// The bodies; the chosen slots are (re)initialised.
+        pub bodies: Bodies,
+        /// The slots to fill: `count` distinct free slots (a prefix of a free list).
+        pub slots: DevSlice<u32>,
+        /// The world (size and boundary rule).
+        pub space: Space,
+        /// Standard deviation of each velocity component.
+        pub speed: f32,
+        /// Initial energy.
+        pub energy: i32,
+    }
 }
-// SAFETY: repr(C) plain data.
-unsafe impl KernelArgs for ScatterArgs {}
 
 /// Thread `t` brings slot `slots[t]` to life at a uniformly random place (see
 /// [`random_place`]), velocity normal with deviation `speed` per axis, with the given energy.

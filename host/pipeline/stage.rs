@@ -1,0 +1,126 @@
+//! The stages of a step, typed: [`Stage`] names each, in step order, and makes its ops for
+//! a world (one file per stage under `stages/`).
+
+use serde::Serialize;
+
+use super::stages;
+use super::world::World;
+use crate::{Op, Plan};
+
+/// A stage of the step. [`Stage::ALL`] is the step's order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Stage {
+    /// The autopilot, or the player's input passed through (one warp); games.
+    Pilot,
+    /// The master before the physics (one warp); games.
+    Master,
+    /// The enemies the master ordered come alive; games.
+    Births,
+    /// The grid: bucket counts, their prefix sum, placement, canonical order; games, and
+    /// worlds where something collides.
+    Broad,
+    /// Contacts and their response; worlds where something collides.
+    Narrow,
+    /// Every enemy's machine, in one launch over the enemy kinds' slots; games with enemies.
+    Think,
+    /// Euler, the boundary rule, deaths; always.
+    Integrate,
+    /// Broad, narrow and integrate again for each further substep; worlds with substeps.
+    Substeps,
+    /// Kills burst into particles, the others move and fade; games with explosions.
+    Effects,
+    /// The free lists: flags, their prefix sum, gather; always.
+    Free,
+    /// The master after the physics (one warp); games.
+    Tally,
+}
+
+impl Stage {
+    /// Every stage, in the order a step runs them.
+    pub const ALL: [Stage; 11] = [
+        Stage::Pilot,
+        Stage::Master,
+        Stage::Births,
+        Stage::Broad,
+        Stage::Narrow,
+        Stage::Think,
+        Stage::Integrate,
+        Stage::Substeps,
+        Stage::Effects,
+        Stage::Free,
+        Stage::Tally,
+    ];
+
+    /// The stage's name, as profiles and the documentation spell it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Pilot => "pilot",
+            Stage::Master => "master",
+            Stage::Births => "births",
+            Stage::Broad => "broad",
+            Stage::Narrow => "narrow",
+            Stage::Think => "think",
+            Stage::Integrate => "integrate",
+            Stage::Substeps => "substeps",
+            Stage::Effects => "effects",
+            Stage::Free => "free",
+            Stage::Tally => "tally",
+        }
+    }
+
+    /// The stage's ops for `world` (none where the world has no such stage).
+    pub(super) fn ops(self, world: &World) -> Vec<Op> {
+        match self {
+            Stage::Pilot => stages::pilot::ops(world),
+            Stage::Master => stages::master::ops(world),
+            Stage::Births => stages::births::ops(world),
+            Stage::Broad => stages::broad::ops(world),
+            Stage::Narrow => stages::narrow::ops(world, 0),
+            Stage::Think => stages::think::ops(world),
+            Stage::Integrate => stages::integrate::ops(world, 0),
+            Stage::Substeps => stages::substeps::ops(world),
+            Stage::Effects => stages::effects::ops(world),
+            Stage::Free => stages::free::ops(world),
+            Stage::Tally => stages::tally::ops(world),
+        }
+    }
+}
+
+/// A stage of a world's step and its plan.
+pub struct StagePlan {
+    /// Which stage.
+    pub stage: Stage,
+    pub(super) plan: Plan,
+}
+
+impl StagePlan {
+    /// Kernel launches per step.
+    pub fn launches(&self) -> usize {
+        self.plan.launches()
+    }
+
+    /// Bytes the stage moves per step, by our count.
+    pub fn bytes(&self) -> u64 {
+        self.plan.bytes()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Stage;
+
+    /// The table of stages in the pipeline's documentation lists the enum's, in order.
+    #[test]
+    fn documentation_lists_every_stage_in_order() {
+        let doc = include_str!("mod.rs");
+        let listed: Vec<&str> = doc
+            .lines()
+            .take_while(|l| l.starts_with("//!"))
+            .filter_map(|l| l.strip_prefix("//! | `"))
+            .filter_map(|l| l.split('`').next())
+            .collect();
+        let names: Vec<&str> = Stage::ALL.iter().map(|s| s.name()).collect();
+        assert_eq!(listed, names);
+    }
+}

@@ -1,0 +1,91 @@
+//! `broad`: the grid: bucket counts, their prefix sum into starts, placement, canonical
+//! order.
+
+use gpuwars_kernels::registry;
+use gpuwars_kernels::sim::broad::{self, CountArgs, MergeArgs, OrderArgs, PlaceArgs};
+
+use crate::Op;
+use crate::backend::Binder;
+use crate::pipeline::world::World;
+use crate::primitives::threads;
+
+/// The broad phase's launches, a thread a slot each, if the world has a grid.
+pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
+    if !world.config.grid {
+        return Vec::new();
+    }
+    let slots = world.layout.slots;
+    let (g, pos) = (&world.scratch.grid, &world.state.bodies.pos);
+    // SAFETY (every binder below): the views go into the op made with it.
+    let mut b = unsafe { Binder::new() };
+    let start = b.view(&g.start);
+    // SAFETY (every op below): the world's buffers, sized as the kernels ask (see `World`).
+    let mut ops = vec![unsafe { Op::clear(start, b) }];
+    let mut b = unsafe { Binder::new() };
+    let count = CountArgs {
+        bodies: world.state.bodies(&mut b),
+        space: world.space,
+        keys: b.view(&g.keys),
+        ranks: b.view(&g.ranks),
+        counts: b.view(&g.start),
+    };
+    ops.push(unsafe { threads(registry::COUNT_CELLS, slots, count, b, 28) });
+    ops.extend(
+        world
+            .scratch
+            .grid_scan
+            .ops(&g.start, &g.start, g.start.len() as u32)
+            .expect("the scan was made for the buckets"),
+    );
+    let mut b = unsafe { Binder::new() };
+    let place = PlaceArgs {
+        keys: b.view(&g.keys),
+        ranks: b.view(&g.ranks),
+        start: b.view(&g.start),
+        unordered: b.view(&g.unordered),
+    };
+    ops.push(unsafe { threads(registry::PLACE_IN_CELLS, slots, place, b, 16) });
+    // With a cap, crowded buckets are ordered in runs and merged, so that their cost stays
+    // O(n log n): the passes a bucket of the largest kind's capacity needs.
+    let bounded = world.spec.physics.neighbour_cap != 0;
+    let mut b = unsafe { Binder::new() };
+    let order = OrderArgs {
+        pos: b.view(pos),
+        keys: b.view(&g.keys),
+        start: b.view(&g.start),
+        unordered: b.view(&g.unordered),
+        slots: b.view(&g.slots),
+        entry_pos: b.view(&g.pos),
+        runs: b.view(&g.ranks),
+        bounded: u32::from(bounded),
+        reserved: 0,
+    };
+    ops.push(unsafe { threads(registry::ORDER_CELLS, slots, order, b, 36) });
+    let largest = world.layout.ranges.iter().map(|r| r.capacity).max();
+    let merges = match largest {
+        Some(largest) if bounded => largest
+            .div_ceil(broad::RUN)
+            .next_power_of_two()
+            .trailing_zeros(),
+        _ => 0,
+    };
+    // The runs go back and forth between the ranks (free after placement) and the
+    // arrival-ordered slots (free after ordering).
+    let (mut src, mut dst) = (&g.ranks, &g.unordered);
+    for pass in 0..merges {
+        let mut b = unsafe { Binder::new() };
+        let merge = MergeArgs {
+            pos: b.view(pos),
+            start: b.view(&g.start),
+            src: b.view(src),
+            dst: b.view(dst),
+            slots: b.view(&g.slots),
+            entry_pos: b.view(&g.pos),
+            run: broad::RUN << pass,
+            reserved: 0,
+        };
+        ops.push(unsafe { threads(registry::MERGE_RUNS, slots, merge, b, 24) });
+        (src, dst) = (dst, src);
+    }
+    ops
+}

@@ -1,0 +1,43 @@
+//! `free`: the free lists: flags, their prefix sum into ranks, the lists and counts (each
+//! kind's last slot writes its count, so they need no clearing).
+
+use gpuwars_kernels::registry;
+use gpuwars_kernels::sim::free_list::{GatherArgs, MarkArgs};
+
+use crate::Op;
+use crate::backend::Binder;
+use crate::pipeline::world::World;
+use crate::primitives::threads;
+
+/// Mark, scan, gather: a thread a slot each.
+pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
+    let (slots, state, marks) = (world.layout.slots, &world.state, &world.scratch.marks);
+    // SAFETY (both binders): the views go into the op made with each.
+    let mut b = unsafe { Binder::new() };
+    let mark = MarkArgs {
+        bodies: state.bodies(&mut b),
+        ranges: b.view(&state.tables.ranges),
+        flags: b.view(&marks.flags),
+    };
+    // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
+    let mut ops = vec![unsafe { threads(registry::MARK_FREE, slots, mark, b, 12) }];
+    ops.extend(
+        world
+            .scratch
+            .marks_scan
+            .ops(&marks.flags, &marks.ranks, slots)
+            .expect("the scan was made for the slots"),
+    );
+    let mut b = unsafe { Binder::new() };
+    let gather = GatherArgs {
+        kind: b.view(&state.bodies.kind),
+        ranges: b.view(&state.tables.ranges),
+        flags: b.view(&marks.flags),
+        ranks: b.view(&marks.ranks),
+        list: b.view(&state.free.list),
+        count: b.view(&state.free.count),
+    };
+    // SAFETY: as above.
+    ops.push(unsafe { threads(registry::GATHER_FREE, slots, gather, b, 16) });
+    ops
+}

@@ -1,0 +1,29 @@
+//! `integrate`: Euler, the boundary rule, deaths.
+
+use gpuwars_kernels::registry;
+use gpuwars_kernels::sim::integrate::IntegrateArgs;
+
+use crate::Op;
+use crate::backend::Binder;
+use crate::pipeline::world::World;
+use crate::primitives::threads;
+
+/// The integrator of substep `substep`, a thread a slot.
+pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
+    let (spec, physics) = (&world.spec, &world.spec.physics);
+    // SAFETY: the views go into this op only.
+    let mut b = unsafe { Binder::new() };
+    let args = IntegrateArgs {
+        bodies: world.state.bodies(&mut b),
+        kinds: b.view(&world.state.tables.info),
+        contacts: world.scratch.contacts(&mut b),
+        space: world.space,
+        field: spec.field,
+        dt: spec.dt / physics.substeps as f32,
+        integrator: physics.integrator.code(),
+        substep,
+        reserved: 0,
+    };
+    // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
+    vec![unsafe { threads(registry::INTEGRATE, world.layout.slots, args, b, 88) }]
+}

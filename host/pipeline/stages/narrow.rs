@@ -1,0 +1,33 @@
+//! `narrow`: contacts and their response (`collide_circles` without rectangles).
+
+use gpuwars_kernels::sim::narrow::{CollideArgs, Relaxation};
+
+use crate::Op;
+use crate::backend::Binder;
+use crate::pipeline::world::World;
+use crate::primitives::threads;
+
+/// The narrow phase of substep `substep`, a thread a slot, if anything collides.
+pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
+    let Some(kernel) = world.config.collide else {
+        return Vec::new();
+    };
+    let physics = &world.spec.physics;
+    // SAFETY: the views go into this op only.
+    let mut b = unsafe { Binder::new() };
+    let args = CollideArgs {
+        bodies: world.state.bodies(&mut b),
+        kinds: b.view(&world.state.tables.info),
+        space: world.space,
+        grid: world.cells(&mut b),
+        contacts: world.scratch.contacts(&mut b),
+        relax: Relaxation {
+            fraction: physics.relaxation,
+            averaged: u32::from(physics.averaged),
+        },
+        substep,
+        reserved: 0,
+    };
+    // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
+    vec![unsafe { threads(kernel, world.layout.slots, args, b, 52) }]
+}
