@@ -199,7 +199,15 @@ impl Pipeline<'_> {
         };
         // SAFETY: the canvas's buffers, sized as the kernel asks; the caller vouches for
         // `image`; one thread per pixel of the largest box.
-        Ok(unsafe { threads(registry::RADAR_IMAGE, RADAR_BOX as u32, args, b, 12) })
+        Ok(unsafe {
+            threads(
+                registry::RADAR_IMAGE,
+                RADAR_BOX as u32,
+                args,
+                b,
+                12 * u64::from(RADAR_BOX as u32),
+            )
+        })
     }
 
     fn canvas(&self) -> Result<&Canvas, Error> {
@@ -309,7 +317,15 @@ impl Pipeline<'_> {
                 reserved: 0,
             };
             let samples = slots.div_ceil(stride);
-            ops.push(unsafe { threads(registry::RADAR_BODIES, samples, radar, b, 24) });
+            ops.push(unsafe {
+                threads(
+                    registry::RADAR_BODIES,
+                    samples,
+                    radar,
+                    b,
+                    24 * u64::from(samples),
+                )
+            });
         }
         Ok(ops)
     }
@@ -343,7 +359,13 @@ impl Pipeline<'_> {
             ops.push(Op::clear(large_count, b));
             let mut b = Binder::new();
             let args = splat(&mut b);
-            ops.push(threads(registry::SPLAT_BODIES, slots, args, b, 64));
+            ops.push(threads(
+                registry::SPLAT_BODIES,
+                slots,
+                args,
+                b,
+                64 * u64::from(slots),
+            ));
             let large = (slots * LARGE_LANES).min(LARGE_THREADS);
             let mut b = Binder::new();
             let args = splat(&mut b);
@@ -362,7 +384,7 @@ impl Pipeline<'_> {
                     particles.len(),
                     args,
                     b,
-                    24,
+                    24 * u64::from(particles.len()),
                 ));
             }
             let mut b = Binder::new();
@@ -376,7 +398,13 @@ impl Pipeline<'_> {
                 reserved: 0,
             };
             let pixels = lens.width * lens.height;
-            ops.push(threads(registry::RESOLVE_PIXELS, pixels, resolve, b, 12));
+            ops.push(threads(
+                registry::RESOLVE_PIXELS,
+                pixels,
+                resolve,
+                b,
+                12 * u64::from(pixels),
+            ));
         }
         let device = self.device;
         device.run(&device.plan(ops, false)?)
@@ -461,7 +489,13 @@ impl Pipeline<'_> {
                 shown: b.view(&canvas.shown),
                 vertices: vertices(&mut b).range(0, slots + 1),
             };
-            ops.push(threads(registry::WRITE_VERTICES, slots + 1, args, b, 40));
+            ops.push(threads(
+                registry::WRITE_VERTICES,
+                slots + 1,
+                args,
+                b,
+                40 * u64::from(slots + 1),
+            ));
             let mut b = Binder::new();
             if let Some((particles, lifetime)) = world.particles(&mut b) {
                 let args = ParticleVertexArgs {
@@ -472,7 +506,13 @@ impl Pipeline<'_> {
                     reserved: 0,
                 };
                 let n = particles.len();
-                ops.push(threads(registry::WRITE_PARTICLE_VERTICES, n, args, b, 60));
+                ops.push(threads(
+                    registry::WRITE_PARTICLE_VERTICES,
+                    n,
+                    args,
+                    b,
+                    60 * u64::from(n),
+                ));
             }
         }
         let device = self.device;

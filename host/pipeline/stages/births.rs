@@ -27,5 +27,13 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         reserved: 0,
     };
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
-    vec![unsafe { threads(registry::BIRTHS, world.layout.slots, args, b, 8) }]
+    vec![unsafe {
+        threads(
+            registry::BIRTHS,
+            world.layout.slots,
+            args,
+            b,
+            8 * u64::from(world.layout.slots),
+        )
+    }]
 }

@@ -29,7 +29,15 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         ranks: b.view(&g.ranks),
         counts: b.view(&g.start),
     };
-    ops.push(unsafe { threads(registry::COUNT_CELLS, slots, count, b, 28) });
+    ops.push(unsafe {
+        threads(
+            registry::COUNT_CELLS,
+            slots,
+            count,
+            b,
+            28 * u64::from(slots),
+        )
+    });
     ops.extend(
         world
             .scratch
@@ -44,7 +52,15 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         start: b.view(&g.start),
         unordered: b.view(&g.unordered),
     };
-    ops.push(unsafe { threads(registry::PLACE_IN_CELLS, slots, place, b, 16) });
+    ops.push(unsafe {
+        threads(
+            registry::PLACE_IN_CELLS,
+            slots,
+            place,
+            b,
+            16 * u64::from(slots),
+        )
+    });
     // With a cap, crowded buckets are ordered in runs and merged, so that their cost stays
     // O(n log n): the passes a bucket of the largest kind's capacity needs.
     let bounded = world.spec.physics.neighbour_cap != 0;
@@ -60,7 +76,15 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         bounded: u32::from(bounded),
         reserved: 0,
     };
-    ops.push(unsafe { threads(registry::ORDER_CELLS, slots, order, b, 36) });
+    ops.push(unsafe {
+        threads(
+            registry::ORDER_CELLS,
+            slots,
+            order,
+            b,
+            36 * u64::from(slots),
+        )
+    });
     let largest = world.layout.ranges.iter().map(|r| r.capacity).max();
     let merges = match largest {
         Some(largest) if bounded => largest
@@ -84,7 +108,7 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
             run: broad::RUN << pass,
             reserved: 0,
         };
-        ops.push(unsafe { threads(registry::MERGE_RUNS, slots, merge, b, 24) });
+        ops.push(unsafe { threads(registry::MERGE_RUNS, slots, merge, b, 24 * u64::from(slots)) });
         (src, dst) = (dst, src);
     }
     ops

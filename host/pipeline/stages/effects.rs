@@ -29,5 +29,13 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         burst: *burst,
     };
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
-    vec![unsafe { threads(registry::BURST_AND_FADE, burst.particles(), args, b, 28) }]
+    vec![unsafe {
+        threads(
+            registry::BURST_AND_FADE,
+            burst.particles(),
+            args,
+            b,
+            28 * u64::from(burst.particles()),
+        )
+    }]
 }

@@ -20,7 +20,8 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         flags: b.view(&marks.flags),
     };
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
-    let mut ops = vec![unsafe { threads(registry::MARK_FREE, slots, mark, b, 12) }];
+    let mut ops =
+        vec![unsafe { threads(registry::MARK_FREE, slots, mark, b, 12 * u64::from(slots)) }];
     ops.extend(
         world
             .scratch
@@ -38,6 +39,14 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         count: b.view(&state.free.count),
     };
     // SAFETY: as above.
-    ops.push(unsafe { threads(registry::GATHER_FREE, slots, gather, b, 16) });
+    ops.push(unsafe {
+        threads(
+            registry::GATHER_FREE,
+            slots,
+            gather,
+            b,
+            16 * u64::from(slots),
+        )
+    });
     ops
 }

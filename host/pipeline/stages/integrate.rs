@@ -25,5 +25,13 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         reserved: 0,
     };
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
-    vec![unsafe { threads(registry::INTEGRATE, world.layout.slots, args, b, 88) }]
+    vec![unsafe {
+        threads(
+            registry::INTEGRATE,
+            world.layout.slots,
+            args,
+            b,
+            88 * u64::from(world.layout.slots),
+        )
+    }]
 }

@@ -15,5 +15,13 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         return Vec::new();
     };
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
-    vec![unsafe { threads(registry::MASTER, warp::WARP, args, b, 128) }]
+    vec![unsafe {
+        threads(
+            registry::MASTER,
+            warp::WARP,
+            args,
+            b,
+            128 * u64::from(warp::WARP),
+        )
+    }]
 }

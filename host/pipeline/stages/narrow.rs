@@ -29,5 +29,13 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         reserved: 0,
     };
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
-    vec![unsafe { threads(kernel, world.layout.slots, args, b, 52) }]
+    vec![unsafe {
+        threads(
+            kernel,
+            world.layout.slots,
+            args,
+            b,
+            52 * u64::from(world.layout.slots),
+        )
+    }]
 }

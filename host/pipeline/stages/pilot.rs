@@ -26,5 +26,13 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         reserved: 0,
     };
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
-    vec![unsafe { threads(registry::AUTOPILOT, warp::WARP, args, b, 64) }]
+    vec![unsafe {
+        threads(
+            registry::AUTOPILOT,
+            warp::WARP,
+            args,
+            b,
+            64 * u64::from(warp::WARP),
+        )
+    }]
 }

@@ -31,5 +31,13 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         shot_kind: game.config.rules.shot_kind,
     };
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
-    vec![unsafe { threads(registry::THINK, end_slot - first_slot, args, b, 56) }]
+    vec![unsafe {
+        threads(
+            registry::THINK,
+            end_slot - first_slot,
+            args,
+            b,
+            56 * u64::from(end_slot - first_slot),
+        )
+    }]
 }
