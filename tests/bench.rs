@@ -151,6 +151,7 @@ fn bench_scale_measures_each_size_and_compare_reads_two_runs() {
     assert_eq!(sizes, [1024, 2048, 3000]);
     for r in &table {
         assert!(r.steps_per_s > 0.0 && r.frames_per_s > 0.0 && r.bytes_per_step > 0);
+        assert!(r.floor_us > 0.0);
         let rate = r.bytes_per_step as f64 / (r.step_us / 1e6);
         assert!((r.achieved_bandwidth - rate).abs() <= rate * 1e-9);
         assert!((r.fraction_of_copy - rate / summary.copy_bandwidth).abs() < 1e-9);

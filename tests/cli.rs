@@ -274,6 +274,19 @@ fn demo_profiles_every_stage_and_runs_the_same_game() {
         .map(|s| s["launches"].as_u64().unwrap())
         .sum();
     assert_eq!(launches, plain["launches_per_step"].as_u64().unwrap());
+    // The stages with a thread a slot read at least one word of every slot.
+    let slots = profile["floor"]["threads"].as_u64().unwrap();
+    assert!(slots >= 8192, "{slots} slots");
+    for s in profile["stages"].as_array().unwrap() {
+        if ["births", "broad", "narrow", "integrate", "free"]
+            .contains(&s["stage"].as_str().unwrap())
+        {
+            assert!(s["bytes"].as_u64().unwrap() >= 4 * slots, "{s}");
+        }
+    }
+    // The launch floor: the step's launches over its slots, measured in the same run.
+    assert_eq!(profile["floor"]["launches"], plain["launches_per_step"]);
+    assert!(profile["floor"]["graph_s"].as_f64().unwrap() > 0.0);
     // Every status read back at once, or four steps late: the same game.
     let lagged = demo_json(&[
         "--scene", "paper", "--steps", "30", "--seed", "2", "--lag", "1",

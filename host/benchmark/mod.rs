@@ -9,6 +9,7 @@
 //! - [`tradeoff`]: speed against accuracy for each physics choice (`gpuwars tradeoff`).
 
 pub mod compare;
+pub mod floor;
 pub mod paper;
 mod plot;
 pub mod scale;

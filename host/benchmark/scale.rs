@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context as _, bail};
 use serde::{Deserialize, Serialize};
 
-use super::{Outputs, Provenance, plot, progress, write_csv, write_json};
+use super::{Outputs, Provenance, floor, plot, progress, write_csv, write_json};
 use crate::files::thousands;
 use crate::game::scene::built_in;
 use crate::game::{Game, Options, Scene};
@@ -53,6 +53,9 @@ pub struct ScaleRow {
     pub steps_per_s: f64,
     /// Time per step over the profiled steps, stage by stage summed (µs).
     pub step_us: f64,
+    /// The launch floor of a step this size: as many one-touch launches as it makes over
+    /// its slots, replayed as a graph (µs; see `benchmark::floor`).
+    pub floor_us: f64,
     /// Each stage's share of it, in step order: `stage=µs` joined by spaces.
     pub stages: String,
     /// Bytes the step moves by our count (every array element its kernels must touch).
@@ -231,6 +234,12 @@ fn measure(
         game.render(width, height, &Camera::field(), 0.0)
     })?;
     let step_s = profile.step_seconds();
+    let pipeline = game.pipeline();
+    let floor = floor::measure(
+        device,
+        pipeline.launches_per_step(),
+        pipeline.layout().slots,
+    )?;
     let bytes: u64 = profile.stages.iter().map(|s| s.bytes).sum();
     let achieved = bytes as f64 / step_s.max(f64::MIN_POSITIVE);
     let stages = profile.stage_line(1e-6, 1);
@@ -239,6 +248,7 @@ fn measure(
         setup_s,
         steps_per_s,
         step_us: step_s * 1e6,
+        floor_us: floor.graph_s * 1e6,
         stages,
         bytes_per_step: bytes,
         achieved_bandwidth: achieved,
@@ -257,15 +267,16 @@ impl ScaleSummary {
             self.copy_bandwidth / 1e9
         );
         out += &format!(
-            "{:>10} {:>12} {:>10} {:>12} {:>9} {:>12}\n",
-            "enemies", "steps/s", "step µs", "GB/s", "of copy", "frames/s"
+            "{:>10} {:>12} {:>10} {:>10} {:>12} {:>9} {:>12}\n",
+            "enemies", "steps/s", "step µs", "floor µs", "GB/s", "of copy", "frames/s"
         );
         for r in &self.rows {
             out += &format!(
-                "{:>10} {:>12.1} {:>10.1} {:>12.1} {:>8.1}% {:>12.1}\n",
+                "{:>10} {:>12.1} {:>10.1} {:>10.1} {:>12.1} {:>8.1}% {:>12.1}\n",
                 r.enemies,
                 r.steps_per_s,
                 r.step_us,
+                r.floor_us,
                 r.achieved_bandwidth / 1e9,
                 100.0 * r.fraction_of_copy,
                 r.frames_per_s

@@ -11,6 +11,7 @@ use super::Game;
 use super::engine::Options;
 use super::replay::Replay;
 use super::spec::Scene;
+use crate::benchmark::floor::{self, Floor};
 use crate::benchmark::progress;
 use crate::graphics::Renderer;
 use crate::graphics::bodies::BodyRenderer;
@@ -74,11 +75,14 @@ pub struct Report {
     pub frame: Option<Frame>,
 }
 
-/// The stage times of a profiled run, and the device's copy bandwidth measured in it.
+/// The stage times of a profiled run, and the device's copy bandwidth and launch floor
+/// measured in it.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ProfileReport {
     /// Bytes per second of a large device-to-device copy (read plus written).
     pub copy_bandwidth: f64,
+    /// A chain of as many one-touch launches as the step makes, over its slots.
+    pub floor: Floor,
     /// The stages' times.
     #[serde(flatten)]
     pub profile: Profile,
@@ -135,10 +139,11 @@ impl Report {
         }
         if let Some(p) = &self.profile {
             out += &format!(
-                "\nstage times over {} steps (copy bandwidth {:.1} GB/s):\n{}",
+                "\nstage times over {} steps (copy bandwidth {:.1} GB/s):\n{}{}\n",
                 p.profile.steps,
                 p.copy_bandwidth / 1e9,
-                p.profile.to_table(Some(p.copy_bandwidth))
+                p.profile.to_table(Some(p.copy_bandwidth)),
+                p.floor.describe(p.profile.step_seconds())
             );
         }
         out
@@ -352,6 +357,11 @@ fn play(
     let profile = match profile {
         Some(profile) => Some(ProfileReport {
             copy_bandwidth: device.copy_bandwidth()?,
+            floor: floor::measure(
+                device,
+                pipeline.launches_per_step(),
+                pipeline.layout().slots,
+            )?,
             profile,
         }),
         None => None,

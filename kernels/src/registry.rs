@@ -5,7 +5,7 @@
 //! the entry's name and the constant's `name` come from the same identifier, they cannot drift.
 
 use crate::game::{ai, autopilot, effects, master};
-use crate::primitives::{histogram, scan, sort};
+use crate::primitives::{histogram, scan, sort, touch};
 use crate::render::{self, camera, particles, radar};
 use crate::rng::streams;
 use crate::sim::{broad, free_list, integrate, narrow, scatter};
@@ -50,6 +50,8 @@ kernels! {
     SCAN_TILES_AFTER_SUMS = scan_tiles_after_sums(scan::ScanArgs) => scan::scan_tiles_after_sums;
     /// Counts keys per bin with atomic adds.
     HISTOGRAM = histogram(histogram::HistogramArgs) => histogram::count_keys;
+    /// Adds one to each thread's element: the launch floor's probe.
+    TOUCH = touch(touch::TouchArgs) => touch::touch;
     /// Counts the digits of each tile of keys (one counting-sort pass).
     SORT_COUNT = sort_count(sort::CountArgs) => sort::count_digits;
     /// Moves each tile's (key, index) pairs to their sorted slots (one counting-sort pass).
