@@ -95,11 +95,9 @@ impl Emulator {
         // one on the GPU.
         catch_unwind(AssertUnwindSafe(|| match self.schedule {
             Schedule::InOrder => self.pool.install(|| {
-                (0..grid).into_par_iter().for_each(|b| {
-                    for t in 0..block {
-                        (kernel.body)(thread(t, b), args);
-                    }
-                })
+                (0..grid)
+                    .into_par_iter()
+                    .for_each(|b| (kernel.block)(b, block, grid, args))
             }),
             Schedule::Shuffled { seed } => {
                 let launch = self.launches.fetch_add(1, Ordering::Relaxed);

@@ -76,6 +76,33 @@ pub struct Kernel<A> {
     pub name: &'static str,
     /// The kernel body, called once per thread.
     pub body: fn(Thread, &A),
+    /// The body for every thread of block `block` in order, `(block, block_dim, grid_dim,
+    /// args)`: the emulator's way to run a block with one call, the body inlined into the
+    /// loop ([`run_block`]).
+    pub block: fn(u32, u32, u32, &A),
+}
+
+/// Runs `body` for the threads `0 .. block_dim` of block `block`, in order: what a kernel's
+/// [`Kernel::block`] does, with the body known at compile time so that it is inlined.
+#[inline(always)]
+pub fn run_block<A>(
+    body: impl Fn(Thread, &A),
+    block: u32,
+    block_dim: u32,
+    grid_dim: u32,
+    args: &A,
+) {
+    for thread in 0..block_dim {
+        body(
+            Thread {
+                thread,
+                block,
+                block_dim,
+                grid_dim,
+            },
+            args,
+        );
+    }
 }
 
 impl<A> Clone for Kernel<A> {

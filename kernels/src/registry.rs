@@ -18,7 +18,16 @@ macro_rules! kernels {
     )*) => {
         $(
             $(#[doc = $doc])+
-            pub const $konst: Kernel<$args> = Kernel { name: stringify!($entry), body: $body };
+            pub const $konst: Kernel<$args> = Kernel {
+                name: stringify!($entry),
+                body: $body,
+                block: {
+                    fn block(block: u32, block_dim: u32, grid_dim: u32, args: &$args) {
+                        crate::exec::run_block($body, block, block_dim, grid_dim, args)
+                    }
+                    block
+                },
+            };
         )*
 
         /// Every kernel of the module, in declaration order.
