@@ -1,0 +1,631 @@
+//! Documents read with positions: the one layer under the scene (TOML) and replay (JSON)
+//! readers. A [`Node`] is one value, where it is written and its path as the file spells it
+//! (`kinds[2].mass`, `inputs[17].aim`); its typed accessors check a value's type and range
+//! and say what is wrong on the value's line, quoting at most an excerpt of it.
+//!
+//! TOML comes from the toml crate's spanned tree. serde_json keeps no positions, so a JSON
+//! document is checked by serde_json first (its syntax errors, in its words), then walked
+//! here one level at a time, as a reader asks: each leaf is still decoded by serde_json, and
+//! a huge array is never held as more than the places of its items.
+
+use std::borrow::Cow;
+use std::fmt;
+use std::ops::Range;
+
+use serde::de::IgnoredAny;
+use toml::Spanned;
+use toml::de::DeValue;
+
+use super::{FileError, excerpt, json_problem, line_of, number, thousands};
+
+/// The text being read and what it is called, for errors.
+pub struct Doc<'t> {
+    /// The whole text.
+    pub text: &'t str,
+    /// The file's name, or what the text is.
+    pub origin: &'t str,
+}
+
+/// One value of a document.
+#[derive(Clone)]
+pub struct Node<'a> {
+    doc: &'a Doc<'a>,
+    /// Where the value is written.
+    span: Range<usize>,
+    /// Whether errors about it have a line (a TOML document as a whole has none).
+    placed: bool,
+    /// Its path, as the file spells it (empty for the document).
+    path: String,
+    /// The parsed value for TOML; `None` for JSON, read from `span` when asked.
+    toml: Option<&'a DeValue<'a>>,
+}
+
+/// What a value is, one level deep.
+pub enum Value<'a> {
+    /// A TOML table or a JSON object, in the order written.
+    Table(Vec<Entry<'a>>),
+    /// An array.
+    Array(Vec<Node<'a>>),
+    /// A string.
+    Text(Cow<'a, str>),
+    /// A whole number, `None` if beyond 128 bits (JSON's beyond 64 bits are floats, as
+    /// serde_json reads them).
+    Integer(Option<i128>),
+    /// A float, as [`written_float`] reads a TOML one.
+    Float(f64),
+    /// `true` or `false`.
+    Bool(bool),
+    /// JSON's `null`.
+    Null,
+    /// A TOML date or time.
+    Other,
+}
+
+/// A key of a table and its value.
+pub struct Entry<'a> {
+    /// The key.
+    pub key: Cow<'a, str>,
+    /// Where the key is written.
+    pub key_span: Range<usize>,
+    /// Its value, whose path is the table's and the key.
+    pub node: Node<'a>,
+}
+
+/// The first syntax error of a JSON document: serde_json's, and about where it was found
+/// (at or one past the byte it stumbled on).
+pub struct Syntax {
+    /// The error.
+    pub error: serde_json::Error,
+    /// Its byte offset.
+    pub at: usize,
+}
+
+impl<'a> Node<'a> {
+    /// A TOML document, as the toml crate parsed it.
+    pub fn toml(doc: &'a Doc<'a>, root: &'a Spanned<DeValue<'a>>) -> Self {
+        Node {
+            doc,
+            span: root.span(),
+            placed: false,
+            path: String::new(),
+            toml: Some(root.get_ref()),
+        }
+    }
+
+    /// A JSON document: its top value, and its first syntax error if it has one (the value is
+    /// then read only as far as the error).
+    pub fn json(doc: &'a Doc<'a>) -> (Self, Option<Syntax>) {
+        let syntax = serde_json::from_str::<IgnoredAny>(doc.text)
+            .err()
+            .map(|error| {
+                // serde_json's column counts bytes from the start of the line.
+                let line_start: usize = doc
+                    .text
+                    .split_inclusive('\n')
+                    .take(error.line().saturating_sub(1))
+                    .map(str::len)
+                    .sum();
+                let at = line_start + error.column();
+                Syntax { error, at }
+            });
+        let start = skip_space(doc.text.as_bytes(), 0);
+        let root = Node {
+            doc,
+            span: start..value_end(doc.text.as_bytes(), start),
+            placed: true,
+            path: String::new(),
+            toml: None,
+        };
+        (root, syntax)
+    }
+
+    /// Its path, as the file spells it.
+    pub fn path(&self) -> &str {
+        &self.path
+    }
+
+    /// Where it is written.
+    pub fn span(&self) -> Range<usize> {
+        self.span.clone()
+    }
+
+    /// The text of the document it is in.
+    pub fn text(&self) -> &'a str {
+        self.doc.text
+    }
+
+    /// The same value under another path.
+    pub fn renamed(&self, path: String) -> Self {
+        Node {
+            path,
+            ..self.clone()
+        }
+    }
+
+    /// The path of key `key` in this table.
+    pub fn join(&self, key: &str) -> String {
+        match self.path.is_empty() {
+            true => key.to_owned(),
+            false => format!("{}.{key}", self.path),
+        }
+    }
+
+    /// The 1-based line it starts on (none for a TOML document as a whole).
+    pub fn line(&self) -> Option<usize> {
+        self.placed
+            .then(|| line_of(self.doc.text.as_bytes(), self.span.start))
+    }
+
+    /// An error about this value, on its line.
+    pub fn fail(&self, problem: impl fmt::Display) -> FileError {
+        FileError::new(self.doc.origin, self.line(), &self.path, problem)
+    }
+
+    /// An error about this value on the line of byte `at` (the end of an array, say).
+    pub fn fail_at(&self, at: usize, problem: impl fmt::Display) -> FileError {
+        let line = line_of(self.doc.text.as_bytes(), at);
+        FileError::new(self.doc.origin, Some(line), &self.path, problem)
+    }
+
+    /// What the value is, one level deep. For JSON, a string or number serde_json cannot
+    /// read (a lone surrogate, `1e400`) is an error on this value.
+    pub fn value(&self) -> Result<Value<'a>, FileError> {
+        match self.toml {
+            Some(value) => Ok(self.toml_value(value)),
+            None => self.json_value(),
+        }
+    }
+
+    /// A TOML value one level deep.
+    fn toml_value(&self, value: &'a DeValue<'a>) -> Value<'a> {
+        let child = |value: &'a Spanned<DeValue<'a>>, path| Node {
+            doc: self.doc,
+            span: value.span(),
+            placed: true,
+            path,
+            toml: Some(value.get_ref()),
+        };
+        match value {
+            DeValue::Table(table) => Value::Table(
+                table
+                    .iter()
+                    .map(|(key, value)| Entry {
+                        key: key.get_ref().clone(),
+                        key_span: key.span(),
+                        node: child(value, self.join(&excerpt(key.get_ref()))),
+                    })
+                    .collect(),
+            ),
+            DeValue::Array(items) => Value::Array(
+                items
+                    .iter()
+                    .enumerate()
+                    .map(|(i, item)| child(item, format!("{}[{i}]", self.path)))
+                    .collect(),
+            ),
+            DeValue::String(text) => Value::Text(Cow::Borrowed(text.as_ref())),
+            DeValue::Integer(integer) => {
+                Value::Integer(i128::from_str_radix(integer.as_str(), integer.radix()).ok())
+            }
+            DeValue::Float(float) => Value::Float(written_float(float.as_str())),
+            DeValue::Boolean(flag) => Value::Bool(*flag),
+            DeValue::Datetime(_) => Value::Other,
+        }
+    }
+
+    /// A JSON value one level deep: containers by the places of their items, leaves decoded
+    /// by serde_json. Safe on any text; a container is read up to where its syntax breaks.
+    fn json_value(&self) -> Result<Value<'a>, FileError> {
+        let text = self.doc.text;
+        let bytes = text.as_bytes();
+        let at = self.span.start;
+        let leaf = text.get(self.span.clone()).unwrap_or_default();
+        let decode = |e: serde_json::Error| self.fail(json_problem(&e));
+        let value = match bytes.get(at) {
+            Some(b'{') => match self.entries() {
+                (entries, None) => Value::Table(entries),
+                (_, Some(e)) => return Err(e),
+            },
+            Some(b'[') => {
+                let mut items = Vec::new();
+                self.json_items(b']', |start| {
+                    let node = self.json_node(start, format!("{}[{}]", self.path, items.len()));
+                    let end = node.span.end;
+                    items.push(node);
+                    Some(end)
+                });
+                Value::Array(items)
+            }
+            Some(b'"') => Value::Text(Cow::Owned(serde_json::from_str(leaf).map_err(decode)?)),
+            Some(b't' | b'f') => Value::Bool(serde_json::from_str(leaf).map_err(decode)?),
+            Some(b'n') => {
+                serde_json::from_str::<()>(leaf).map_err(decode)?;
+                Value::Null
+            }
+            _ => {
+                let n: serde_json::Number = serde_json::from_str(leaf).map_err(decode)?;
+                match (n.as_i64(), n.as_u64()) {
+                    (Some(v), _) => Value::Integer(Some(v.into())),
+                    (None, Some(v)) => Value::Integer(Some(v.into())),
+                    (None, None) => Value::Float(n.as_f64().unwrap_or(f64::NAN)),
+                }
+            }
+        };
+        Ok(value)
+    }
+
+    /// The entries of this JSON object in the order written, up to the first key that
+    /// serde_json cannot read (whose error comes with them) or where the syntax breaks.
+    pub fn entries(&self) -> (Vec<Entry<'a>>, Option<FileError>) {
+        let bytes = self.doc.text.as_bytes();
+        let (mut entries, mut error) = (Vec::new(), None);
+        self.json_items(b'}', |at| {
+            (bytes.get(at) == Some(&b'"')).then_some(())?;
+            let key_span = at..string_end(bytes, at)?;
+            let key = self.doc.text.get(key_span.clone())?;
+            let key: String = match serde_json::from_str(key) {
+                Ok(key) => key,
+                Err(e) => {
+                    let line = Some(line_of(bytes, at));
+                    error = Some(FileError::new(
+                        self.doc.origin,
+                        line,
+                        &self.path,
+                        json_problem(&e),
+                    ));
+                    return None;
+                }
+            };
+            let colon = skip_space(bytes, key_span.end);
+            (bytes.get(colon) == Some(&b':')).then_some(())?;
+            let node = self.json_node(skip_space(bytes, colon + 1), self.join(&excerpt(&key)));
+            let end = node.span.end;
+            let key = Cow::Owned(key);
+            entries.push(Entry {
+                key,
+                key_span,
+                node,
+            });
+            Some(end)
+        });
+        (entries, error)
+    }
+
+    /// The JSON value that starts at byte `start`, at `path`.
+    fn json_node(&self, start: usize, path: String) -> Node<'a> {
+        Node {
+            doc: self.doc,
+            span: start..value_end(self.doc.text.as_bytes(), start),
+            placed: true,
+            path,
+            toml: None,
+        }
+    }
+
+    /// Walks the items of this JSON array or object, up to `close`: `item` reads the one
+    /// that starts at the byte it is given and says where it ends, or `None` to stop.
+    fn json_items(&self, close: u8, mut item: impl FnMut(usize) -> Option<usize>) {
+        let bytes = self.doc.text.as_bytes();
+        let mut at = skip_space(bytes, self.span.start + 1);
+        while at < self.span.end && bytes.get(at) != Some(&close) {
+            let Some(end) = item(at) else { break };
+            at = skip_space(bytes, end);
+            match bytes.get(at) {
+                Some(b',') => at = skip_space(bytes, at + 1),
+                _ => break,
+            }
+        }
+    }
+
+    /// The value as an error quotes it: for TOML an excerpt as written, for JSON the value
+    /// as read (`1e30`, `"text"`); what it is for a table or an array.
+    pub fn written(&self) -> String {
+        let as_written = || excerpt(self.doc.text.get(self.span.clone()).unwrap_or_default());
+        let json = self.toml.is_none();
+        match self.value() {
+            Ok(Value::Table(_)) if json => "an object".to_owned(),
+            Ok(Value::Table(_)) => "a table".to_owned(),
+            Ok(Value::Array(_)) => "an array".to_owned(),
+            Ok(Value::Text(text)) if json => format!("\"{}\"", excerpt(&text)),
+            Ok(Value::Integer(Some(v))) if json => v.to_string(),
+            Ok(Value::Float(v)) if json => format!("{v:?}"),
+            _ => as_written(),
+        }
+    }
+
+    /// The error for a value of the wrong type.
+    pub fn expected(&self, what: impl fmt::Display) -> FileError {
+        self.fail(format!("expected {what}, found {}", self.written()))
+    }
+
+    /// The table this value must be, whose keys must be among `keys`.
+    pub fn table(&self, keys: &'static [&'static str]) -> Result<Table<'a>, FileError> {
+        let Value::Table(entries) = self.value()? else {
+            return Err(self.expected("a table"));
+        };
+        let unknown = entries
+            .iter()
+            .filter(|entry| !keys.contains(&entry.key.as_ref()))
+            .min_by_key(|entry| entry.key_span.start);
+        if let Some(entry) = unknown {
+            let allowed: Vec<String> = keys.iter().map(|k| format!("`{k}`")).collect();
+            let problem = format!("unknown key (allowed {})", allowed.join(", "));
+            return Err(entry.node.fail_at(entry.key_span.start, problem));
+        }
+        Ok(Table {
+            node: self.clone(),
+            entries,
+        })
+    }
+
+    /// The items of the array this value must be (`what` it should hold, for the error).
+    pub fn array(&self, what: &str) -> Result<Vec<Node<'a>>, FileError> {
+        match self.value()? {
+            Value::Array(items) => Ok(items),
+            _ => Err(self.expected(what)),
+        }
+    }
+
+    /// A string (`what` it should be, for the error).
+    pub fn string(&self, what: &str) -> Result<String, FileError> {
+        match self.value()? {
+            Value::Text(text) => Ok(text.into_owned()),
+            _ => Err(self.expected(what)),
+        }
+    }
+
+    /// One of `options`, by name; `what` the value is, for the error.
+    pub fn choice<T: Copy>(&self, what: &str, options: &[(&str, T)]) -> Result<T, FileError> {
+        let names: Vec<String> = options
+            .iter()
+            .map(|(name, _)| format!("`{name}`"))
+            .collect();
+        let names = match names.split_last() {
+            Some((last, [])) => last.clone(),
+            Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+            None => String::new(),
+        };
+        let name = self.string(&format!("a {what} in quotes ({names})"))?;
+        options
+            .iter()
+            .find(|(option, _)| *option == name)
+            .map(|&(_, value)| value)
+            .ok_or_else(|| {
+                self.fail(format!(
+                    "unknown {what} `{}` (allowed {names})",
+                    excerpt(&name)
+                ))
+            })
+    }
+
+    /// `true` or `false`.
+    pub fn flag(&self) -> Result<bool, FileError> {
+        match self.value()? {
+            Value::Bool(flag) => Ok(flag),
+            _ => Err(self.expected("true or false")),
+        }
+    }
+
+    /// A whole number from `low` to `high`, as written (not a float, however round).
+    pub fn whole<T>(&self, low: T, high: T) -> Result<T, FileError>
+    where
+        T: Copy + Into<i128> + TryFrom<i128>,
+    {
+        let allowed = format!(
+            "a whole number from {} to {}",
+            thousands(low),
+            thousands(high)
+        );
+        let Value::Integer(v) = self.value()? else {
+            return Err(self.expected(allowed));
+        };
+        v.filter(|v| (low.into()..=high.into()).contains(v))
+            .and_then(|v| T::try_from(v).ok())
+            .ok_or_else(|| {
+                self.fail(format!(
+                    "{} is out of range (allowed {allowed})",
+                    self.written()
+                ))
+            })
+    }
+
+    /// A number in `range`, checked as written, before it is rounded to an `f32`; a number
+    /// the `f32` cannot hold (too large, or so close to 0 that it would lose its precision
+    /// or become 0) is an error too. An integer stands for a float.
+    pub fn real(&self, range: Interval) -> Result<f32, FileError> {
+        let x = match self.value()? {
+            Value::Integer(Some(v)) => v as f64,
+            // Beyond 128 bits: out of any range, on its side.
+            Value::Integer(None) if self.written().starts_with('-') => -f64::MAX,
+            Value::Integer(None) => f64::MAX,
+            Value::Float(x) => x,
+            _ => return Err(self.expected(format_args!("a number in {range}"))),
+        };
+        let written = self.written();
+        if !range.contains(x) {
+            return Err(self.fail(format!("{written} is out of range (allowed {range})")));
+        }
+        let stored = x as f32;
+        if x.is_finite() && stored.is_infinite() {
+            return Err(self.fail(format!(
+                "{written} is too large to store (allowed {range}, finite numbers at most {})",
+                number(f32::MAX)
+            )));
+        }
+        // As written, not as rounded: a value just under the bound would round up to it.
+        let smallest = f64::from(f32::MIN_POSITIVE);
+        if x != 0.0 && x.abs() < smallest {
+            return Err(self.fail(format!(
+                "{written} is too close to 0 to store (allowed {range}, numbers other than 0 \
+                 at least {smallest:e} in size)"
+            )));
+        }
+        Ok(stored)
+    }
+
+    /// `[x, y]`: exactly two numbers in `range`; `what` says what they are
+    /// (`[width, height]`). An error about either names the array.
+    pub fn pair(&self, range: Interval, what: &str) -> Result<[f32; 2], FileError> {
+        let items = self.array(&format!("an array {what} of two numbers in {range}"))?;
+        let [x, y] = &items[..] else {
+            let values = match items.len() {
+                1 => "1 value".to_owned(),
+                n => format!("{n} values"),
+            };
+            return Err(self.fail(format!(
+                "has {values} (allowed exactly 2: {what}, each in {range})"
+            )));
+        };
+        let read = |item: &Node<'a>| item.renamed(self.path.clone()).real(range);
+        Ok([read(x)?, read(y)?])
+    }
+}
+
+/// The first byte at or after `at` that is not JSON whitespace.
+fn skip_space(bytes: &[u8], mut at: usize) -> usize {
+    while matches!(bytes.get(at), Some(b' ' | b'\n' | b'\t' | b'\r')) {
+        at += 1;
+    }
+    at
+}
+
+/// The end of the JSON value that starts at byte `at`, read loosely: past its closing
+/// bracket or quote, or past the characters a number or a literal is made of. Never past
+/// the text; a value cut short ends where the text does.
+fn value_end(bytes: &[u8], at: usize) -> usize {
+    let mut depth = 0usize;
+    let mut i = at;
+    while let Some(&b) = bytes.get(i) {
+        match b {
+            b'"' => match string_end(bytes, i) {
+                Some(end) => i = end - 1,
+                None => return bytes.len(),
+            },
+            b'{' | b'[' => depth += 1,
+            b'}' | b']' => depth = depth.saturating_sub(1),
+            b'0'..=b'9' | b'a'..=b'z' | b'A'..=b'Z' | b'-' | b'+' | b'.' if depth == 0 => {
+                while bytes
+                    .get(i + 1)
+                    .is_some_and(|b| b.is_ascii_alphanumeric() || b"+-.".contains(b))
+                {
+                    i += 1;
+                }
+            }
+            _ => {}
+        }
+        i += 1;
+        if depth == 0 {
+            break;
+        }
+    }
+    i.min(bytes.len())
+}
+
+/// The end of the JSON string whose opening quote is at byte `at`: past its closing quote,
+/// or `None` if the text ends first.
+fn string_end(bytes: &[u8], at: usize) -> Option<usize> {
+    let mut i = at + 1;
+    loop {
+        match bytes.get(i)? {
+            b'\\' => i += 2,
+            b'"' => return Some(i + 1),
+            _ => i += 1,
+        }
+    }
+}
+
+/// A float as written in TOML (`1e39`, `-0.5`, `inf`, `nan`) as an `f64`: one that
+/// overflows an `f64` becomes its largest finite value, and one that underflows it its
+/// smallest normal one, so that neither passes as `inf` or 0.
+fn written_float(text: &str) -> f64 {
+    let x: f64 = text.parse().unwrap_or(f64::NAN);
+    let negative = text.starts_with('-');
+    let sign = if negative { -1.0 } else { 1.0 };
+    let mantissa = text.split(['e', 'E']).next().unwrap_or_default();
+    if x.is_infinite() && !text.contains("inf") {
+        sign * f64::MAX
+    } else if x == 0.0 && mantissa.bytes().any(|b| (b'1'..=b'9').contains(&b)) {
+        sign * f64::MIN_POSITIVE
+    } else {
+        x
+    }
+}
+
+/// A table of the document, its keys checked.
+pub struct Table<'a> {
+    node: Node<'a>,
+    entries: Vec<Entry<'a>>,
+}
+
+impl<'a> Table<'a> {
+    /// The table itself.
+    pub fn node(&self) -> &Node<'a> {
+        &self.node
+    }
+
+    /// The value of `key`, if the table has it.
+    pub fn get(&self, key: &str) -> Option<Node<'a>> {
+        self.entries
+            .iter()
+            .find(|entry| entry.key == key)
+            .map(|entry| entry.node.renamed(self.node.join(key)))
+    }
+
+    /// The value of `key`, which the table must have.
+    pub fn need(&self, key: &str) -> Result<Node<'a>, FileError> {
+        self.get(key)
+            .ok_or_else(|| self.node.fail(format!("missing key `{key}`")))
+    }
+
+    /// `read` of the value of `key`, or `default` without one.
+    pub fn or<T>(
+        &self,
+        key: &str,
+        default: T,
+        read: impl FnOnce(&Node<'a>) -> Result<T, FileError>,
+    ) -> Result<T, FileError> {
+        self.get(key).map_or(Ok(default), |node| read(&node))
+    }
+}
+
+/// The range of a number: `(low, high]`, or `[low, high]` when `closed`.
+#[derive(Clone, Copy)]
+pub struct Interval {
+    low: f32,
+    closed: bool,
+    high: f32,
+}
+
+/// `(low, high]`.
+pub fn above(low: f32, high: f32) -> Interval {
+    Interval {
+        low,
+        closed: false,
+        high,
+    }
+}
+
+/// `[low, high]`.
+pub fn within(low: f32, high: f32) -> Interval {
+    Interval {
+        low,
+        closed: true,
+        high,
+    }
+}
+
+impl fmt::Display for Interval {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let open = if self.closed { '[' } else { '(' };
+        write!(f, "{open}{}, {}]", number(self.low), number(self.high))
+    }
+}
+
+impl Interval {
+    /// Whether `x`, as written, is in the range (NaN never is).
+    fn contains(&self, x: f64) -> bool {
+        let (low, high) = (f64::from(self.low), f64::from(self.high));
+        let above = if self.closed { x >= low } else { x > low };
+        above && x <= high
+    }
+}
