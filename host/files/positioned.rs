@@ -9,9 +9,11 @@
 //! a huge array is never held as more than the places of its items.
 
 use std::borrow::Cow;
+use std::collections::BTreeMap;
 use std::fmt;
 use std::ops::Range;
 
+use serde::Deserialize;
 use serde::de::IgnoredAny;
 use toml::Spanned;
 use toml::de::DeValue;
@@ -95,20 +97,24 @@ impl<'a> Node<'a> {
     /// A JSON document: its top value, and its first syntax error if it has one (the value is
     /// then read only as far as the error).
     pub fn json(doc: &'a Doc<'a>) -> (Self, Option<Syntax>) {
-        let syntax = serde_json::from_str::<IgnoredAny>(doc.text)
-            .err()
-            .map(|error| {
-                // serde_json's column counts bytes from the start of the line.
-                let line_start: usize = doc
-                    .text
-                    .split_inclusive('\n')
-                    .take(error.line().saturating_sub(1))
-                    .map(str::len)
-                    .sum();
-                let at = line_start + error.column();
-                Syntax { error, at }
-            });
         let start = skip_space(doc.text.as_bytes(), 0);
+        // An object as a reader takes one: its keys read, its values skipped (serde_json
+        // words some errors differently in either).
+        let checked = match doc.text.as_bytes().get(start) {
+            Some(b'{') => serde_json::from_str::<BTreeMap<String, IgnoredAny>>(doc.text).err(),
+            _ => serde_json::from_str::<IgnoredAny>(doc.text).err(),
+        };
+        let syntax = checked.map(|error| {
+            // serde_json's column counts bytes from the start of the line.
+            let line_start: usize = doc
+                .text
+                .split_inclusive('\n')
+                .take(error.line().saturating_sub(1))
+                .map(str::len)
+                .sum();
+            let at = line_start + error.column();
+            Syntax { error, at }
+        });
         let root = Node {
             doc,
             span: start..value_end(doc.text.as_bytes(), start),
@@ -117,11 +123,6 @@ impl<'a> Node<'a> {
             toml: None,
         };
         (root, syntax)
-    }
-
-    /// Its path, as the file spells it.
-    pub fn path(&self) -> &str {
-        &self.path
     }
 
     /// Where it is written.
@@ -219,13 +220,18 @@ impl<'a> Node<'a> {
         let text = self.doc.text;
         let bytes = text.as_bytes();
         let at = self.span.start;
-        let leaf = text.get(self.span.clone()).unwrap_or_default();
-        let decode = |e: serde_json::Error| self.fail(json_problem(&e));
+        // Read in place, up to the end of the text, so that serde_json meets what follows
+        // the value as it would in the whole text; on the line it would say.
+        let rest = text.get(at..).unwrap_or_default();
+        let decode = |e: serde_json::Error| {
+            let line = line_of(bytes, at) + e.line().saturating_sub(1);
+            FileError::new(self.doc.origin, Some(line), &self.path, json_problem(&e))
+        };
+        let leaf = |read: fn(&mut serde_json::Deserializer<_>) -> serde_json::Result<Value<'a>>| {
+            read(&mut serde_json::Deserializer::from_str(rest)).map_err(decode)
+        };
         let value = match bytes.get(at) {
-            Some(b'{') => match self.entries() {
-                (entries, None) => Value::Table(entries),
-                (_, Some(e)) => return Err(e),
-            },
+            Some(b'{') => Value::Table(self.entries()),
             Some(b'[') => {
                 let mut items = Vec::new();
                 self.json_items(b']', |start| {
@@ -236,59 +242,54 @@ impl<'a> Node<'a> {
                 });
                 Value::Array(items)
             }
-            Some(b'"') => Value::Text(Cow::Owned(serde_json::from_str(leaf).map_err(decode)?)),
-            Some(b't' | b'f') => Value::Bool(serde_json::from_str(leaf).map_err(decode)?),
-            Some(b'n') => {
-                serde_json::from_str::<()>(leaf).map_err(decode)?;
-                Value::Null
-            }
-            _ => {
-                let n: serde_json::Number = serde_json::from_str(leaf).map_err(decode)?;
-                match (n.as_i64(), n.as_u64()) {
+            Some(b'"') => leaf(|d| Ok(Value::Text(Cow::Owned(String::deserialize(d)?))))?,
+            Some(b't' | b'f') => leaf(|d| Ok(Value::Bool(bool::deserialize(d)?)))?,
+            Some(b'n') => leaf(|d| <()>::deserialize(d).map(|()| Value::Null))?,
+            _ => leaf(|d| {
+                let n = serde_json::Number::deserialize(d)?;
+                Ok(match (n.as_i64(), n.as_u64()) {
                     (Some(v), _) => Value::Integer(Some(v.into())),
                     (None, Some(v)) => Value::Integer(Some(v.into())),
                     (None, None) => Value::Float(n.as_f64().unwrap_or(f64::NAN)),
-                }
-            }
+                })
+            })?,
         };
         Ok(value)
     }
 
-    /// The entries of this JSON object in the order written, up to the first key that
-    /// serde_json cannot read (whose error comes with them) or where the syntax breaks.
-    pub fn entries(&self) -> (Vec<Entry<'a>>, Option<FileError>) {
+    /// The entries of this JSON object in the order written, up to where its syntax breaks.
+    pub fn entries(&self) -> Vec<Entry<'a>> {
         let bytes = self.doc.text.as_bytes();
-        let (mut entries, mut error) = (Vec::new(), None);
+        let mut entries = Vec::new();
         self.json_items(b'}', |at| {
             (bytes.get(at) == Some(&b'"')).then_some(())?;
             let key_span = at..string_end(bytes, at)?;
             let key = self.doc.text.get(key_span.clone())?;
-            let key: String = match serde_json::from_str(key) {
-                Ok(key) => key,
-                Err(e) => {
-                    let line = Some(line_of(bytes, at));
-                    error = Some(FileError::new(
-                        self.doc.origin,
-                        line,
-                        &self.path,
-                        json_problem(&e),
-                    ));
-                    return None;
+            let key: String = serde_json::from_str(key).ok()?;
+            let colon = skip_space(bytes, key_span.end);
+            // Without its `:`, a key is listed with an empty value, and the listing stops.
+            let (node, end) = match bytes.get(colon) {
+                Some(b':') => {
+                    let node =
+                        self.json_node(skip_space(bytes, colon + 1), self.join(&excerpt(&key)));
+                    let end = node.span.end;
+                    (node, Some(end))
+                }
+                _ => {
+                    let mut node = self.json_node(key_span.end, self.join(&excerpt(&key)));
+                    node.span.end = key_span.end;
+                    (node, None)
                 }
             };
-            let colon = skip_space(bytes, key_span.end);
-            (bytes.get(colon) == Some(&b':')).then_some(())?;
-            let node = self.json_node(skip_space(bytes, colon + 1), self.join(&excerpt(&key)));
-            let end = node.span.end;
             let key = Cow::Owned(key);
             entries.push(Entry {
                 key,
                 key_span,
                 node,
             });
-            Some(end)
+            end
         });
-        (entries, error)
+        entries
     }
 
     /// The JSON value that starts at byte `start`, at `path`.
@@ -317,6 +318,12 @@ impl<'a> Node<'a> {
         }
     }
 
+    /// Whether this JSON value is written whole: its text is JSON on its own.
+    pub fn is_whole(&self) -> bool {
+        let text = self.doc.text.get(self.span.clone()).unwrap_or_default();
+        serde_json::from_str::<IgnoredAny>(text).is_ok()
+    }
+
     /// The value as an error quotes it: for TOML an excerpt as written, for JSON the value
     /// as read (`1e30`, `"text"`); what it is for a table or an array.
     pub fn written(&self) -> String {
@@ -335,7 +342,20 @@ impl<'a> Node<'a> {
 
     /// The error for a value of the wrong type.
     pub fn expected(&self, what: impl fmt::Display) -> FileError {
-        self.fail(format!("expected {what}, found {}", self.written()))
+        let problem = format!("expected {what}, found {}", self.written());
+        let bytes = self.doc.text.as_bytes();
+        match (self.toml, bytes.get(self.span.start)) {
+            // serde_json says where it stands after looking past the bracket (and a `,`).
+            (None, Some(b'[' | b'{')) => {
+                let at = skip_space(bytes, self.span.start + 1);
+                let at = match bytes.get(at) {
+                    Some(b',') => skip_space(bytes, at + 1),
+                    _ => at,
+                };
+                self.fail_at(at, problem)
+            }
+            _ => self.fail(problem),
+        }
     }
 
     /// The table this value must be, whose keys must be among `keys`.
@@ -503,11 +523,18 @@ fn value_end(bytes: &[u8], at: usize) -> usize {
             },
             b'{' | b'[' => depth += 1,
             b'}' | b']' => depth = depth.saturating_sub(1),
-            b'0'..=b'9' | b'a'..=b'z' | b'A'..=b'Z' | b'-' | b'+' | b'.' if depth == 0 => {
-                while bytes
-                    .get(i + 1)
-                    .is_some_and(|b| b.is_ascii_alphanumeric() || b"+-.".contains(b))
-                {
+            // A number's characters, or a literal's letters.
+            b'0'..=b'9' | b'-' if depth == 0 => {
+                // A sign only first or after the exponent's `e`.
+                while bytes.get(i + 1).is_some_and(|b| match b {
+                    b'+' | b'-' => matches!(bytes[i], b'e' | b'E'),
+                    _ => b"0123456789.eE".contains(b),
+                }) {
+                    i += 1;
+                }
+            }
+            b'a'..=b'z' if depth == 0 => {
+                while bytes.get(i + 1).is_some_and(u8::is_ascii_lowercase) {
                     i += 1;
                 }
             }
@@ -517,6 +544,10 @@ fn value_end(bytes: &[u8], at: usize) -> usize {
         if depth == 0 {
             break;
         }
+    }
+    // Never inside a character.
+    while bytes.get(i).is_some_and(|b| (0x80..0xc0).contains(b)) {
+        i += 1;
     }
     i.min(bytes.len())
 }
@@ -558,11 +589,6 @@ pub struct Table<'a> {
 }
 
 impl<'a> Table<'a> {
-    /// The table itself.
-    pub fn node(&self) -> &Node<'a> {
-        &self.node
-    }
-
     /// The value of `key`, if the table has it.
     pub fn get(&self, key: &str) -> Option<Node<'a>> {
         self.entries
