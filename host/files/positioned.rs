@@ -4,17 +4,17 @@
 //! and say what is wrong on the value's line, quoting at most an excerpt of it.
 //!
 //! TOML comes from the toml crate's spanned tree. serde_json keeps no positions, so a JSON
-//! document is checked by serde_json first (its syntax errors, in its words), then walked
-//! here one level at a time, as a reader asks: each leaf is still decoded by serde_json, and
-//! a huge array is never held as more than the places of its items.
+//! document is read by serde_json once, values skipped, for its first syntax error and how
+//! far it got; then walked here one level at a time, as a reader asks, each leaf decoded by
+//! serde_json in place. An array's items are walked one at a time, never held.
 
 use std::borrow::Cow;
-use std::collections::BTreeMap;
+use std::cell::Cell;
 use std::fmt;
 use std::ops::Range;
 
 use serde::Deserialize;
-use serde::de::IgnoredAny;
+use serde::de::{DeserializeSeed, Deserializer, IgnoredAny, MapAccess, Visitor};
 use toml::Spanned;
 use toml::de::DeValue;
 
@@ -32,11 +32,11 @@ pub struct Doc<'t> {
 #[derive(Clone)]
 pub struct Node<'a> {
     doc: &'a Doc<'a>,
-    /// Where the value is written.
+    /// Where the value is written (a JSON document's: up to the end of the text).
     span: Range<usize>,
     /// Whether errors about it have a line (a TOML document as a whole has none).
     placed: bool,
-    /// Its path, as the file spells it (empty for the document).
+    /// Its path, as the file spells it (empty for the document and an array's items).
     path: String,
     /// The parsed value for TOML; `None` for JSON, read from `span` when asked.
     toml: Option<&'a DeValue<'a>>,
@@ -46,8 +46,8 @@ pub struct Node<'a> {
 pub enum Value<'a> {
     /// A TOML table or a JSON object, in the order written.
     Table(Vec<Entry<'a>>),
-    /// An array.
-    Array(Vec<Node<'a>>),
+    /// An array (see [`Node::items`]).
+    Array,
     /// A string.
     Text(Cow<'a, str>),
     /// A whole number, `None` if beyond 128 bits (JSON's beyond 64 bits are floats, as
@@ -73,13 +73,51 @@ pub struct Entry<'a> {
     pub node: Node<'a>,
 }
 
-/// The first syntax error of a JSON document: serde_json's, and about where it was found
-/// (at or one past the byte it stumbled on).
+/// The first syntax error of a JSON object, as serde_json reads one (keys as strings, values
+/// skipped), and how far it got.
 pub struct Syntax {
     /// The error.
     pub error: serde_json::Error,
-    /// Its byte offset.
-    pub at: usize,
+    /// How many keys it read.
+    pub keys: usize,
+    /// `None` if it broke between entries, else whether it broke in the last key's value
+    /// (`false`: at its `:`).
+    pub in_value: Option<bool>,
+}
+
+/// What serde_json has read of an object (see [`Syntax`]).
+#[derive(Default)]
+struct Progress {
+    keys: Cell<usize>,
+    in_value: Cell<Option<bool>>,
+}
+
+impl<'de> Visitor<'de> for &Progress {
+    type Value = ();
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("an object")
+    }
+
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        while map.next_key::<String>()?.is_some() {
+            self.keys.set(self.keys.get() + 1);
+            self.in_value.set(Some(false));
+            map.next_value_seed(self)?;
+            self.in_value.set(None);
+        }
+        Ok(())
+    }
+}
+
+/// A value, skipped once its `:` is read.
+impl<'de> DeserializeSeed<'de> for &Progress {
+    type Value = ();
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        self.in_value.set(Some(true));
+        IgnoredAny::deserialize(d).map(|_| ())
+    }
 }
 
 impl<'a> Node<'a> {
@@ -94,34 +132,29 @@ impl<'a> Node<'a> {
         }
     }
 
-    /// A JSON document: its top value, and its first syntax error if it has one (the value is
-    /// then read only as far as the error).
+    /// A JSON document: its top value and, if that is an object, its first syntax error (the
+    /// value is then read only as far as serde_json read it).
     pub fn json(doc: &'a Doc<'a>) -> (Self, Option<Syntax>) {
-        let start = skip_space(doc.text.as_bytes(), 0);
-        // An object as a reader takes one: its keys read, its values skipped (serde_json
-        // words some errors differently in either).
-        let checked = match doc.text.as_bytes().get(start) {
-            Some(b'{') => serde_json::from_str::<BTreeMap<String, IgnoredAny>>(doc.text).err(),
-            _ => serde_json::from_str::<IgnoredAny>(doc.text).err(),
-        };
-        let syntax = checked.map(|error| {
-            // serde_json's column counts bytes from the start of the line.
-            let line_start: usize = doc
-                .text
-                .split_inclusive('\n')
-                .take(error.line().saturating_sub(1))
-                .map(str::len)
-                .sum();
-            let at = line_start + error.column();
-            Syntax { error, at }
-        });
+        let bytes = doc.text.as_bytes();
+        let start = skip_space(bytes, 0);
         let root = Node {
             doc,
-            span: start..value_end(doc.text.as_bytes(), start),
+            span: start..bytes.len(),
             placed: true,
             path: String::new(),
             toml: None,
         };
+        if bytes.get(start) != Some(&b'{') {
+            return (root, None);
+        }
+        let progress = Progress::default();
+        let mut json = serde_json::Deserializer::from_str(doc.text);
+        let read = json.deserialize_map(&progress).and_then(|()| json.end());
+        let syntax = read.err().map(|error| Syntax {
+            error,
+            keys: progress.keys.get(),
+            in_value: progress.in_value.get(),
+        });
         (root, syntax)
     }
 
@@ -168,26 +201,33 @@ impl<'a> Node<'a> {
         FileError::new(self.doc.origin, Some(line), &self.path, problem)
     }
 
-    /// What the value is, one level deep. For JSON, a string or number serde_json cannot
-    /// read (a lone surrogate, `1e400`) is an error on this value.
-    pub fn value(&self) -> Result<Value<'a>, FileError> {
-        match self.toml {
-            Some(value) => Ok(self.toml_value(value)),
-            None => self.json_value(),
+    /// The JSON value that starts at byte `start`, at `path`.
+    fn json_node(&self, start: usize, path: String) -> Node<'a> {
+        let span = start..value_end(self.doc.text.as_bytes(), start);
+        Node {
+            span,
+            path,
+            ..self.clone()
         }
     }
 
-    /// A TOML value one level deep.
-    fn toml_value(&self, value: &'a DeValue<'a>) -> Value<'a> {
+    /// What the value is, one level deep. For JSON, a string or number serde_json cannot
+    /// read (a lone surrogate, `1e400`) is an error on this value.
+    pub fn value(&self) -> Result<Value<'a>, FileError> {
         let child = |value: &'a Spanned<DeValue<'a>>, path| Node {
-            doc: self.doc,
             span: value.span(),
             placed: true,
             path,
             toml: Some(value.get_ref()),
+            ..self.clone()
         };
-        match value {
-            DeValue::Table(table) => Value::Table(
+        let integer = |n: serde_json::Number| match (n.as_i64(), n.as_u64()) {
+            (Some(v), _) => Value::Integer(Some(v.into())),
+            (None, Some(v)) => Value::Integer(Some(v.into())),
+            (None, None) => Value::Float(n.as_f64().unwrap_or(f64::NAN)),
+        };
+        Ok(match self.toml {
+            Some(DeValue::Table(table)) => Value::Table(
                 table
                     .iter()
                     .map(|(key, value)| Entry {
@@ -197,146 +237,111 @@ impl<'a> Node<'a> {
                     })
                     .collect(),
             ),
-            DeValue::Array(items) => Value::Array(
-                items
-                    .iter()
-                    .enumerate()
-                    .map(|(i, item)| child(item, format!("{}[{i}]", self.path)))
-                    .collect(),
-            ),
-            DeValue::String(text) => Value::Text(Cow::Borrowed(text.as_ref())),
-            DeValue::Integer(integer) => {
+            Some(DeValue::Array(_)) => Value::Array,
+            Some(DeValue::String(text)) => Value::Text(Cow::Borrowed(text.as_ref())),
+            Some(DeValue::Integer(integer)) => {
                 Value::Integer(i128::from_str_radix(integer.as_str(), integer.radix()).ok())
             }
-            DeValue::Float(float) => Value::Float(written_float(float.as_str())),
-            DeValue::Boolean(flag) => Value::Bool(*flag),
-            DeValue::Datetime(_) => Value::Other,
-        }
-    }
-
-    /// A JSON value one level deep: containers by the places of their items, leaves decoded
-    /// by serde_json. Safe on any text; a container is read up to where its syntax breaks.
-    fn json_value(&self) -> Result<Value<'a>, FileError> {
-        let text = self.doc.text;
-        let bytes = text.as_bytes();
-        let at = self.span.start;
-        // Read in place, up to the end of the text, so that serde_json meets what follows
-        // the value as it would in the whole text; on the line it would say.
-        let rest = text.get(at..).unwrap_or_default();
-        let decode = |e: serde_json::Error| {
-            let line = line_of(bytes, at) + e.line().saturating_sub(1);
-            FileError::new(self.doc.origin, Some(line), &self.path, json_problem(&e))
-        };
-        let leaf = |read: fn(&mut serde_json::Deserializer<_>) -> serde_json::Result<Value<'a>>| {
-            read(&mut serde_json::Deserializer::from_str(rest)).map_err(decode)
-        };
-        let value = match bytes.get(at) {
-            Some(b'{') => Value::Table(self.entries()),
-            Some(b'[') => {
-                let mut items = Vec::new();
-                self.json_items(b']', |start| {
-                    let node = self.json_node(start, format!("{}[{}]", self.path, items.len()));
-                    let end = node.span.end;
-                    items.push(node);
-                    Some(end)
-                });
-                Value::Array(items)
+            Some(DeValue::Float(float)) => Value::Float(written_float(float.as_str())),
+            Some(DeValue::Boolean(flag)) => Value::Bool(*flag),
+            Some(DeValue::Datetime(_)) => Value::Other,
+            None => {
+                // Read in place, up to the end of the text, so that serde_json meets what
+                // follows the value as it would in the whole text; on the line it would say.
+                let at = self.span.start;
+                let rest = self.doc.text.get(at..).unwrap_or_default();
+                let leaf = match rest.as_bytes().first() {
+                    Some(b'{') => return Ok(Value::Table(self.entries())),
+                    Some(b'[') => return Ok(Value::Array),
+                    _ => serde_json::Value::deserialize(&mut serde_json::Deserializer::from_str(
+                        rest,
+                    )),
+                };
+                match leaf.map_err(|e| {
+                    let line = line_of(self.doc.text.as_bytes(), at) + e.line().saturating_sub(1);
+                    FileError::new(self.doc.origin, Some(line), &self.path, json_problem(&e))
+                })? {
+                    serde_json::Value::String(text) => Value::Text(Cow::Owned(text)),
+                    serde_json::Value::Number(n) => integer(n),
+                    serde_json::Value::Bool(flag) => Value::Bool(flag),
+                    _ => Value::Null,
+                }
             }
-            Some(b'"') => leaf(|d| Ok(Value::Text(Cow::Owned(String::deserialize(d)?))))?,
-            Some(b't' | b'f') => leaf(|d| Ok(Value::Bool(bool::deserialize(d)?)))?,
-            Some(b'n') => leaf(|d| <()>::deserialize(d).map(|()| Value::Null))?,
-            _ => leaf(|d| {
-                let n = serde_json::Number::deserialize(d)?;
-                Ok(match (n.as_i64(), n.as_u64()) {
-                    (Some(v), _) => Value::Integer(Some(v.into())),
-                    (None, Some(v)) => Value::Integer(Some(v.into())),
-                    (None, None) => Value::Float(n.as_f64().unwrap_or(f64::NAN)),
-                })
-            })?,
-        };
-        Ok(value)
+        })
     }
 
-    /// The entries of this JSON object in the order written, up to where its syntax breaks.
-    pub fn entries(&self) -> Vec<Entry<'a>> {
-        let bytes = self.doc.text.as_bytes();
+    /// The entries of this JSON object in the order written, up to where its syntax breaks
+    /// (a key without its `:` is listed last, as if it had one).
+    fn entries(&self) -> Vec<Entry<'a>> {
+        let (text, bytes) = (self.doc.text, self.doc.text.as_bytes());
         let mut entries = Vec::new();
-        self.json_items(b'}', |at| {
-            (bytes.get(at) == Some(&b'"')).then_some(())?;
-            let key_span = at..string_end(bytes, at)?;
-            let key = self.doc.text.get(key_span.clone())?;
-            let key: String = serde_json::from_str(key).ok()?;
-            let colon = skip_space(bytes, key_span.end);
-            // Without its `:`, a key is listed with an empty value, and the listing stops.
-            let (node, end) = match bytes.get(colon) {
-                Some(b':') => {
-                    let node =
-                        self.json_node(skip_space(bytes, colon + 1), self.join(&excerpt(&key)));
-                    let end = node.span.end;
-                    (node, Some(end))
-                }
-                _ => {
-                    let mut node = self.json_node(key_span.end, self.join(&excerpt(&key)));
-                    node.span.end = key_span.end;
-                    (node, None)
-                }
+        let mut at = skip_space(bytes, self.span.start + 1);
+        while let Some(key_span) = (bytes.get(at) == Some(&b'"'))
+            .then(|| string_end(bytes, at).map(|end| at..end))
+            .flatten()
+        {
+            let Some(key) = text
+                .get(key_span.clone())
+                .and_then(|key| serde_json::from_str::<String>(key).ok())
+            else {
+                break;
             };
+            let colon = skip_space(bytes, key_span.end);
+            let path = self.join(&excerpt(&key));
+            let node = self.json_node(skip_space(bytes, colon + 1), path);
+            let next = skip_space(bytes, node.span.end);
+            let whole = bytes.get(colon) == Some(&b':');
             let key = Cow::Owned(key);
             entries.push(Entry {
                 key,
                 key_span,
                 node,
             });
-            end
-        });
+            if !whole || bytes.get(next) != Some(&b',') {
+                break;
+            }
+            at = skip_space(bytes, next + 1);
+        }
         entries
     }
 
-    /// The JSON value that starts at byte `start`, at `path`.
-    fn json_node(&self, start: usize, path: String) -> Node<'a> {
-        Node {
-            doc: self.doc,
-            span: start..value_end(self.doc.text.as_bytes(), start),
-            placed: true,
-            path,
-            toml: None,
+    /// The items of the array this value must be (`what` it should hold, for the error), read
+    /// one at a time, without paths (see [`Node::array`]).
+    pub fn items(&self, what: &str) -> Result<Items<'a>, FileError> {
+        match self.value()? {
+            Value::Array => Ok(Items {
+                next: match self.toml {
+                    Some(_) => 0,
+                    None => skip_space(self.doc.text.as_bytes(), self.span.start + 1),
+                },
+                node: self.renamed(String::new()),
+            }),
+            _ => Err(self.expected(what)),
         }
     }
 
-    /// Walks the items of this JSON array or object, up to `close`: `item` reads the one
-    /// that starts at the byte it is given and says where it ends, or `None` to stop.
-    fn json_items(&self, close: u8, mut item: impl FnMut(usize) -> Option<usize>) {
-        let bytes = self.doc.text.as_bytes();
-        let mut at = skip_space(bytes, self.span.start + 1);
-        while at < self.span.end && bytes.get(at) != Some(&close) {
-            let Some(end) = item(at) else { break };
-            at = skip_space(bytes, end);
-            match bytes.get(at) {
-                Some(b',') => at = skip_space(bytes, at + 1),
-                _ => break,
-            }
-        }
-    }
-
-    /// Whether this JSON value is written whole: its text is JSON on its own.
-    pub fn is_whole(&self) -> bool {
-        let text = self.doc.text.get(self.span.clone()).unwrap_or_default();
-        serde_json::from_str::<IgnoredAny>(text).is_ok()
+    /// The items of the array this value must be, each at its path (`kinds[2]`).
+    pub fn array(&self, what: &str) -> Result<Vec<Node<'a>>, FileError> {
+        let items = self.items(what)?.enumerate();
+        Ok(items
+            .map(|(i, item)| item.renamed(format!("{}[{i}]", self.path)))
+            .collect())
     }
 
     /// The value as an error quotes it: for TOML an excerpt as written, for JSON the value
     /// as read (`1e30`, `"text"`); what it is for a table or an array.
     pub fn written(&self) -> String {
-        let as_written = || excerpt(self.doc.text.get(self.span.clone()).unwrap_or_default());
         let json = self.toml.is_none();
         match self.value() {
             Ok(Value::Table(_)) if json => "an object".to_owned(),
             Ok(Value::Table(_)) => "a table".to_owned(),
-            Ok(Value::Array(_)) => "an array".to_owned(),
+            Ok(Value::Array) => "an array".to_owned(),
             Ok(Value::Text(text)) if json => format!("\"{}\"", excerpt(&text)),
             Ok(Value::Integer(Some(v))) if json => v.to_string(),
             Ok(Value::Float(v)) if json => format!("{v:?}"),
-            _ => as_written(),
+            Ok(Value::Bool(flag)) if json => flag.to_string(),
+            Ok(Value::Null) => "null".to_owned(),
+            _ => excerpt(self.doc.text.get(self.span.clone()).unwrap_or_default()),
         }
     }
 
@@ -344,16 +349,12 @@ impl<'a> Node<'a> {
     pub fn expected(&self, what: impl fmt::Display) -> FileError {
         let problem = format!("expected {what}, found {}", self.written());
         let bytes = self.doc.text.as_bytes();
-        match (self.toml, bytes.get(self.span.start)) {
-            // serde_json says where it stands after looking past the bracket (and a `,`).
-            (None, Some(b'[' | b'{')) => {
-                let at = skip_space(bytes, self.span.start + 1);
-                let at = match bytes.get(at) {
-                    Some(b',') => skip_space(bytes, at + 1),
-                    _ => at,
-                };
-                self.fail_at(at, problem)
-            }
+        let at = skip_space(bytes, self.span.start + 1);
+        match (self.toml, bytes.get(self.span.start), bytes.get(at)) {
+            // serde_json says where it stands after looking past the bracket (and, in an
+            // array, a `,`).
+            (None, Some(b'['), Some(b',')) => self.fail_at(skip_space(bytes, at + 1), problem),
+            (None, Some(b'[' | b'{'), _) => self.fail_at(at, problem),
             _ => self.fail(problem),
         }
     }
@@ -369,21 +370,12 @@ impl<'a> Node<'a> {
             .min_by_key(|entry| entry.key_span.start);
         if let Some(entry) = unknown {
             let allowed: Vec<String> = keys.iter().map(|k| format!("`{k}`")).collect();
-            let problem = format!("unknown key (allowed {})", allowed.join(", "));
-            return Err(entry.node.fail_at(entry.key_span.start, problem));
+            return Err(entry.fail(format!("unknown key (allowed {})", allowed.join(", "))));
         }
         Ok(Table {
             node: self.clone(),
             entries,
         })
-    }
-
-    /// The items of the array this value must be (`what` it should hold, for the error).
-    pub fn array(&self, what: &str) -> Result<Vec<Node<'a>>, FileError> {
-        match self.value()? {
-            Value::Array(items) => Ok(items),
-            _ => Err(self.expected(what)),
-        }
     }
 
     /// A string (`what` it should be, for the error).
@@ -393,7 +385,6 @@ impl<'a> Node<'a> {
             _ => Err(self.expected(what)),
         }
     }
-
     /// One of `options`, by name; `what` the value is, for the error.
     pub fn choice<T: Copy>(&self, what: &str, options: &[(&str, T)]) -> Result<T, FileError> {
         let names: Vec<String> = options
@@ -498,6 +489,55 @@ impl<'a> Node<'a> {
         };
         let read = |item: &Node<'a>| item.renamed(self.path.clone()).real(range);
         Ok([read(x)?, read(y)?])
+    }
+}
+
+/// The items of an array, read one at a time (see [`Node::items`]).
+pub struct Items<'a> {
+    /// The array, without its path.
+    node: Node<'a>,
+    /// The next item's index (TOML) or byte (JSON); `usize::MAX` past the last.
+    next: usize,
+}
+
+impl<'a> Iterator for Items<'a> {
+    type Item = Node<'a>;
+
+    fn next(&mut self) -> Option<Node<'a>> {
+        let node = &self.node;
+        if let Some(DeValue::Array(items)) = node.toml {
+            let item = items.get(self.next)?;
+            self.next += 1;
+            return Some(Node {
+                span: item.span(),
+                placed: true,
+                toml: Some(item.get_ref()),
+                ..node.clone()
+            });
+        }
+        let bytes = node.doc.text.as_bytes();
+        if matches!(bytes.get(self.next), None | Some(b']')) {
+            return None;
+        }
+        let item = node.json_node(self.next, String::new());
+        let after = skip_space(bytes, item.span.end);
+        self.next = match bytes.get(after) {
+            Some(b',') => skip_space(bytes, after + 1),
+            _ => usize::MAX,
+        };
+        Some(item)
+    }
+}
+
+impl Entry<'_> {
+    /// An error about the key itself (unknown, written twice): on its line in TOML, and in
+    /// JSON where serde_json stands after reading it (at what follows).
+    pub fn fail(&self, problem: impl fmt::Display) -> FileError {
+        let at = match self.node.toml {
+            Some(_) => self.key_span.start,
+            None => skip_space(self.node.doc.text.as_bytes(), self.key_span.end),
+        };
+        self.node.fail_at(at, problem)
     }
 }
 

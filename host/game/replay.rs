@@ -219,27 +219,15 @@ fn scene_too_large(bytes: usize) -> String {
 /// entries, the text then known to be JSON.
 fn read_header<'a>(doc: &'a Doc<'a>) -> Result<Vec<Entry<'a>>, ReplayError> {
     let (root, syntax) = Node::json(doc);
-    let syntax_error = |blame: &str, e: &serde_json::Error| {
-        let line = (e.line() > 0).then_some(e.line());
-        ReplayError::new(doc.origin, line, blame, json_problem(e))
+    let Value::Table(entries) = root.value()? else {
+        return Err(root.expected("a replay (a JSON object)"));
     };
-    // serde_json stops at the syntax error: what starts after it is never read.
-    let read_up_to = syntax.as_ref().map_or(usize::MAX, |s| s.at);
-    let top = doc.text.get(root.span()).unwrap_or_default();
-    if !top.starts_with('{') {
-        // An array is refused at its bracket, before anything in it is read; any other
-        // value once read.
-        return Err(match top.starts_with('[') {
-            true => root.expected("a replay (a JSON object)"),
-            false => root
-                .value()
-                .err()
-                .unwrap_or_else(|| root.expected("a replay (a JSON object)")),
-        });
-    }
-    let entries = root.entries();
+    // serde_json stops at the syntax error: what comes after it is never read.
+    let (keys, in_value) = syntax
+        .as_ref()
+        .map_or((entries.len(), None), |s| (s.keys, s.in_value));
     let mut seen = [false; 2];
-    for entry in entries.iter().take_while(|e| e.key_span.end < read_up_to) {
+    for (i, entry) in entries.iter().enumerate().take(keys) {
         let (slot, read): (_, Check) = match &*entry.key {
             "format" => (&mut seen[0], read_format),
             "version" => (&mut seen[1], read_version),
@@ -247,19 +235,28 @@ fn read_header<'a>(doc: &'a Doc<'a>) -> Result<Vec<Entry<'a>>, ReplayError> {
         };
         // A key twice is seen before its `:` and its value are read.
         if std::mem::replace(slot, true) {
-            return Err(twice(entry));
+            return Err(entry.fail("appears twice"));
         }
-        if entry.node.span().is_empty() {
+        if i + 1 == keys && in_value == Some(false) {
             break;
         }
         read(&entry.node)?;
     }
     if let Some(s) = syntax {
-        let blame = entries
-            .iter()
-            .find(|e| blamed(e, s.at))
-            .map_or("", |e| &*e.key);
-        return Err(syntax_error(blame, &s.error));
+        // The key whose value serde_json was reading; its `:` is read with the value, but for
+        // `format` and `version` before their readers take over.
+        let key = s.keys.checked_sub(1).and_then(|k| entries.get(k));
+        let blame = match (key, s.in_value) {
+            (Some(e), Some(value)) if value || !matches!(&*e.key, "format" | "version") => &*e.key,
+            _ => "",
+        };
+        let line = (s.error.line() > 0).then_some(s.error.line());
+        return Err(ReplayError::new(
+            doc.origin,
+            line,
+            blame,
+            json_problem(&s.error),
+        ));
     }
     for (key, seen) in ["format", "version"].into_iter().zip(seen) {
         if !seen {
@@ -267,26 +264,6 @@ fn read_header<'a>(doc: &'a Doc<'a>) -> Result<Vec<Entry<'a>>, ReplayError> {
         }
     }
     Ok(entries)
-}
-
-/// Whether serde_json, meeting a syntax error at byte `at`, was reading `entry`'s value:
-/// `at` is in it (or just after a part of one), not just after a whole one. Its `:` is read
-/// with the value, but for `format` and `version` before their readers take over.
-fn blamed(entry: &Entry<'_>, at: usize) -> bool {
-    let (key, value) = (entry.key_span.end, entry.node.span());
-    let text = entry.node.text();
-    if !text
-        .get(key..value.start)
-        .is_some_and(|gap| gap.contains(':'))
-    {
-        return !matches!(&*entry.key, "format" | "version");
-    }
-    value.start <= at && (at < value.end || at <= value.end + 1 && !entry.node.is_whole())
-}
-
-/// The error for a key written a second time.
-fn twice(entry: &Entry<'_>) -> ReplayError {
-    entry.node.fail_at(entry.key_span.start, "appears twice")
 }
 
 /// A check of a header value.
@@ -345,8 +322,10 @@ fn read_fields(entries: &[Entry<'_>]) -> Result<Fields, ReplayError> {
             "seed" => store(&mut f.seed, entry, || ranged(node, 0, u32::MAX))?,
             "backend" => store(&mut f.backend, entry, text)?,
             "steps" => store(&mut f.steps, entry, || {
-                let line = line_of(node.text().as_bytes(), entry.key_span.start);
-                Ok((ranged(node, 0, MAX_STEPS)?, Some(line)))
+                // Found, as before, only if written without escapes.
+                let plain = node.text().get(entry.key_span.clone()) == Some("\"steps\"");
+                let line = plain.then(|| line_of(node.text().as_bytes(), entry.key_span.start));
+                Ok((ranged(node, 0, MAX_STEPS)?, line))
             })?,
             "state_hash" => store(&mut f.state_hash, entry, || {
                 parse_hash(&text()?).map_err(|problem| node.fail(problem))
@@ -354,7 +333,7 @@ fn read_fields(entries: &[Entry<'_>]) -> Result<Fields, ReplayError> {
             "inputs" => store(&mut f.inputs, entry, || read_runs(node))?,
             _ => {
                 let problem = format!("unknown key (allowed {})", KEYS.join(", "));
-                return Err(node.fail_at(entry.key_span.start, problem));
+                return Err(entry.fail(problem));
             }
         }
     }
@@ -368,7 +347,7 @@ fn store<T>(
     read: impl FnOnce() -> Result<T, ReplayError>,
 ) -> Result<(), ReplayError> {
     if slot.is_some() {
-        return Err(twice(entry));
+        return Err(entry.fail("appears twice"));
     }
     *slot = Some(read()?);
     Ok(())
@@ -473,23 +452,26 @@ fn input_number(node: &Node<'_>, set: Setter) -> Result<i128, ReplayError> {
 }
 
 /// The `inputs` array: its runs as `(repeat, input)`, checked to add up to at most
-/// [`MAX_STEPS`] as they are read, so that the error points at the run that passes it.
+/// [`MAX_STEPS`] as they are read, so that the error points at the run that passes it. A run
+/// is read without a path, named only in an error.
 fn read_runs(node: &Node<'_>) -> Result<Vec<(u64, Input)>, ReplayError> {
     const RUN: &str = "[repeat, move_x, move_y, aim, fire]";
+    let (a_run, repeats) = (format!("a run {RUN}"), span(1, MAX_STEPS));
     let mut runs = Vec::new();
     let mut total = 0;
-    for run in node.array(&format!("an array of runs {RUN}"))? {
-        let numbers = run.array(&format!("a run {RUN}"))?;
+    for (i, run) in node.items(&format!("an array of runs {RUN}"))?.enumerate() {
+        let name = |e: ReplayError, field: &str| ReplayError {
+            field: format!("inputs[{i}]{field}"),
+            ..e
+        };
         // At the closing bracket, where the count is known.
         let length = |found: usize| {
             let problem = format!("has {found} numbers, expected 5: {RUN}");
-            run.fail_at(run.span().end.saturating_sub(1), problem)
+            name(run.fail_at(run.span().end.saturating_sub(1), problem), "")
         };
-        let number = |k: usize, name: &str| match numbers.get(k) {
-            Some(number) => Ok(number.renamed(run.join(name))),
-            None => Err(length(k)),
-        };
-        let repeat = whole(&number(0, "repeat")?, &span(1, MAX_STEPS), |v| {
+        let mut numbers = run.items(&a_run).map_err(|e| name(e, ""))?;
+        let repeat = numbers.next().ok_or_else(|| length(0))?;
+        let repeat = whole(&repeat, &repeats, |v| {
             let repeat = in_range(v, 1, MAX_STEPS)?;
             match total + repeat {
                 sum if sum > MAX_STEPS => Err(format!(
@@ -499,14 +481,17 @@ fn read_runs(node: &Node<'_>) -> Result<Vec<(u64, Input)>, ReplayError> {
                 )),
                 _ => Ok(repeat),
             }
-        })?;
+        })
+        .map_err(|e| name(e, ".repeat"))?;
         let mut input = Input::default();
-        for (k, (name, set)) in INPUT_FIELDS.into_iter().enumerate() {
-            let v = input_number(&number(k + 1, name)?, set)?;
+        for (k, (field, set)) in INPUT_FIELDS.into_iter().enumerate() {
+            let number = numbers.next().ok_or_else(|| length(k + 1))?;
+            let v = input_number(&number, set).map_err(|e| name(e, &format!(".{field}")))?;
             set(&mut input, v);
         }
-        if numbers.len() > 1 + INPUT_FIELDS.len() {
-            return Err(length(numbers.len()));
+        match numbers.count() {
+            0 => {}
+            more => return Err(length(1 + INPUT_FIELDS.len() + more)),
         }
         total += repeat;
         runs.push((repeat, input));

@@ -16,7 +16,6 @@
 //! array of two numbers), quote a value as written and at most a few dozen characters of it.
 
 use std::fmt;
-use std::ops::Range;
 use std::path::Path;
 
 use glam::Vec2;
@@ -109,7 +108,7 @@ impl Scene {
         let doc = Doc { text, origin };
         let root = DeTable::parse(text).map_err(|e| {
             let line = match e.span() {
-                Some(span) => line_at(text, Some(span)),
+                Some(span) => Some(line_of(text.as_bytes(), span.start)),
                 None => spanless_error_line(text, e.message()),
             };
             SceneError::new(origin, line, "", parse_problem(e.message()))
@@ -636,42 +635,22 @@ fn check_game(world: &WorldSpec, game: &GameSpec) -> Result<(), SpecError> {
     Ok(())
 }
 
-/// 1-based line of the byte `span` starts at.
-fn line_at(text: &str, span: Option<Range<usize>>) -> Option<usize> {
-    Some(line_of(text.as_bytes(), span?.start))
-}
-
 /// The line of the value at the TOML path `field` (`kinds[1].collides_with[0]`), or of the
 /// deepest table or array element on the way that is present (a defaulted key's table).
 fn line_of_field(root: &Node<'_>, field: &str) -> Option<usize> {
-    let mut node = root.clone();
-    let mut line = None;
-    'walk: for part in field.split('.') {
-        let mut steps = part.split('[');
-        let key = steps.next().unwrap_or_default();
-        let Ok(Value::Table(entries)) = node.value() else {
-            break;
+    let (mut node, mut line) = (root.clone(), None);
+    for step in field.split(['.', '[']) {
+        let next = match step.strip_suffix(']').and_then(|i| i.parse().ok()) {
+            Some(i) => node.items("").ok().and_then(|mut items| items.nth(i)),
+            None => match node.value() {
+                Ok(Value::Table(entries)) => entries.into_iter().find(|e| e.key == step),
+                _ => None,
+            }
+            .map(|entry| entry.node),
         };
-        match entries.into_iter().find(|entry| entry.key == key) {
-            Some(entry) => node = entry.node,
-            None => break,
-        }
+        let Some(next) = next else { break };
+        node = next;
         line = node.line();
-        for index in steps {
-            let item = index
-                .strip_suffix(']')
-                .and_then(|i| i.parse::<usize>().ok())
-                .zip(node.value().ok())
-                .and_then(|(i, value)| match value {
-                    Value::Array(mut items) if i < items.len() => Some(items.swap_remove(i)),
-                    _ => None,
-                });
-            let Some(item) = item else {
-                break 'walk;
-            };
-            node = item;
-            line = node.line();
-        }
     }
     line
 }
