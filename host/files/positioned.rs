@@ -201,9 +201,11 @@ impl<'a> Node<'a> {
         FileError::new(self.doc.origin, Some(line), &self.path, problem)
     }
 
-    /// The JSON value that starts at byte `start`, at `path`.
+    /// The JSON value that starts at byte `start`, at `path` (empty if serde_json cannot
+    /// read it there).
     fn json_node(&self, start: usize, path: String) -> Node<'a> {
-        let span = start..value_end(self.doc.text.as_bytes(), start);
+        let end = read_at::<IgnoredAny>(self.doc.text, start).map_or(start, |(_, end)| end);
+        let span = start..end;
         Node {
             span,
             path,
@@ -276,28 +278,17 @@ impl<'a> Node<'a> {
         let (text, bytes) = (self.doc.text, self.doc.text.as_bytes());
         let mut entries = Vec::new();
         let mut at = skip_space(bytes, self.span.start + 1);
-        while let Some(key_span) = (bytes.get(at) == Some(&b'"'))
-            .then(|| string_end(bytes, at).map(|end| at..end))
-            .flatten()
-        {
-            let Some(key) = text
-                .get(key_span.clone())
-                .and_then(|key| serde_json::from_str::<String>(key).ok())
-            else {
-                break;
-            };
-            let colon = skip_space(bytes, key_span.end);
-            let path = self.join(&excerpt(&key));
-            let node = self.json_node(skip_space(bytes, colon + 1), path);
+        while let Some((key, end)) = read_at::<String>(text, at) {
+            let colon = skip_space(bytes, end);
+            let node = self.json_node(skip_space(bytes, colon + 1), self.join(&excerpt(&key)));
             let next = skip_space(bytes, node.span.end);
-            let whole = bytes.get(colon) == Some(&b':');
             let key = Cow::Owned(key);
             entries.push(Entry {
                 key,
-                key_span,
+                key_span: at..end,
                 node,
             });
-            if !whole || bytes.get(next) != Some(&b',') {
+            if bytes.get(colon) != Some(&b':') || bytes.get(next) != Some(&b',') {
                 break;
             }
             at = skip_space(bytes, next + 1);
@@ -549,60 +540,12 @@ fn skip_space(bytes: &[u8], mut at: usize) -> usize {
     at
 }
 
-/// The end of the JSON value that starts at byte `at`, read loosely: past its closing
-/// bracket or quote, or past the characters a number or a literal is made of. Never past
-/// the text; a value cut short ends where the text does.
-fn value_end(bytes: &[u8], at: usize) -> usize {
-    let mut depth = 0usize;
-    let mut i = at;
-    while let Some(&b) = bytes.get(i) {
-        match b {
-            b'"' => match string_end(bytes, i) {
-                Some(end) => i = end - 1,
-                None => return bytes.len(),
-            },
-            b'{' | b'[' => depth += 1,
-            b'}' | b']' => depth = depth.saturating_sub(1),
-            // A number's characters, or a literal's letters.
-            b'0'..=b'9' | b'-' if depth == 0 => {
-                // A sign only first or after the exponent's `e`.
-                while bytes.get(i + 1).is_some_and(|b| match b {
-                    b'+' | b'-' => matches!(bytes[i], b'e' | b'E'),
-                    _ => b"0123456789.eE".contains(b),
-                }) {
-                    i += 1;
-                }
-            }
-            b'a'..=b'z' if depth == 0 => {
-                while bytes.get(i + 1).is_some_and(u8::is_ascii_lowercase) {
-                    i += 1;
-                }
-            }
-            _ => {}
-        }
-        i += 1;
-        if depth == 0 {
-            break;
-        }
-    }
-    // Never inside a character.
-    while bytes.get(i).is_some_and(|b| (0x80..0xc0).contains(b)) {
-        i += 1;
-    }
-    i.min(bytes.len())
-}
-
-/// The end of the JSON string whose opening quote is at byte `at`: past its closing quote,
-/// or `None` if the text ends first.
-fn string_end(bytes: &[u8], at: usize) -> Option<usize> {
-    let mut i = at + 1;
-    loop {
-        match bytes.get(i)? {
-            b'\\' => i += 2,
-            b'"' => return Some(i + 1),
-            _ => i += 1,
-        }
-    }
+/// The JSON value of type `T` that starts at byte `at`, and the byte after it; `None` if
+/// serde_json cannot read one there.
+fn read_at<'t, T: Deserialize<'t>>(text: &'t str, at: usize) -> Option<(T, usize)> {
+    let mut values = serde_json::Deserializer::from_str(text.get(at..)?).into_iter();
+    let value = values.next()?.ok()?;
+    Some((value, at + values.byte_offset()))
 }
 
 /// A float as written in TOML (`1e39`, `-0.5`, `inf`, `nan`) as an `f64`: one that
