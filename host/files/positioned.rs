@@ -213,16 +213,22 @@ impl<'a> Node<'a> {
         }
     }
 
+    /// The TOML value `value`, inside this one, at `path`.
+    fn toml_child(&self, value: &'a Spanned<DeValue<'a>>, path: String) -> Node<'a> {
+        let (span, toml) = (value.span(), Some(value.get_ref()));
+        let placed = true;
+        Node {
+            span,
+            placed,
+            path,
+            toml,
+            ..self.clone()
+        }
+    }
+
     /// What the value is, one level deep. For JSON, a string or number serde_json cannot
     /// read (a lone surrogate, `1e400`) is an error on this value.
     pub fn value(&self) -> Result<Value<'a>, FileError> {
-        let child = |value: &'a Spanned<DeValue<'a>>, path| Node {
-            span: value.span(),
-            placed: true,
-            path,
-            toml: Some(value.get_ref()),
-            ..self.clone()
-        };
         let integer = |n: serde_json::Number| match (n.as_i64(), n.as_u64()) {
             (Some(v), _) => Value::Integer(Some(v.into())),
             (None, Some(v)) => Value::Integer(Some(v.into())),
@@ -235,7 +241,7 @@ impl<'a> Node<'a> {
                     .map(|(key, value)| Entry {
                         key: key.get_ref().clone(),
                         key_span: key.span(),
-                        node: child(value, self.join(&excerpt(key.get_ref()))),
+                        node: self.toml_child(value, self.join(&excerpt(key.get_ref()))),
                     })
                     .collect(),
             ),
@@ -408,6 +414,17 @@ impl<'a> Node<'a> {
         }
     }
 
+    /// A whole number as written (not a float, however round), `None` if too large to read
+    /// (JSON's beyond 64 bits, which serde_json reads as floats); `what` it should be, for
+    /// the error.
+    pub fn integer(&self, what: impl fmt::Display) -> Result<Option<i128>, FileError> {
+        match self.value()? {
+            Value::Integer(v) => Ok(v),
+            Value::Float(v) if self.toml.is_none() && v.abs() >= 2f64.powi(63) => Ok(None),
+            _ => Err(self.expected(what)),
+        }
+    }
+
     /// A whole number from `low` to `high`, as written (not a float, however round).
     pub fn whole<T>(&self, low: T, high: T) -> Result<T, FileError>
     where
@@ -418,10 +435,8 @@ impl<'a> Node<'a> {
             thousands(low),
             thousands(high)
         );
-        let Value::Integer(v) = self.value()? else {
-            return Err(self.expected(allowed));
-        };
-        v.filter(|v| (low.into()..=high.into()).contains(v))
+        self.integer(&allowed)?
+            .filter(|v| (low.into()..=high.into()).contains(v))
             .and_then(|v| T::try_from(v).ok())
             .ok_or_else(|| {
                 self.fail(format!(
@@ -497,14 +512,8 @@ impl<'a> Iterator for Items<'a> {
     fn next(&mut self) -> Option<Node<'a>> {
         let node = &self.node;
         if let Some(DeValue::Array(items)) = node.toml {
-            let item = items.get(self.next)?;
             self.next += 1;
-            return Some(Node {
-                span: item.span(),
-                placed: true,
-                toml: Some(item.get_ref()),
-                ..node.clone()
-            });
+            return Some(node.toml_child(items.get(self.next - 1)?, String::new()));
         }
         let bytes = node.doc.text.as_bytes();
         if matches!(bytes.get(self.next), None | Some(b']')) {

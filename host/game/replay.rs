@@ -44,18 +44,10 @@ pub const MAX_STEPS: u64 = 1_000_000;
 /// its own, and a scene of [`MAX_SCENE_BYTES`] bytes, escaped, take.
 pub const MAX_REPLAY_BYTES: u64 = 64 << 20;
 
+/// The keys read first, before the syntax is judged.
+const HEADER: [&str; 2] = ["format", "version"];
 /// The keys of the top-level object, in the order they are written.
-const KEYS: [&str; 9] = [
-    "format",
-    "version",
-    "scene",
-    "scene_toml",
-    "seed",
-    "backend",
-    "steps",
-    "state_hash",
-    "inputs",
-];
+const KEYS: &str = "format, version, scene, scene_toml, seed, backend, steps, state_hash, inputs";
 
 /// One recorded game.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -228,26 +220,23 @@ fn read_header<'a>(doc: &'a Doc<'a>) -> Result<Vec<Entry<'a>>, ReplayError> {
         .map_or((entries.len(), None), |s| (s.keys, s.in_value));
     let mut seen = [false; 2];
     for (i, entry) in entries.iter().enumerate().take(keys) {
-        let (slot, read): (_, Check) = match &*entry.key {
-            "format" => (&mut seen[0], read_format),
-            "version" => (&mut seen[1], read_version),
-            _ => continue,
+        let Some(k) = HEADER.iter().position(|key| *key == entry.key) else {
+            continue;
         };
         // A key twice is seen before its `:` and its value are read.
-        if std::mem::replace(slot, true) {
+        if std::mem::replace(&mut seen[k], true) {
             return Err(entry.fail("appears twice"));
         }
-        if i + 1 == keys && in_value == Some(false) {
-            break;
+        if i + 1 < keys || in_value != Some(false) {
+            read_header_value(k, &entry.node)?;
         }
-        read(&entry.node)?;
     }
     if let Some(s) = syntax {
         // The key whose value serde_json was reading; its `:` is read with the value, but for
         // `format` and `version` before their readers take over.
         let key = s.keys.checked_sub(1).and_then(|k| entries.get(k));
         let blame = match (key, s.in_value) {
-            (Some(e), Some(value)) if value || !matches!(&*e.key, "format" | "version") => &*e.key,
+            (Some(e), Some(value)) if value || !HEADER.contains(&&*e.key) => &*e.key,
             _ => "",
         };
         let line = (s.error.line() > 0).then_some(s.error.line());
@@ -258,7 +247,7 @@ fn read_header<'a>(doc: &'a Doc<'a>) -> Result<Vec<Entry<'a>>, ReplayError> {
             json_problem(&s.error),
         ));
     }
-    for (key, seen) in ["format", "version"].into_iter().zip(seen) {
+    for (key, seen) in HEADER.into_iter().zip(seen) {
         if !seen {
             return Err(ReplayError::new(doc.origin, None, key, "missing"));
         }
@@ -266,22 +255,18 @@ fn read_header<'a>(doc: &'a Doc<'a>) -> Result<Vec<Entry<'a>>, ReplayError> {
     Ok(entries)
 }
 
-/// A check of a header value.
-type Check = fn(&Node<'_>) -> Result<(), ReplayError>;
-
-/// `format`, which must be [`FORMAT`].
-fn read_format(node: &Node<'_>) -> Result<(), ReplayError> {
-    match node.string("a string")? {
-        format if format == FORMAT => Ok(()),
-        other => Err(node.fail(format!(
-            "\"{}\" is not a GpuWars replay (allowed {FORMAT:?})",
-            excerpt(&other)
-        ))),
+/// `format` (`k` 0), which must be [`FORMAT`], or `version`, which must be [`VERSION`].
+fn read_header_value(k: usize, node: &Node<'_>) -> Result<(), ReplayError> {
+    if k == 0 {
+        let format = node.string("a string")?;
+        return match format == FORMAT {
+            true => Ok(()),
+            false => Err(node.fail(format!(
+                "\"{}\" is not a GpuWars replay (allowed {FORMAT:?})",
+                excerpt(&format)
+            ))),
+        };
     }
-}
-
-/// `version`, which must be [`VERSION`].
-fn read_version(node: &Node<'_>) -> Result<(), ReplayError> {
     whole(node, &VERSION.to_string(), |v| match u64::try_from(v) {
         Ok(VERSION) => Ok(()),
         _ => Err(format!(
@@ -332,7 +317,7 @@ fn read_fields(entries: &[Entry<'_>]) -> Result<Fields, ReplayError> {
             })?,
             "inputs" => store(&mut f.inputs, entry, || read_runs(node))?,
             _ => {
-                let problem = format!("unknown key (allowed {})", KEYS.join(", "));
+                let problem = format!("unknown key (allowed {KEYS})");
                 return Err(entry.fail(problem));
             }
         }
@@ -372,13 +357,12 @@ fn whole<T>(
     allowed: &str,
     convert: impl FnOnce(i128) -> Result<T, String>,
 ) -> Result<T, ReplayError> {
-    match node.value()? {
-        Value::Integer(Some(v)) => convert(v).map_err(|problem| node.fail(problem)),
-        // serde_json reads an integer beyond 64 bits as a float.
-        Value::Float(v) if v.abs() >= 2f64.powi(63) => {
-            Err(node.fail(format!("{v:?} is out of range (allowed {allowed})")))
-        }
-        _ => Err(node.expected(format_args!("a whole number (allowed {allowed})"))),
+    match node.integer(format_args!("a whole number (allowed {allowed})"))? {
+        Some(v) => convert(v).map_err(|problem| node.fail(problem)),
+        None => Err(node.fail(format!(
+            "{} is out of range (allowed {allowed})",
+            node.written()
+        ))),
     }
 }
 
@@ -404,42 +388,34 @@ fn ranged<T: TryFrom<i128> + Into<i128> + Copy>(
     whole(node, &span(lo, hi), |v| in_range(v, lo, hi))
 }
 
-/// Stores `v` in one field of an [`Input`], saturated to the field's type (a negative value
-/// becomes `u32::MAX` in an unsigned one, so that it stays out of range); returns whether `v`
-/// fitted unchanged.
-type Setter = fn(&mut Input, i128) -> bool;
-
 /// The numbers of a run after the repeat, in file order.
-const INPUT_FIELDS: [(&str, Setter); 4] = [
-    ("move_x", |input, v| {
-        input.move_x = saturate_i32(v);
-        i128::from(input.move_x) == v
-    }),
-    ("move_y", |input, v| {
-        input.move_y = saturate_i32(v);
-        i128::from(input.move_y) == v
-    }),
-    ("aim", |input, v| {
-        input.aim = u32::try_from(v).unwrap_or(u32::MAX);
-        i128::from(input.aim) == v
-    }),
-    ("fire", |input, v| {
-        input.fire = u32::try_from(v).unwrap_or(u32::MAX);
-        i128::from(input.fire) == v
-    }),
-];
+const INPUT_FIELDS: [&str; 4] = ["move_x", "move_y", "aim", "fire"];
 
-/// `v`, clamped to the range of an `i32`.
-fn saturate_i32(v: i128) -> i32 {
-    i32::try_from(v).unwrap_or(if v < 0 { i32::MIN } else { i32::MAX })
+/// Stores `v` as number `k` of an [`Input`] (see [`INPUT_FIELDS`]), saturated to the field's
+/// type (a negative value becomes `u32::MAX` in an unsigned one, so that it stays out of
+/// range); returns whether `v` fitted unchanged.
+fn set(input: &mut Input, k: usize, v: i128) -> bool {
+    let signed = i32::try_from(v).unwrap_or(if v < 0 { i32::MIN } else { i32::MAX });
+    let unsigned = u32::try_from(v).unwrap_or(u32::MAX);
+    match k {
+        0 => input.move_x = signed,
+        1 => input.move_y = signed,
+        2 => input.aim = unsigned,
+        _ => input.fire = unsigned,
+    }
+    v == if k < 2 {
+        signed.into()
+    } else {
+        unsigned.into()
+    }
 }
 
-/// One number of an input, stored by `set`, checked by [`Input::problem`] on an input that
-/// is all zeros but for it (so the ranges are the kernels' own).
-fn input_number(node: &Node<'_>, set: Setter) -> Result<i128, ReplayError> {
+/// Number `k` of an input, checked by [`Input::problem`] on an input that is all zeros but
+/// for it (so the ranges are the kernels' own).
+fn input_number(node: &Node<'_>, k: usize) -> Result<i128, ReplayError> {
     let allowed = move |v| {
         let mut probe = Input::default();
-        let fits = set(&mut probe, v);
+        let fits = set(&mut probe, k, v);
         (probe.problem().map(|(_, allowed)| allowed), fits)
     };
     // The largest integer is out of any range the field has, if it has one.
@@ -484,10 +460,10 @@ fn read_runs(node: &Node<'_>) -> Result<Vec<(u64, Input)>, ReplayError> {
         })
         .map_err(|e| name(e, ".repeat"))?;
         let mut input = Input::default();
-        for (k, (field, set)) in INPUT_FIELDS.into_iter().enumerate() {
+        for (k, field) in INPUT_FIELDS.into_iter().enumerate() {
             let number = numbers.next().ok_or_else(|| length(k + 1))?;
-            let v = input_number(&number, set).map_err(|e| name(e, &format!(".{field}")))?;
-            set(&mut input, v);
+            let v = input_number(&number, k).map_err(|e| name(e, &format!(".{field}")))?;
+            set(&mut input, k, v);
         }
         match numbers.count() {
             0 => {}
