@@ -115,11 +115,17 @@ impl Scene {
         })?;
         let root = Spanned::new(root.span(), DeValue::Table(root.into_inner()));
         let root = Node::toml(&doc, &root);
-        let raw = read_scene(&root)?;
-        raw.into_scene(text)
+        let scene = read_scene(&root)?;
+        // The world's rules, then the game's.
+        let world = &scene.world;
+        world
+            .validate()
+            .map_err(|e| toml_field(world, e))
+            .and_then(|()| check_game(world, &scene.game))
             .map_err(|SpecError { field, problem }| {
                 SceneError::new(origin, line_of_field(&root, &field), field, &problem)
-            })
+            })?;
+        Ok(scene)
     }
 
     /// The built-in scene called `name_or_path` if there is one, else the TOML file at that
@@ -172,18 +178,6 @@ fn spanless_error_line(text: &str, message: &str) -> Option<usize> {
     (low < ends.len()).then_some(low + 1)
 }
 
-/// The scene file's rules on its own values, before the world's and the game's rules.
-struct RawScene {
-    name: String,
-    description: String,
-    world: WorldSpec,
-    ship: ShipSpec,
-    fps: FpsSpec,
-    spawn: SpawnSpec,
-    behaviours: Vec<Option<Behaviour>>,
-    effects: Option<EffectsSpec>,
-}
-
 /// Most of a distance, speed or time.
 fn side() -> Interval {
     above(0.0, MAX)
@@ -196,7 +190,7 @@ fn side_or_zero() -> Interval {
 
 /// Reads the whole document: every value's type and range, and the rules only the file's
 /// form can break. The world's and the game's rules across values come after.
-fn read_scene(root: &Node<'_>) -> Result<RawScene, SceneError> {
+fn read_scene(root: &Node<'_>) -> Result<Scene, SceneError> {
     let top = root.table(&[
         "name",
         "description",
@@ -237,7 +231,7 @@ fn read_scene(root: &Node<'_>) -> Result<RawScene, SceneError> {
         .iter()
         .map(read_kind)
         .collect::<Result<_, _>>()?;
-    Ok(RawScene {
+    Ok(Scene {
         name,
         description,
         world: WorldSpec {
@@ -249,11 +243,14 @@ fn read_scene(root: &Node<'_>) -> Result<RawScene, SceneError> {
             physics,
             field: Field::default(),
         },
-        ship,
-        fps,
-        spawn,
-        behaviours,
-        effects,
+        game: GameSpec {
+            ship,
+            fps,
+            spawn,
+            behaviours,
+            effects,
+        },
+        source: root.text().to_owned(),
     })
 }
 
@@ -498,30 +495,6 @@ fn read_behaviour(node: &Node<'_>, max_speed: f32) -> Result<Behaviour, SceneErr
         low_energy,
         recovery,
     })
-}
-
-impl RawScene {
-    /// The scene, checked against the world's and the game's rules; `text` becomes its
-    /// source.
-    fn into_scene(self, text: &str) -> Result<Scene, SpecError> {
-        let world = self.world;
-        world.validate().map_err(|e| toml_field(&world, e))?;
-        let game = GameSpec {
-            ship: self.ship,
-            fps: self.fps,
-            spawn: self.spawn,
-            behaviours: self.behaviours,
-            effects: self.effects,
-        };
-        check_game(&world, &game)?;
-        Ok(Scene {
-            name: self.name,
-            description: self.description,
-            world,
-            game,
-            source: text.to_owned(),
-        })
-    }
 }
 
 /// [`WorldSpec::validate`]'s error with its field in TOML terms: `size.x` → `world.size`,
