@@ -112,7 +112,7 @@ impl Replay {
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let doc = Doc { text, origin };
         let entries = read_header(&doc)?;
-        let fields = read_fields(&entries)?;
+        let fields = read_fields(&entries, None)?;
         let missing = |key: &str| ReplayError::new(origin, None, key, "missing");
         let scene = fields.scene.ok_or_else(|| missing("scene"))?;
         let scene_toml = fields.scene_toml.ok_or_else(|| missing("scene_toml"))?;
@@ -214,23 +214,13 @@ fn read_header<'a>(doc: &'a Doc<'a>) -> Result<Vec<Entry<'a>>, ReplayError> {
     let Value::Table(entries) = root.value()? else {
         return Err(root.expected("a replay (a JSON object)"));
     };
-    // serde_json stops at the syntax error: what comes after it is never read.
+    // serde_json stops at the syntax error: what comes after it is never read, nor the
+    // value of a key without its `:`.
     let (keys, in_value) = syntax
         .as_ref()
         .map_or((entries.len(), None), |s| (s.keys, s.in_value));
-    let mut seen = [false; 2];
-    for (i, entry) in entries.iter().enumerate().take(keys) {
-        let Some(k) = HEADER.iter().position(|key| *key == entry.key) else {
-            continue;
-        };
-        // A key twice is seen before its `:` and its value are read.
-        if std::mem::replace(&mut seen[k], true) {
-            return Err(entry.fail("appears twice"));
-        }
-        if i + 1 < keys || in_value != Some(false) {
-            read_header_value(k, &entry.node)?;
-        }
-    }
+    let read = entries.get(..keys).unwrap_or(&entries);
+    let header = read_fields(read, Some(in_value != Some(false)))?;
     if let Some(s) = syntax {
         // The key whose value serde_json was reading; its `:` is read with the value, but for
         // `format` and `version` before their readers take over.
@@ -240,45 +230,21 @@ fn read_header<'a>(doc: &'a Doc<'a>) -> Result<Vec<Entry<'a>>, ReplayError> {
             _ => "",
         };
         let line = (s.error.line() > 0).then_some(s.error.line());
-        return Err(ReplayError::new(
-            doc.origin,
-            line,
-            blame,
-            json_problem(&s.error),
-        ));
+        let problem = json_problem(&s.error);
+        return Err(ReplayError::new(doc.origin, line, blame, problem));
     }
-    for (key, seen) in HEADER.into_iter().zip(seen) {
-        if !seen {
-            return Err(ReplayError::new(doc.origin, None, key, "missing"));
-        }
-    }
+    let missing = |key: &str| ReplayError::new(doc.origin, None, key, "missing");
+    header.format.ok_or_else(|| missing("format"))?;
+    header.version.ok_or_else(|| missing("version"))?;
     Ok(entries)
 }
 
-/// `format` (`k` 0), which must be [`FORMAT`], or `version`, which must be [`VERSION`].
-fn read_header_value(k: usize, node: &Node<'_>) -> Result<(), ReplayError> {
-    if k == 0 {
-        let format = node.string("a string")?;
-        return match format == FORMAT {
-            true => Ok(()),
-            false => Err(node.fail(format!(
-                "\"{}\" is not a GpuWars replay (allowed {FORMAT:?})",
-                excerpt(&format)
-            ))),
-        };
-    }
-    whole(node, &VERSION.to_string(), |v| match u64::try_from(v) {
-        Ok(VERSION) => Ok(()),
-        _ => Err(format!(
-            "unsupported version {v} (this build reads version {VERSION})"
-        )),
-    })
-}
-
-/// The values of the top-level keys but `format` and `version` (already read), each read
-/// in the order written; `steps` with the line of its key.
+/// The values of the top-level keys, each read in the order written; `steps` with the line of
+/// its key.
 #[derive(Default)]
 struct Fields {
+    format: Option<()>,
+    version: Option<()>,
     scene: Option<String>,
     scene_toml: Option<String>,
     seed: Option<u32>,
@@ -288,14 +254,34 @@ struct Fields {
     inputs: Option<Vec<(u64, Input)>>,
 }
 
-/// Reads the entries of the top-level object (see [`Fields`]).
-fn read_fields(entries: &[Entry<'_>]) -> Result<Fields, ReplayError> {
+/// Reads the entries of the top-level object (see [`Fields`]); with `header`, only `format`
+/// and `version`, and the value of the last entry only if `header` is true.
+fn read_fields(entries: &[Entry<'_>], header: Option<bool>) -> Result<Fields, ReplayError> {
     let mut f = Fields::default();
-    for entry in entries {
+    for (i, entry) in entries.iter().enumerate() {
         let node = &entry.node;
         let text = || node.string("a string");
+        let read = header != Some(false) || i + 1 < entries.len();
         match &*entry.key {
-            "format" | "version" => {}
+            key if header.is_some() && !HEADER.contains(&key) => {}
+            // A key without its `:` is seen (twice, say), its value never read.
+            "format" if !read => store(&mut f.format, entry, || Ok(()))?,
+            "version" if !read => store(&mut f.version, entry, || Ok(()))?,
+            "format" => store(&mut f.format, entry, || match text()? {
+                format if format == FORMAT => Ok(()),
+                other => Err(node.fail(format!(
+                    "\"{}\" is not a GpuWars replay (allowed {FORMAT:?})",
+                    excerpt(&other)
+                ))),
+            })?,
+            "version" => store(&mut f.version, entry, || {
+                whole(node, &VERSION.to_string(), |v| match u64::try_from(v) {
+                    Ok(VERSION) => Ok(()),
+                    _ => Err(format!(
+                        "unsupported version {v} (this build reads version {VERSION})"
+                    )),
+                })
+            })?,
             "scene" => store(&mut f.scene, entry, text)?,
             "scene_toml" => store(&mut f.scene_toml, entry, || {
                 let toml = text()?;
