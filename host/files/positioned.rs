@@ -382,6 +382,7 @@ impl<'a> Node<'a> {
             _ => Err(self.expected(what)),
         }
     }
+
     /// One of `options`, by name; `what` the value is, for the error.
     pub fn choice<T: Copy>(&self, what: &str, options: &[(&str, T)]) -> Result<T, FileError> {
         let names: Vec<String> = options
