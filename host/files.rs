@@ -7,6 +7,8 @@ use std::fs::{File, FileType};
 use std::io::{ErrorKind, Read, Write};
 use std::path::{Path, PathBuf};
 
+pub mod positioned;
+
 /// Most bytes of a scene file (the built-in ones take a few thousand).
 pub const MAX_SCENE_BYTES: u64 = 1 << 20;
 

@@ -26,14 +26,12 @@
 //! steps, its scene at most [`MAX_SCENE_BYTES`] bytes, and its file at most
 //! [`MAX_REPLAY_BYTES`] bytes: anything larger is refused before its inputs are allocated.
 
-use std::cell::Cell;
-use std::fmt::{self, Display};
 use std::path::Path;
 
 use gpuwars_kernels::game::control::Input;
 
+use crate::files::positioned::{Doc, Entry, Node, Value};
 use crate::files::{MAX_SCENE_BYTES, excerpt, json_problem, line_of, read_text, thousands};
-use serde::de::{self, DeserializeSeed, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
 
 /// The `format` of every replay file.
 pub const FORMAT: &str = "gpuwars-replay";
@@ -46,18 +44,10 @@ pub const MAX_STEPS: u64 = 1_000_000;
 /// its own, and a scene of [`MAX_SCENE_BYTES`] bytes, escaped, take.
 pub const MAX_REPLAY_BYTES: u64 = 64 << 20;
 
+/// The keys read first, before the syntax is judged.
+const HEADER: [&str; 2] = ["format", "version"];
 /// The keys of the top-level object, in the order they are written.
-const KEYS: [&str; 9] = [
-    "format",
-    "version",
-    "scene",
-    "scene_toml",
-    "seed",
-    "backend",
-    "steps",
-    "state_hash",
-    "inputs",
-];
+const KEYS: &str = "format, version, scene, scene_toml, seed, backend, steps, state_hash, inputs";
 
 /// One recorded game.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -120,26 +110,21 @@ impl Replay {
     /// start is skipped, as the scene reader does.
     pub fn parse(text: &str, origin: &str) -> Result<Replay, ReplayError> {
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-        // The header first: a file of another version is reported as such, not as a pile of
-        // keys this build does not know.
-        let header = read_fields(text, origin, true)?;
+        let doc = Doc { text, origin };
+        let entries = read_header(&doc)?;
+        let fields = read_fields(&entries, None)?;
         let missing = |key: &str| ReplayError::new(origin, None, key, "missing");
-        header.format.ok_or_else(|| missing("format"))?;
-        header.version.ok_or_else(|| missing("version"))?;
-
-        let fields = read_fields(text, origin, false)?;
         let scene = fields.scene.ok_or_else(|| missing("scene"))?;
         let scene_toml = fields.scene_toml.ok_or_else(|| missing("scene_toml"))?;
         let seed = fields.seed.ok_or_else(|| missing("seed"))?;
         let backend = fields.backend.ok_or_else(|| missing("backend"))?;
-        let steps = fields.steps.ok_or_else(|| missing("steps"))?;
+        let (steps, steps_line) = fields.steps.ok_or_else(|| missing("steps"))?;
         let state_hash = fields.state_hash.ok_or_else(|| missing("state_hash"))?;
         let runs = fields.inputs.ok_or_else(|| missing("inputs"))?;
 
         // The runs were checked to add up to at most MAX_STEPS as they were read.
         let total: u64 = runs.iter().map(|&(repeat, _)| repeat).sum();
-        let steps_error =
-            |problem: String| ReplayError::new(origin, key_line(text, "steps"), "steps", problem);
+        let steps_error = |problem: String| ReplayError::new(origin, steps_line, "steps", problem);
         if total != steps {
             return Err(steps_error(format!(
                 "{steps} does not match the inputs, whose runs add up to {total} steps"
@@ -211,37 +196,6 @@ impl Replay {
     }
 }
 
-/// The line of the top-level key `key` in the JSON object `text`, if it is written plainly
-/// (without escapes). serde_json gives no positions for values that parsed fine.
-fn key_line(text: &str, key: &str) -> Option<usize> {
-    let bytes = text.as_bytes();
-    let mut depth = 0usize;
-    let mut i = 0;
-    while i < bytes.len() {
-        match bytes[i] {
-            b'{' | b'[' => depth += 1,
-            b'}' | b']' => depth = depth.saturating_sub(1),
-            b'"' => {
-                let start = i + 1;
-                i = start;
-                while i < bytes.len() && bytes[i] != b'"' {
-                    i += if bytes[i] == b'\\' { 2 } else { 1 };
-                }
-                let is_key = depth == 1
-                    && text
-                        .get(i + 1..)
-                        .is_some_and(|rest| rest.trim_start().starts_with(':'));
-                if is_key && text.get(start..i) == Some(key) {
-                    return Some(line_of(bytes, start));
-                }
-            }
-            _ => {}
-        }
-        i += 1;
-    }
-    None
-}
-
 /// The problem of a scene text of `bytes` bytes.
 fn scene_too_large(bytes: usize) -> String {
     format!(
@@ -251,126 +205,42 @@ fn scene_too_large(bytes: usize) -> String {
     )
 }
 
-/// The visitor methods for the JSON values a reader does not take: each is a [`refusal`]
-/// that says what it found in words (`"ten"`, `an array`), never in serde's terms.
-macro_rules! refuse {
-    ($($kind:ident),*) => { $(refuse!(@ $kind);)* };
-    (@ bool) => {
-        fn visit_bool<E: de::Error>(self, v: bool) -> Result<Self::Value, E> {
-            Err(refusal(&self, v))
-        }
+/// Reads the top-level object's `format` and `version`, and only then, if they are right,
+/// says what is wrong with the JSON after them: a file of another version is reported as
+/// such, not as broken or as a pile of keys this build does not know. Returns the object's
+/// entries, the text then known to be JSON.
+fn read_header<'a>(doc: &'a Doc<'a>) -> Result<Vec<Entry<'a>>, ReplayError> {
+    let (root, syntax) = Node::json(doc);
+    let Value::Table(entries) = root.value()? else {
+        return Err(root.expected("a replay (a JSON object)"));
     };
-    (@ integer) => {
-        fn visit_i64<E: de::Error>(self, v: i64) -> Result<Self::Value, E> {
-            Err(refusal(&self, v))
-        }
-        fn visit_u64<E: de::Error>(self, v: u64) -> Result<Self::Value, E> {
-            Err(refusal(&self, v))
-        }
-    };
-    (@ float) => {
-        fn visit_f64<E: de::Error>(self, v: f64) -> Result<Self::Value, E> {
-            Err(refusal(&self, format_args!("{v:?}")))
-        }
-    };
-    (@ str) => {
-        fn visit_str<E: de::Error>(self, v: &str) -> Result<Self::Value, E> {
-            Err(refusal(&self, format_args!("\"{}\"", excerpt(v))))
-        }
-    };
-    (@ null) => {
-        fn visit_unit<E: de::Error>(self) -> Result<Self::Value, E> {
-            Err(refusal(&self, "null"))
-        }
-    };
-    (@ array) => {
-        fn visit_seq<A: SeqAccess<'de>>(self, _: A) -> Result<Self::Value, A::Error> {
-            Err(refusal(&self, "an array"))
-        }
-    };
-    (@ object) => {
-        fn visit_map<A: MapAccess<'de>>(self, _: A) -> Result<Self::Value, A::Error> {
-            Err(refusal(&self, "an object"))
-        }
-    };
-}
-
-/// The error of a `visitor` given a value it does not take: what it expected, and what it
-/// `found`.
-fn refusal<'de, E: de::Error>(visitor: &impl Visitor<'de>, found: impl Display) -> E {
-    let expected: &dyn de::Expected = visitor;
-    E::custom(format_args!("expected {expected}, found {found}"))
-}
-
-/// Runs the strict reader (or, with `header_only`, the one that reads only `format` and
-/// `version`) over the whole text.
-fn read_fields(text: &str, origin: &str, header_only: bool) -> Result<Fields, ReplayError> {
-    let blame = Blame::default();
-    let mut json = serde_json::Deserializer::from_str(text);
-    let seed = Top {
-        blame: &blame,
-        header_only,
-    };
-    let fields = seed.deserialize(&mut json).and_then(|fields| {
-        json.end()?;
-        Ok(fields)
-    });
-    fields.map_err(|e| {
-        let line = (e.line() > 0).then_some(e.line());
-        let field = blame.0.take().unwrap_or_default();
-        ReplayError::new(origin, line, field, json_problem(&e))
-    })
-}
-
-/// The name of the value a parse error happened in. serde_json knows the line of an error but
-/// not which key it was under, so the readers below note it on the way out.
-#[derive(Default)]
-struct Blame(Cell<Option<String>>);
-
-impl Blame {
-    /// Names `field` as where `result`'s error happened, unless a value inside it already was.
-    fn name<T, E>(&self, field: impl Display, result: Result<T, E>) -> Result<T, E> {
-        if result.is_err() {
-            self.note(field);
-        }
-        result
+    // serde_json stops at the syntax error: what comes after it is never read, nor the
+    // value of a key without its `:`.
+    let (keys, in_value) = syntax
+        .as_ref()
+        .map_or((entries.len(), None), |s| (s.keys, s.in_value));
+    let read = entries.get(..keys).unwrap_or(&entries);
+    let header = read_fields(read, Some(in_value != Some(false)))?;
+    if let Some(s) = syntax {
+        // The key whose value serde_json was reading; its `:` is read with the value, but for
+        // `format` and `version` before their readers take over.
+        let key = s.keys.checked_sub(1).and_then(|k| entries.get(k));
+        let blame = match (key, s.in_value) {
+            (Some(e), Some(value)) if value || !HEADER.contains(&&*e.key) => &*e.key,
+            _ => "",
+        };
+        let line = (s.error.line() > 0).then_some(s.error.line());
+        let problem = json_problem(&s.error);
+        return Err(ReplayError::new(doc.origin, line, blame, problem));
     }
-
-    /// An error about `field`.
-    fn fail<E: de::Error>(&self, field: impl Display, problem: impl Display) -> E {
-        self.note(field);
-        E::custom(problem)
-    }
-
-    /// Notes `field` unless a field was noted already (the innermost is the most precise).
-    fn note(&self, field: impl Display) {
-        let inner = self.0.take();
-        self.0.set(inner.or_else(|| Some(field.to_string())));
-    }
+    let missing = |key: &str| ReplayError::new(doc.origin, None, key, "missing");
+    header.format.ok_or_else(|| missing("format"))?;
+    header.version.ok_or_else(|| missing("version"))?;
+    Ok(entries)
 }
 
-/// Where in the file a value is.
-#[derive(Clone, Copy)]
-enum Field {
-    /// A top-level key.
-    Key(&'static str),
-    /// Run `i` of `inputs`.
-    Run(usize),
-    /// One number of run `i`.
-    Number(usize, &'static str),
-}
-
-impl Display for Field {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Field::Key(key) => f.write_str(key),
-            Field::Run(i) => write!(f, "inputs[{i}]"),
-            Field::Number(i, name) => write!(f, "inputs[{i}].{name}"),
-        }
-    }
-}
-
-/// The top-level values, as read (all `None` but `format` and `version` for a header).
+/// The values of the top-level keys, each read in the order written; `steps` with the line of
+/// its key.
 #[derive(Default)]
 struct Fields {
     format: Option<()>,
@@ -379,118 +249,78 @@ struct Fields {
     scene_toml: Option<String>,
     seed: Option<u32>,
     backend: Option<String>,
-    steps: Option<u64>,
+    steps: Option<(u64, Option<usize>)>,
     state_hash: Option<u64>,
     inputs: Option<Vec<(u64, Input)>>,
 }
 
-/// Reads the top-level object; with `header_only`, just `format` and `version` (the rest is
-/// skipped, only its syntax checked).
-struct Top<'a> {
-    blame: &'a Blame,
-    header_only: bool,
-}
-
-impl<'de> DeserializeSeed<'de> for Top<'_> {
-    type Value = Fields;
-
-    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<Fields, D::Error> {
-        d.deserialize_any(self)
-    }
-}
-
-impl<'de> Visitor<'de> for Top<'_> {
-    type Value = Fields;
-
-    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str("a replay (a JSON object)")
-    }
-
-    refuse!(bool, integer, float, str, null, array);
-
-    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Fields, A::Error> {
-        let blame = self.blame;
-        let mut f = Fields::default();
-        while let Some(key) = map.next_key::<String>()? {
-            let map = &mut map;
-            match key.as_str() {
-                "format" => {
-                    let value = text(blame, "format", |s| match s {
-                        FORMAT => Ok(()),
-                        _ => Err(format!(
-                            "\"{}\" is not a GpuWars replay (allowed {FORMAT:?})",
-                            excerpt(s)
-                        )),
-                    });
-                    store(map, blame, &mut f.format, "format", value)?;
+/// Reads the entries of the top-level object (see [`Fields`]); with `header`, only `format`
+/// and `version`, and the value of the last entry only if `header` is true.
+fn read_fields(entries: &[Entry<'_>], header: Option<bool>) -> Result<Fields, ReplayError> {
+    let mut f = Fields::default();
+    for (i, entry) in entries.iter().enumerate() {
+        let node = &entry.node;
+        let text = || node.string("a string");
+        let read = header != Some(false) || i + 1 < entries.len();
+        match &*entry.key {
+            key if header.is_some() && !HEADER.contains(&key) => {}
+            // A key without its `:` is seen (twice, say), its value never read.
+            "format" if !read => store(&mut f.format, entry, || Ok(()))?,
+            "version" if !read => store(&mut f.version, entry, || Ok(()))?,
+            "format" => store(&mut f.format, entry, || match text()? {
+                format if format == FORMAT => Ok(()),
+                other => Err(node.fail(format!(
+                    "\"{}\" is not a GpuWars replay (allowed {FORMAT:?})",
+                    excerpt(&other)
+                ))),
+            })?,
+            "version" => store(&mut f.version, entry, || {
+                whole(node, &VERSION.to_string(), |v| match u64::try_from(v) {
+                    Ok(VERSION) => Ok(()),
+                    _ => Err(format!(
+                        "unsupported version {v} (this build reads version {VERSION})"
+                    )),
+                })
+            })?,
+            "scene" => store(&mut f.scene, entry, text)?,
+            "scene_toml" => store(&mut f.scene_toml, entry, || {
+                let toml = text()?;
+                match toml.len() as u64 > MAX_SCENE_BYTES {
+                    true => Err(node.fail(scene_too_large(toml.len()))),
+                    false => Ok(toml),
                 }
-                "version" => {
-                    let version = Int {
-                        blame,
-                        field: Field::Key("version"),
-                        allowed: VERSION.to_string(),
-                        convert: |v| match u64::try_from(v) {
-                            Ok(VERSION) => Ok(()),
-                            _ => Err(format!(
-                                "unsupported version {v} (this build reads version {VERSION})"
-                            )),
-                        },
-                    };
-                    store(map, blame, &mut f.version, "version", version)?;
-                }
-                other if self.header_only => {
-                    blame.name(other, map.next_value::<IgnoredAny>())?;
-                }
-                "scene" => store(map, blame, &mut f.scene, "scene", string(blame, "scene"))?,
-                "scene_toml" => {
-                    let value = text(blame, "scene_toml", |s| {
-                        match s.len() as u64 > MAX_SCENE_BYTES {
-                            true => Err(scene_too_large(s.len())),
-                            false => Ok(s.to_owned()),
-                        }
-                    });
-                    store(map, blame, &mut f.scene_toml, "scene_toml", value)?;
-                }
-                "seed" => {
-                    let value = ranged(blame, Field::Key("seed"), 0, u32::MAX);
-                    store(map, blame, &mut f.seed, "seed", value)?;
-                }
-                "backend" => {
-                    let value = string(blame, "backend");
-                    store(map, blame, &mut f.backend, "backend", value)?;
-                }
-                "steps" => {
-                    let value = ranged(blame, Field::Key("steps"), 0, MAX_STEPS);
-                    store(map, blame, &mut f.steps, "steps", value)?;
-                }
-                "state_hash" => {
-                    let value = text(blame, "state_hash", parse_hash);
-                    store(map, blame, &mut f.state_hash, "state_hash", value)?;
-                }
-                "inputs" => store(map, blame, &mut f.inputs, "inputs", Runs { blame })?,
-                other => {
-                    let allowed = KEYS.join(", ");
-                    let problem = format!("unknown key (allowed {allowed})");
-                    return Err(blame.fail(excerpt(other), problem));
-                }
+            })?,
+            "seed" => store(&mut f.seed, entry, || ranged(node, 0, u32::MAX))?,
+            "backend" => store(&mut f.backend, entry, text)?,
+            "steps" => store(&mut f.steps, entry, || {
+                // Found, as before, only if written without escapes.
+                let plain = node.text().get(entry.key_span.clone()) == Some("\"steps\"");
+                let line = plain.then(|| line_of(node.text().as_bytes(), entry.key_span.start));
+                Ok((ranged(node, 0, MAX_STEPS)?, line))
+            })?,
+            "state_hash" => store(&mut f.state_hash, entry, || {
+                parse_hash(&text()?).map_err(|problem| node.fail(problem))
+            })?,
+            "inputs" => store(&mut f.inputs, entry, || read_runs(node))?,
+            _ => {
+                let problem = format!("unknown key (allowed {KEYS})");
+                return Err(entry.fail(problem));
             }
         }
-        Ok(f)
     }
+    Ok(f)
 }
 
-/// Reads the value of `key` into `slot`; a key may appear once.
-fn store<'de, A: MapAccess<'de>, S: DeserializeSeed<'de>>(
-    map: &mut A,
-    blame: &Blame,
-    slot: &mut Option<S::Value>,
-    key: &str,
-    seed: S,
-) -> Result<(), A::Error> {
+/// Reads the value of `entry` into `slot`; a key may appear once.
+fn store<T>(
+    slot: &mut Option<T>,
+    entry: &Entry<'_>,
+    read: impl FnOnce() -> Result<T, ReplayError>,
+) -> Result<(), ReplayError> {
     if slot.is_some() {
-        return Err(blame.fail(key, "appears twice"));
+        return Err(entry.fail("appears twice"));
     }
-    *slot = Some(map.next_value_seed(seed)?);
+    *slot = Some(read()?);
     Ok(())
 }
 
@@ -506,101 +336,19 @@ fn parse_hash(s: &str) -> Result<u64, String> {
         })
 }
 
-/// A JSON string, turned into a `T` by `convert` (whose error is the problem).
-struct Text<'a, F> {
-    blame: &'a Blame,
-    field: &'static str,
-    convert: F,
-}
-
-/// A string checked by `convert`.
-fn text<'a, T, F: FnOnce(&str) -> Result<T, String>>(
-    blame: &'a Blame,
-    field: &'static str,
-    convert: F,
-) -> Text<'a, F> {
-    Text {
-        blame,
-        field,
-        convert,
-    }
-}
-
-/// Any string.
-fn string<'a>(
-    blame: &'a Blame,
-    field: &'static str,
-) -> Text<'a, impl FnOnce(&str) -> Result<String, String>> {
-    text(blame, field, |s| Ok(s.to_owned()))
-}
-
-impl<'de, T, F: FnOnce(&str) -> Result<T, String>> DeserializeSeed<'de> for Text<'_, F> {
-    type Value = T;
-
-    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<T, D::Error> {
-        let (blame, field) = (self.blame, self.field);
-        blame.name(field, d.deserialize_any(self))
-    }
-}
-
-impl<'de, T, F: FnOnce(&str) -> Result<T, String>> Visitor<'de> for Text<'_, F> {
-    type Value = T;
-
-    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str("a string")
-    }
-
-    refuse!(bool, integer, float, null, array, object);
-
-    fn visit_str<E: de::Error>(self, s: &str) -> Result<T, E> {
-        (self.convert)(s).map_err(E::custom)
-    }
-}
-
-/// A JSON integer, turned into a `T` by `convert` (whose error is the problem); `allowed` says
-/// what it may be, for the error about a value of another type.
-struct Int<'a, F> {
-    blame: &'a Blame,
-    field: Field,
-    allowed: String,
-    convert: F,
-}
-
-impl<'de, T, F: FnOnce(i128) -> Result<T, String>> DeserializeSeed<'de> for Int<'_, F> {
-    type Value = T;
-
-    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<T, D::Error> {
-        let (blame, field) = (self.blame, self.field);
-        blame.name(field, d.deserialize_any(self))
-    }
-}
-
-impl<'de, T, F: FnOnce(i128) -> Result<T, String>> Visitor<'de> for Int<'_, F> {
-    type Value = T;
-
-    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "a whole number (allowed {})", self.allowed)
-    }
-
-    refuse!(bool, str, null, array, object);
-
-    /// serde_json reads an integer beyond 64 bits as a float.
-    fn visit_f64<E: de::Error>(self, v: f64) -> Result<T, E> {
-        match v.abs() >= 2f64.powi(63) {
-            true => Err(E::custom(format_args!(
-                "{v:?} is out of range (allowed {})",
-                self.allowed
-            ))),
-            false => Err(refusal(&self, format_args!("{v:?}"))),
-        }
-    }
-
-    fn visit_i64<E: de::Error>(self, v: i64) -> Result<T, E> {
-        (self.convert)(v.into()).map_err(E::custom)
-    }
-
-    fn visit_u64<E: de::Error>(self, v: u64) -> Result<T, E> {
-        (self.convert)(v.into()).map_err(E::custom)
+/// A whole number, turned into a `T` by `convert` (whose error is the problem); `allowed`
+/// says what it may be, for the error about a value of another type.
+fn whole<T>(
+    node: &Node<'_>,
+    allowed: &str,
+    convert: impl FnOnce(i128) -> Result<T, String>,
+) -> Result<T, ReplayError> {
+    match node.integer(format_args!("a whole number (allowed {allowed})"))? {
+        Some(v) => convert(v).map_err(|problem| node.fail(problem)),
+        None => Err(node.fail(format!(
+            "{} is out of range (allowed {allowed})",
+            node.written()
+        ))),
     }
 }
 
@@ -619,184 +367,96 @@ fn span(lo: impl Into<i128>, hi: impl Into<i128>) -> String {
 
 /// An integer in `lo..=hi`.
 fn ranged<T: TryFrom<i128> + Into<i128> + Copy>(
-    blame: &Blame,
-    field: Field,
+    node: &Node<'_>,
     lo: T,
     hi: T,
-) -> Int<'_, impl FnOnce(i128) -> Result<T, String>> {
-    Int {
-        blame,
-        field,
-        allowed: span(lo, hi),
-        convert: move |v| in_range(v, lo, hi),
+) -> Result<T, ReplayError> {
+    whole(node, &span(lo, hi), |v| in_range(v, lo, hi))
+}
+
+/// The numbers of a run after the repeat, in file order.
+const INPUT_FIELDS: [&str; 4] = ["move_x", "move_y", "aim", "fire"];
+
+/// Stores `v` as number `k` of an [`Input`] (see [`INPUT_FIELDS`]), saturated to the field's
+/// type (a negative value becomes `u32::MAX` in an unsigned one, so that it stays out of
+/// range); returns whether `v` fitted unchanged.
+fn set(input: &mut Input, k: usize, v: i128) -> bool {
+    let signed = i32::try_from(v).unwrap_or(if v < 0 { i32::MIN } else { i32::MAX });
+    let unsigned = u32::try_from(v).unwrap_or(u32::MAX);
+    match k {
+        0 => input.move_x = signed,
+        1 => input.move_y = signed,
+        2 => input.aim = unsigned,
+        _ => input.fire = unsigned,
+    }
+    v == if k < 2 {
+        signed.into()
+    } else {
+        unsigned.into()
     }
 }
 
-/// Stores `v` in one field of an [`Input`], saturated to the field's type (a negative value
-/// becomes `u32::MAX` in an unsigned one, so that it stays out of range); returns whether `v`
-/// fitted unchanged.
-type Setter = fn(&mut Input, i128) -> bool;
-
-/// The numbers of a run after the repeat, in file order.
-const INPUT_FIELDS: [(&str, Setter); 4] = [
-    ("move_x", |input, v| {
-        input.move_x = saturate_i32(v);
-        i128::from(input.move_x) == v
-    }),
-    ("move_y", |input, v| {
-        input.move_y = saturate_i32(v);
-        i128::from(input.move_y) == v
-    }),
-    ("aim", |input, v| {
-        input.aim = u32::try_from(v).unwrap_or(u32::MAX);
-        i128::from(input.aim) == v
-    }),
-    ("fire", |input, v| {
-        input.fire = u32::try_from(v).unwrap_or(u32::MAX);
-        i128::from(input.fire) == v
-    }),
-];
-
-/// `v`, clamped to the range of an `i32`.
-fn saturate_i32(v: i128) -> i32 {
-    i32::try_from(v).unwrap_or(if v < 0 { i32::MIN } else { i32::MAX })
-}
-
-/// One number of an input, checked by [`Input::problem`] on an input that is all zeros but
+/// Number `k` of an input, checked by [`Input::problem`] on an input that is all zeros but
 /// for it (so the ranges are the kernels' own).
-fn input_number<'a>(
-    blame: &'a Blame,
-    run: usize,
-    (name, set): (&'static str, Setter),
-) -> Int<'a, impl FnOnce(i128) -> Result<i128, String>> {
+fn input_number(node: &Node<'_>, k: usize) -> Result<i128, ReplayError> {
     let allowed = move |v| {
         let mut probe = Input::default();
-        let fits = set(&mut probe, v);
+        let fits = set(&mut probe, k, v);
         (probe.problem().map(|(_, allowed)| allowed), fits)
     };
     // The largest integer is out of any range the field has, if it has one.
     let any = allowed(i128::MAX).0.unwrap_or("any 32-bit integer");
-    Int {
-        blame,
-        field: Field::Number(run, name),
-        allowed: any.to_owned(),
-        convert: move |v| match allowed(v) {
-            (Some(allowed), _) => Err(format!("{v} is out of range (allowed {allowed})")),
-            (None, false) => Err(format!("{v} does not fit in 32 bits")),
-            (None, true) => Ok(v),
-        },
-    }
+    whole(node, any, |v| match allowed(v) {
+        (Some(allowed), _) => Err(format!("{v} is out of range (allowed {allowed})")),
+        (None, false) => Err(format!("{v} does not fit in 32 bits")),
+        (None, true) => Ok(v),
+    })
 }
 
-/// The `inputs` array: its runs as `(repeat, input)`.
-struct Runs<'a> {
-    blame: &'a Blame,
-}
-
-impl<'de> DeserializeSeed<'de> for Runs<'_> {
-    type Value = Vec<(u64, Input)>;
-
-    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
-        let blame = self.blame;
-        blame.name("inputs", d.deserialize_any(self))
-    }
-}
-
-impl<'de> Visitor<'de> for Runs<'_> {
-    type Value = Vec<(u64, Input)>;
-
-    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str("an array of runs [repeat, move_x, move_y, aim, fire]")
-    }
-
-    refuse!(bool, integer, float, str, null, object);
-
-    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
-        let mut runs = Vec::new();
-        let mut total = 0;
-        let run = |index, total| Run {
-            blame: self.blame,
-            index,
-            total,
+/// The `inputs` array: its runs as `(repeat, input)`, checked to add up to at most
+/// [`MAX_STEPS`] as they are read, so that the error points at the run that passes it. A run
+/// is read without a path, named only in an error.
+fn read_runs(node: &Node<'_>) -> Result<Vec<(u64, Input)>, ReplayError> {
+    const RUN: &str = "[repeat, move_x, move_y, aim, fire]";
+    let (a_run, repeats) = (format!("a run {RUN}"), span(1, MAX_STEPS));
+    let mut runs = Vec::new();
+    let mut total = 0;
+    for (i, run) in node.items(&format!("an array of runs {RUN}"))?.enumerate() {
+        let name = |e: ReplayError, field: &str| ReplayError {
+            field: format!("inputs[{i}]{field}"),
+            ..e
         };
-        while let Some((repeat, input)) = seq.next_element_seed(run(runs.len(), total))? {
-            total += repeat;
-            runs.push((repeat, input));
-        }
-        Ok(runs)
-    }
-}
-
-/// Run `index` of `inputs`; `total` is the steps of the runs before it.
-struct Run<'a> {
-    blame: &'a Blame,
-    index: usize,
-    total: u64,
-}
-
-impl<'de> DeserializeSeed<'de> for Run<'_> {
-    type Value = (u64, Input);
-
-    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
-        let (blame, index) = (self.blame, self.index);
-        blame.name(Field::Run(index), d.deserialize_any(self))
-    }
-}
-
-impl<'de> Visitor<'de> for Run<'_> {
-    type Value = (u64, Input);
-
-    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str("a run [repeat, move_x, move_y, aim, fire]")
-    }
-
-    refuse!(bool, integer, float, str, null, object);
-
-    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
-        let Run {
-            blame,
-            index,
-            total,
-        } = self;
-        let length = |found: usize| -> A::Error {
-            blame.fail(
-                Field::Run(index),
-                format!("has {found} numbers, expected 5: [repeat, move_x, move_y, aim, fire]"),
-            )
+        // At the closing bracket, where the count is known.
+        let length = |found: usize| {
+            let problem = format!("has {found} numbers, expected 5: {RUN}");
+            name(run.fail_at(run.span().end.saturating_sub(1), problem), "")
         };
-        // Checked here, at the number, so the error points at this run's line.
-        let repeat = Int {
-            blame,
-            field: Field::Number(index, "repeat"),
-            allowed: span(1, MAX_STEPS),
-            convert: |v| {
-                let repeat = in_range(v, 1, MAX_STEPS)?;
-                match total + repeat {
-                    sum if sum > MAX_STEPS => Err(format!(
-                        "the runs so far add up to {} steps (allowed at most {})",
-                        thousands(sum),
-                        thousands(MAX_STEPS)
-                    )),
-                    _ => Ok(repeat),
-                }
-            },
-        };
-        let repeat = seq.next_element_seed(repeat)?.ok_or_else(|| length(0))?;
+        let mut numbers = run.items(&a_run).map_err(|e| name(e, ""))?;
+        let repeat = numbers.next().ok_or_else(|| length(0))?;
+        let repeat = whole(&repeat, &repeats, |v| {
+            let repeat = in_range(v, 1, MAX_STEPS)?;
+            match total + repeat {
+                sum if sum > MAX_STEPS => Err(format!(
+                    "the runs so far add up to {} steps (allowed at most {})",
+                    thousands(sum),
+                    thousands(MAX_STEPS)
+                )),
+                _ => Ok(repeat),
+            }
+        })
+        .map_err(|e| name(e, ".repeat"))?;
         let mut input = Input::default();
         for (k, field) in INPUT_FIELDS.into_iter().enumerate() {
-            let number = input_number(blame, index, field);
-            let v = seq
-                .next_element_seed(number)?
-                .ok_or_else(|| length(k + 1))?;
-            (field.1)(&mut input, v);
+            let number = numbers.next().ok_or_else(|| length(k + 1))?;
+            let v = input_number(&number, k).map_err(|e| name(e, &format!(".{field}")))?;
+            set(&mut input, k, v);
         }
-        let mut found = 1 + INPUT_FIELDS.len();
-        while seq.next_element::<IgnoredAny>()?.is_some() {
-            found += 1;
+        match numbers.count() {
+            0 => {}
+            more => return Err(length(1 + INPUT_FIELDS.len() + more)),
         }
-        if found > 1 + INPUT_FIELDS.len() {
-            return Err(length(found));
-        }
-        Ok((repeat, input))
+        total += repeat;
+        runs.push((repeat, input));
     }
+    Ok(runs)
 }

@@ -16,7 +16,6 @@
 //! array of two numbers), quote a value as written and at most a few dozen characters of it.
 
 use std::fmt;
-use std::ops::Range;
 use std::path::Path;
 
 use glam::Vec2;
@@ -24,6 +23,7 @@ use gpuwars_kernels::game::effects::{MAX_PARTICLES, MAX_PER_KILL};
 use toml::Spanned;
 use toml::de::{DeTable, DeValue};
 
+use crate::files::positioned::{Doc, Interval, Node, Value, above, within};
 use crate::files::{MAX_SCENE_BYTES, excerpt, line_of, number, read_text, thousands};
 
 use super::spec::{
@@ -108,17 +108,24 @@ impl Scene {
         let doc = Doc { text, origin };
         let root = DeTable::parse(text).map_err(|e| {
             let line = match e.span() {
-                Some(span) => line_at(text, Some(span)),
+                Some(span) => Some(line_of(text.as_bytes(), span.start)),
                 None => spanless_error_line(text, e.message()),
             };
             SceneError::new(origin, line, "", parse_problem(e.message()))
         })?;
         let root = Spanned::new(root.span(), DeValue::Table(root.into_inner()));
-        let raw = read_scene(&Node::root(&doc, &root))?;
-        raw.into_scene(text)
+        let root = Node::toml(&doc, &root);
+        let scene = read_scene(&root)?;
+        // The world's rules, then the game's.
+        let world = &scene.world;
+        world
+            .validate()
+            .map_err(|e| toml_field(world, e))
+            .and_then(|()| check_game(world, &scene.game))
             .map_err(|SpecError { field, problem }| {
-                SceneError::new(origin, line_of_field(text, &field), field, &problem)
-            })
+                SceneError::new(origin, line_of_field(&root, &field), field, &problem)
+            })?;
+        Ok(scene)
     }
 
     /// The built-in scene called `name_or_path` if there is one, else the TOML file at that
@@ -171,331 +178,6 @@ fn spanless_error_line(text: &str, message: &str) -> Option<usize> {
     (low < ends.len()).then_some(low + 1)
 }
 
-/// The scene file's rules on its own values, before the world's and the game's rules.
-struct RawScene {
-    name: String,
-    description: String,
-    world: WorldSpec,
-    ship: ShipSpec,
-    fps: FpsSpec,
-    spawn: SpawnSpec,
-    behaviours: Vec<Option<Behaviour>>,
-    effects: Option<EffectsSpec>,
-}
-
-/// The text being read and what it is called, for errors.
-struct Doc<'t> {
-    text: &'t str,
-    origin: &'t str,
-}
-
-/// One value of the document and its path as the file spells it (`kinds[2].mass`).
-#[derive(Clone)]
-struct Node<'a> {
-    doc: &'a Doc<'a>,
-    value: &'a Spanned<DeValue<'a>>,
-    path: String,
-}
-
-/// The range of a number: `(low, high]`, or `[low, high]` when `closed`.
-#[derive(Clone, Copy)]
-struct Interval {
-    low: f32,
-    closed: bool,
-    high: f32,
-}
-
-/// `(low, high]`.
-fn above(low: f32, high: f32) -> Interval {
-    Interval {
-        low,
-        closed: false,
-        high,
-    }
-}
-
-/// `[low, high]`.
-fn within(low: f32, high: f32) -> Interval {
-    Interval {
-        low,
-        closed: true,
-        high,
-    }
-}
-
-impl fmt::Display for Interval {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let open = if self.closed { '[' } else { '(' };
-        write!(f, "{open}{}, {}]", number(self.low), number(self.high))
-    }
-}
-
-impl Interval {
-    /// Whether `x`, as written, is in the range (NaN never is).
-    fn contains(&self, x: f64) -> bool {
-        let (low, high) = (f64::from(self.low), f64::from(self.high));
-        let above = if self.closed { x >= low } else { x > low };
-        above && x <= high
-    }
-}
-
-impl<'a> Node<'a> {
-    /// The whole document.
-    fn root(doc: &'a Doc<'a>, value: &'a Spanned<DeValue<'a>>) -> Self {
-        Node {
-            doc,
-            value,
-            path: String::new(),
-        }
-    }
-
-    /// An error about this value, on its line (the document as a whole has none).
-    fn fail(&self, problem: impl fmt::Display) -> SceneError {
-        let span = (!self.path.is_empty()).then(|| self.value.span());
-        SceneError::new(
-            self.doc.origin,
-            line_at(self.doc.text, span),
-            &self.path,
-            problem,
-        )
-    }
-
-    /// The value as an error quotes it: an excerpt as written, or what it is for a table or
-    /// an array.
-    fn written(&self) -> String {
-        match self.value.get_ref() {
-            DeValue::Table(_) => "a table".to_owned(),
-            DeValue::Array(_) => "an array".to_owned(),
-            _ => excerpt(self.doc.text.get(self.value.span()).unwrap_or_default()),
-        }
-    }
-
-    /// The error for a value of the wrong type.
-    fn expected(&self, what: impl fmt::Display) -> SceneError {
-        self.fail(format!("expected {what}, found {}", self.written()))
-    }
-
-    /// `value`, inside this one, at `path`.
-    fn child(&self, value: &'a Spanned<DeValue<'a>>, path: String) -> Node<'a> {
-        Node {
-            doc: self.doc,
-            value,
-            path,
-        }
-    }
-
-    /// The table this value must be, whose keys must be among `keys`.
-    fn table(&self, keys: &'static [&'static str]) -> Result<Table<'a>, SceneError> {
-        let DeValue::Table(table) = self.value.get_ref() else {
-            return Err(self.expected("a table"));
-        };
-        let unknown = table
-            .iter()
-            .map(|(key, _)| key)
-            .filter(|key| !keys.contains(&key.get_ref().as_ref()))
-            .min_by_key(|key| key.span().start);
-        if let Some(key) = unknown {
-            let allowed: Vec<String> = keys.iter().map(|k| format!("`{k}`")).collect();
-            let line = line_at(self.doc.text, Some(key.span()));
-            let field = self.join(&excerpt(key.get_ref()));
-            let problem = format!("unknown key (allowed {})", allowed.join(", "));
-            return Err(SceneError::new(self.doc.origin, line, field, problem));
-        }
-        Ok(Table {
-            node: self.clone(),
-            table,
-        })
-    }
-
-    /// The path of key `key` in this table.
-    fn join(&self, key: &str) -> String {
-        match self.path.is_empty() {
-            true => key.to_owned(),
-            false => format!("{}.{key}", self.path),
-        }
-    }
-
-    /// The elements of the array this value must be (`what` it should hold, for the error).
-    fn array(&self, what: &str) -> Result<Vec<Node<'a>>, SceneError> {
-        let DeValue::Array(items) = self.value.get_ref() else {
-            return Err(self.expected(what));
-        };
-        Ok(items
-            .iter()
-            .enumerate()
-            .map(|(i, item)| self.child(item, format!("{}[{i}]", self.path)))
-            .collect())
-    }
-
-    /// A string.
-    fn text(&self, what: &str) -> Result<&'a str, SceneError> {
-        match self.value.get_ref() {
-            DeValue::String(text) => Ok(text.as_ref()),
-            _ => Err(self.expected(what)),
-        }
-    }
-
-    /// One of `options`, by name; `what` the value is, for the error.
-    fn choice<T: Copy>(&self, what: &str, options: &[(&str, T)]) -> Result<T, SceneError> {
-        let names: Vec<String> = options
-            .iter()
-            .map(|(name, _)| format!("`{name}`"))
-            .collect();
-        let names = match names.split_last() {
-            Some((last, [])) => last.clone(),
-            Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
-            None => String::new(),
-        };
-        let name = self.text(&format!("a {what} in quotes ({names})"))?;
-        options
-            .iter()
-            .find(|(option, _)| *option == name)
-            .map(|&(_, value)| value)
-            .ok_or_else(|| {
-                self.fail(format!(
-                    "unknown {what} `{}` (allowed {names})",
-                    excerpt(name)
-                ))
-            })
-    }
-
-    /// `true` or `false`.
-    fn flag(&self) -> Result<bool, SceneError> {
-        match self.value.get_ref() {
-            DeValue::Boolean(flag) => Ok(*flag),
-            _ => Err(self.expected("true or false")),
-        }
-    }
-
-    /// A whole number from `low` to `high`, as written (not a float, however round).
-    fn whole<T>(&self, low: T, high: T) -> Result<T, SceneError>
-    where
-        T: Copy + Into<i128> + TryFrom<i128>,
-    {
-        let allowed = format!(
-            "a whole number from {} to {}",
-            thousands(low),
-            thousands(high)
-        );
-        let DeValue::Integer(integer) = self.value.get_ref() else {
-            return Err(self.expected(allowed));
-        };
-        i128::from_str_radix(integer.as_str(), integer.radix())
-            .ok()
-            .filter(|v| (low.into()..=high.into()).contains(v))
-            .and_then(|v| T::try_from(v).ok())
-            .ok_or_else(|| {
-                self.fail(format!(
-                    "{} is out of range (allowed {allowed})",
-                    self.written()
-                ))
-            })
-    }
-
-    /// A number in `range`, checked as written, before it is rounded to an `f32`; a number
-    /// the `f32` cannot hold (too large, or so close to 0 that it would lose its precision
-    /// or become 0) is an error too. An integer stands for a float.
-    fn real(&self, range: Interval) -> Result<f32, SceneError> {
-        let x = match self.value.get_ref() {
-            DeValue::Integer(integer) => {
-                match i128::from_str_radix(integer.as_str(), integer.radix()) {
-                    Ok(v) => v as f64,
-                    Err(_) if integer.as_str().starts_with('-') => -f64::MAX,
-                    Err(_) => f64::MAX,
-                }
-            }
-            DeValue::Float(float) => written_float(float.as_str()),
-            _ => return Err(self.expected(format_args!("a number in {range}"))),
-        };
-        let written = self.written();
-        if !range.contains(x) {
-            return Err(self.fail(format!("{written} is out of range (allowed {range})")));
-        }
-        let stored = x as f32;
-        if x.is_finite() && stored.is_infinite() {
-            return Err(self.fail(format!(
-                "{written} is too large to store (allowed {range}, finite numbers at most {})",
-                number(f32::MAX)
-            )));
-        }
-        // As written, not as rounded: a value just under the bound would round up to it.
-        let smallest = f64::from(f32::MIN_POSITIVE);
-        if x != 0.0 && x.abs() < smallest {
-            return Err(self.fail(format!(
-                "{written} is too close to 0 to store (allowed {range}, numbers other than 0 \
-                 at least {smallest:e} in size)"
-            )));
-        }
-        Ok(stored)
-    }
-
-    /// `[x, y]`: exactly two numbers in `range`; `what` says what they are
-    /// (`[width, height]`). An error about either names the array.
-    fn pair(&self, range: Interval, what: &str) -> Result<Vec2, SceneError> {
-        let items = self.array(&format!("an array {what} of two numbers in {range}"))?;
-        let [x, y] = &items[..] else {
-            let values = match items.len() {
-                1 => "1 value".to_owned(),
-                n => format!("{n} values"),
-            };
-            return Err(self.fail(format!(
-                "has {values} (allowed exactly 2: {what}, each in {range})"
-            )));
-        };
-        let read = |item: &Node<'a>| self.child(item.value, self.path.clone()).real(range);
-        Ok(Vec2::new(read(x)?, read(y)?))
-    }
-}
-
-/// A float as written in TOML (`1e39`, `-0.5`, `inf`, `nan`) as an `f64`: one that
-/// overflows an `f64` becomes its largest finite value, and one that underflows it its
-/// smallest normal one, so that neither passes as `inf` or 0.
-fn written_float(text: &str) -> f64 {
-    let x: f64 = text.parse().unwrap_or(f64::NAN);
-    let negative = text.starts_with('-');
-    let sign = if negative { -1.0 } else { 1.0 };
-    let mantissa = text.split(['e', 'E']).next().unwrap_or_default();
-    if x.is_infinite() && !text.contains("inf") {
-        sign * f64::MAX
-    } else if x == 0.0 && mantissa.bytes().any(|b| (b'1'..=b'9').contains(&b)) {
-        sign * f64::MIN_POSITIVE
-    } else {
-        x
-    }
-}
-
-/// A table of the document.
-struct Table<'a> {
-    node: Node<'a>,
-    table: &'a DeTable<'a>,
-}
-
-impl<'a> Table<'a> {
-    /// The value of `key`, if the table has it.
-    fn get(&self, key: &str) -> Option<Node<'a>> {
-        self.table
-            .iter()
-            .find(|(k, _)| k.get_ref().as_ref() == key)
-            .map(|(_, value)| self.node.child(value, self.node.join(key)))
-    }
-
-    /// The value of `key`, which the table must have.
-    fn need(&self, key: &str) -> Result<Node<'a>, SceneError> {
-        self.get(key)
-            .ok_or_else(|| self.node.fail(format!("missing key `{key}`")))
-    }
-
-    /// `read` of the value of `key`, or `default` without one.
-    fn or<T>(
-        &self,
-        key: &str,
-        default: T,
-        read: impl FnOnce(&Node<'a>) -> Result<T, SceneError>,
-    ) -> Result<T, SceneError> {
-        self.get(key).map_or(Ok(default), |node| read(&node))
-    }
-}
-
 /// Most of a distance, speed or time.
 fn side() -> Interval {
     above(0.0, MAX)
@@ -508,7 +190,7 @@ fn side_or_zero() -> Interval {
 
 /// Reads the whole document: every value's type and range, and the rules only the file's
 /// form can break. The world's and the game's rules across values come after.
-fn read_scene(root: &Node<'_>) -> Result<RawScene, SceneError> {
+fn read_scene(root: &Node<'_>) -> Result<Scene, SceneError> {
     let top = root.table(&[
         "name",
         "description",
@@ -521,16 +203,16 @@ fn read_scene(root: &Node<'_>) -> Result<RawScene, SceneError> {
         "effects",
     ])?;
     let name_node = top.need("name")?;
-    let name = name_node.text("a name in quotes")?;
+    let name = name_node.string("a name in quotes")?;
     if name.trim().is_empty() {
         return Err(name_node.fail("must not be empty"));
     }
-    let description = top.need("description")?.text("a description in quotes")?;
+    let description = top.need("description")?.string("a description in quotes")?;
 
     let world = top
         .need("world")?
         .table(&["size", "dt", "boundary", "cell"])?;
-    let size = world.need("size")?.pair(side(), "[width, height]")?;
+    let size = Vec2::from(world.need("size")?.pair(side(), "[width, height]")?);
     let dt = world.need("dt")?.real(above(0.0, 1.0))?;
     let boundary = world.need("boundary")?.choice(
         "boundary",
@@ -549,9 +231,9 @@ fn read_scene(root: &Node<'_>) -> Result<RawScene, SceneError> {
         .iter()
         .map(read_kind)
         .collect::<Result<_, _>>()?;
-    Ok(RawScene {
-        name: name.to_owned(),
-        description: description.to_owned(),
+    Ok(Scene {
+        name,
+        description,
         world: WorldSpec {
             size,
             dt,
@@ -561,11 +243,14 @@ fn read_scene(root: &Node<'_>) -> Result<RawScene, SceneError> {
             physics,
             field: Field::default(),
         },
-        ship,
-        fps,
-        spawn,
-        behaviours,
-        effects,
+        game: GameSpec {
+            ship,
+            fps,
+            spawn,
+            behaviours,
+            effects,
+        },
+        source: root.text().to_owned(),
     })
 }
 
@@ -623,16 +308,10 @@ fn read_ship(node: &Node<'_>) -> Result<ShipSpec, SceneError> {
         "autopilot_sight",
     ])?;
     Ok(ShipSpec {
-        kind: ship
-            .need("kind")?
-            .text("a kind's name in quotes")?
-            .to_owned(),
+        kind: ship.need("kind")?.string("a kind's name in quotes")?,
         speed: ship.need("speed")?.real(side())?,
         fire_rate: ship.need("fire_rate")?.real(above(0.0, MAX_FIRE_RATE))?,
-        shot: ship
-            .need("shot")?
-            .text("a kind's name in quotes")?
-            .to_owned(),
+        shot: ship.need("shot")?.string("a kind's name in quotes")?,
         shot_speed: ship.need("shot_speed")?.real(side())?,
         autopilot_sight: ship.need("autopilot_sight")?.real(side())?,
     })
@@ -680,10 +359,7 @@ fn read_spawn(node: &Node<'_>) -> Result<SpawnSpec, SceneError> {
                 )));
             }
             Ok(WaveSpec {
-                kind: wave
-                    .need("kind")?
-                    .text("a kind's name in quotes")?
-                    .to_owned(),
+                kind: wave.need("kind")?.string("a kind's name in quotes")?,
                 at: wave.need("at")?.real(side_or_zero())?,
                 count: wave.need("count")?.whole(1, u32::MAX)?,
                 every,
@@ -711,13 +387,13 @@ fn read_kind(node: &Node<'_>) -> Result<(KindSpec, Option<Behaviour>), SceneErro
         "collides_with",
         "behaviour",
     ])?;
-    let name = kind.need("name")?.text("a name in quotes")?.to_owned();
+    let name = kind.need("name")?.string("a name in quotes")?;
     let shape = match (kind.get("circle"), kind.get("rect")) {
         (Some(radius), None) => Shape::Circle {
             radius: radius.real(side())?,
         },
         (None, Some(half)) => Shape::Rect {
-            half: half.pair(side(), "[half_width, half_height]")?,
+            half: Vec2::from(half.pair(side(), "[half_width, half_height]")?),
         },
         (Some(_), Some(rect)) => {
             return Err(rect.fail(
@@ -735,7 +411,7 @@ fn read_kind(node: &Node<'_>) -> Result<(KindSpec, Option<Behaviour>), SceneErro
     let collides_with = kind.or("collides_with", Vec::new(), |n| {
         n.array("an array of kinds' names")?
             .iter()
-            .map(|name| Ok(name.text("a kind's name in quotes")?.to_owned()))
+            .map(|name| name.string("a kind's name in quotes"))
             .collect()
     })?;
     // inf: no speed limit.
@@ -785,7 +461,7 @@ fn read_behaviour(node: &Node<'_>, max_speed: f32) -> Result<Behaviour, SceneErr
             ("tricky", Machine::Tricky),
         ],
     )?;
-    let name = machine_node.text("a machine in quotes")?;
+    let name = machine_node.string("a machine in quotes")?;
     let avoid_bullets = match b.get("avoid_bullets") {
         Some(avoid) => match (machine, avoid.flag()?) {
             (Machine::Kamikaze, true) => {
@@ -819,30 +495,6 @@ fn read_behaviour(node: &Node<'_>, max_speed: f32) -> Result<Behaviour, SceneErr
         low_energy,
         recovery,
     })
-}
-
-impl RawScene {
-    /// The scene, checked against the world's and the game's rules; `text` becomes its
-    /// source.
-    fn into_scene(self, text: &str) -> Result<Scene, SpecError> {
-        let world = self.world;
-        world.validate().map_err(|e| toml_field(&world, e))?;
-        let game = GameSpec {
-            ship: self.ship,
-            fps: self.fps,
-            spawn: self.spawn,
-            behaviours: self.behaviours,
-            effects: self.effects,
-        };
-        check_game(&world, &game)?;
-        Ok(Scene {
-            name: self.name,
-            description: self.description,
-            world,
-            game,
-            source: text.to_owned(),
-        })
-    }
 }
 
 /// [`WorldSpec::validate`]'s error with its field in TOML terms: `size.x` → `world.size`,
@@ -956,37 +608,22 @@ fn check_game(world: &WorldSpec, game: &GameSpec) -> Result<(), SpecError> {
     Ok(())
 }
 
-/// 1-based line of the byte `span` starts at.
-fn line_at(text: &str, span: Option<Range<usize>>) -> Option<usize> {
-    Some(line_of(text.as_bytes(), span?.start))
-}
-
 /// The line of the value at the TOML path `field` (`kinds[1].collides_with[0]`), or of the
 /// deepest table or array element on the way that is present (a defaulted key's table).
-fn line_of_field(text: &str, field: &str) -> Option<usize> {
-    let doc = DeTable::parse(text).ok()?;
-    let root = Spanned::new(doc.span(), DeValue::Table(doc.into_inner()));
-    let mut node = &root;
-    let mut span = None;
-    'walk: for part in field.split('.') {
-        let mut steps = part.split('[');
-        let key = steps.next().unwrap_or_default();
-        match node.get_ref().get(key) {
-            Some(child) => node = child,
-            None => break,
-        }
-        span = Some(node.span());
-        for index in steps {
-            let Some(child) = index
-                .strip_suffix(']')
-                .and_then(|i| i.parse::<usize>().ok())
-                .and_then(|i| node.get_ref().get(i))
-            else {
-                break 'walk;
-            };
-            node = child;
-            span = Some(node.span());
-        }
+fn line_of_field(root: &Node<'_>, field: &str) -> Option<usize> {
+    let (mut node, mut line) = (root.clone(), None);
+    for step in field.split(['.', '[']) {
+        let next = match step.strip_suffix(']').and_then(|i| i.parse().ok()) {
+            Some(i) => node.items("").ok().and_then(|mut items| items.nth(i)),
+            None => match node.value() {
+                Ok(Value::Table(entries)) => entries.into_iter().find(|e| e.key == step),
+                _ => None,
+            }
+            .map(|entry| entry.node),
+        };
+        let Some(next) = next else { break };
+        node = next;
+        line = node.line();
     }
-    line_at(text, span)
+    line
 }
