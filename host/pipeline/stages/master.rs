@@ -1,6 +1,7 @@
 //! `master`: the master before the physics: ship, shots, score, spawns ordered.
 
-use gpuwars_kernels::{registry, warp};
+use gpuwars_kernels::game::master::MasterArgs;
+use gpuwars_kernels::{Kernel, registry, warp};
 
 use crate::Op;
 use crate::backend::Binder;
@@ -9,19 +10,18 @@ use crate::primitives::threads;
 
 /// The master on one warp, in games.
 pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
+    on_one_warp(world, registry::MASTER)
+}
+
+/// `kernel`, the master before or after the physics, on one warp with the master's
+/// arguments, in games.
+pub(super) fn on_one_warp(world: &World, kernel: Kernel<MasterArgs>) -> Vec<Op> {
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
     let Some(args) = world.master_args(&mut b) else {
         return Vec::new();
     };
+    let bytes = 128 * u64::from(warp::WARP);
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
-    vec![unsafe {
-        threads(
-            registry::MASTER,
-            warp::WARP,
-            args,
-            b,
-            128 * u64::from(warp::WARP),
-        )
-    }]
+    vec![unsafe { threads(kernel, warp::WARP, args, b, bytes) }]
 }
