@@ -11,6 +11,7 @@ use gpuwars::game::scene::built_in;
 use gpuwars::game::{Game, Scene, demo};
 use gpuwars::kernels::game::control::{Input, Status};
 use gpuwars::kernels::registry;
+use gpuwars::pipeline::Lanes;
 
 fn scene(name: &str) -> Scene {
     built_in(name)
@@ -49,10 +50,14 @@ fn a_scene_launches_only_the_stages_it_uses() {
     let count = |counts: &std::collections::BTreeMap<&str, u64>, name: &str| {
         counts.get(name).copied().unwrap_or(0)
     };
-    let think = registry::THINK.name;
+    // The machines launch one of two kernels: with teams of threads (on a GPU, for kinds
+    // that expect many neighbours) or without.
+    let thinks = |counts: &std::collections::BTreeMap<&str, u64>| {
+        count(counts, registry::THINK.name) + count(counts, registry::THINK_IN_TEAMS.name)
+    };
     // Kamikazes only, circles only, one wave at the start (then one every 5 s).
     let k = launches(&scene("kamikaze"), 10, true);
-    assert_eq!(count(&k, think), 10);
+    assert_eq!(thinks(&k), 10);
     assert_eq!(count(&k, registry::COLLIDE_CIRCLES.name), 10);
     assert_eq!(
         count(&k, registry::COLLIDE.name),
@@ -78,14 +83,14 @@ fn a_scene_launches_only_the_stages_it_uses() {
     assert_eq!(count(&a, registry::COLLIDE_CIRCLES.name), 0);
     // The paper's seven kinds: their machines in one launch per step.
     let p = launches(&scene("paper"), 2, true);
-    assert_eq!(count(&p, think), 2);
+    assert_eq!(thinks(&p), 2);
     // A world without machines has no think stage at all.
     let mut calm = scene("kamikaze");
     for (kind, behaviour) in calm.world.kinds.iter_mut().zip(&mut calm.game.behaviours) {
         (kind.controlled, *behaviour) = (false, None);
     }
     let c = launches(&calm, 3, true);
-    assert_eq!(count(&c, think), 0, "{c:?}");
+    assert_eq!(thinks(&c), 0, "{c:?}");
 }
 
 #[test]
@@ -130,7 +135,10 @@ fn doomed() -> Scene {
 /// Plays a still ship with statuses read `lag` steps late until a status says the game is
 /// over; returns the step it ended at and the final state hash.
 fn play_until_over(device: &Device, lag: usize) -> (u32, u64) {
-    let options = Options { lag, graphs: true };
+    let options = Options {
+        lag,
+        ..Options::default()
+    };
     let mut game = Game::with_options(device, &doomed(), 5, options).unwrap();
     let mut end: Option<u32> = None;
     let note = |end: &mut Option<u32>, status: Status| {
@@ -229,7 +237,40 @@ fn the_autopilot_survives_a_minute_of_the_paper_scene(device: &Device) {
     );
 }
 
+/// A team of lanes a body folds what its lanes find in the order of one thread: whatever the
+/// width, every scene plays the game of one thread a body on the CPU, bit for bit.
+fn teams_of_any_width_play_the_game_of_one_thread_a_body(device: &Device) {
+    let hash = |device: &Device, scene: &Scene, lanes: Lanes| {
+        let options = Options {
+            lanes,
+            ..Options::default()
+        };
+        let mut game = Game::with_options(device, scene, 1, options).unwrap();
+        for _ in 0..240 {
+            game.step(None).unwrap();
+        }
+        game.state_hash().unwrap()
+    };
+    for name in ["paper", "group", "tricky", "arena"] {
+        let scene = scene(name);
+        let reference = hash(common::cpu(), &scene, Lanes::Fixed(1));
+        for lanes in [
+            Lanes::Auto,
+            Lanes::Fixed(2),
+            Lanes::Fixed(8),
+            Lanes::Fixed(32),
+        ] {
+            assert_eq!(
+                hash(device, &scene, lanes),
+                reference,
+                "{name} with {lanes:?}"
+            );
+        }
+    }
+}
+
 on_both_backends!(
+    teams_of_any_width_play_the_game_of_one_thread_a_body,
     a_replay_reproduces_the_game,
     the_game_ends_at_the_same_step_whatever_the_lag,
     the_autopilot_survives_a_minute_of_the_paper_scene,

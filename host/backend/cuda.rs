@@ -39,6 +39,8 @@ pub struct GpuProperties {
     pub memory_bytes: u64,
     /// Multiprocessors.
     pub multiprocessors: u32,
+    /// Threads one multiprocessor holds at once.
+    pub threads_per_multiprocessor: u32,
     /// Driver's CUDA version, e.g. "13.0".
     pub driver_cuda_version: String,
 }
@@ -620,6 +622,9 @@ fn properties(ctx: &Arc<CudaContext>) -> Result<GpuProperties, DriverError> {
         compute_capability: format!("{major}.{minor}"),
         memory_bytes: ctx.total_mem()? as u64,
         multiprocessors: ctx.attribute(CU_DEVICE_ATTRIBUTE_MULTIPROCESSOR_COUNT)? as u32,
+        threads_per_multiprocessor: ctx
+            .attribute(CU_DEVICE_ATTRIBUTE_MAX_THREADS_PER_MULTIPROCESSOR)?
+            as u32,
         driver_cuda_version: format!("{}.{}", version / 1000, (version % 1000) / 10),
     })
 }

@@ -14,7 +14,7 @@ use super::looks;
 use super::spec::{Behaviour, EffectsSpec, GameSpec, Machine, Scene};
 use crate::backend::Ring;
 use crate::graphics::camera::Camera;
-use crate::pipeline::{Frame, GameConfig, Pipeline, Profile, bytes_needed, mind_slots};
+use crate::pipeline::{Frame, GameConfig, Lanes, Pipeline, Profile, bytes_needed, mind_slots};
 use crate::sim::layout::{Layout, steps};
 use crate::sim::{Snapshot, WorldSpec};
 use crate::{Device, Error};
@@ -27,6 +27,8 @@ pub struct Options {
     pub lag: usize,
     /// Record the step as a CUDA graph (on the GPU).
     pub graphs: bool,
+    /// Threads a body's neighbour queries get (speed only: the results are the same).
+    pub lanes: Lanes,
 }
 
 impl Default for Options {
@@ -34,6 +36,7 @@ impl Default for Options {
         Options {
             lag: 4,
             graphs: true,
+            lanes: Lanes::Auto,
         }
     }
 }
@@ -209,7 +212,13 @@ impl<'d> Game<'d> {
                 .as_ref()
                 .map(|e| burst(e, scene.world.dt)),
         };
-        let pipeline = Pipeline::configured(device, &world, seed, Some(game), options.graphs)?;
+        let pipeline = Pipeline::configured(
+            device,
+            &world,
+            seed,
+            Some(game),
+            (options.graphs, options.lanes),
+        )?;
         Ok(Game {
             ring: device.ring(options.lag)?,
             pipeline,

@@ -35,12 +35,14 @@ mod profile;
 mod simulation;
 mod stage;
 mod stages;
+mod teams;
 pub(crate) mod world;
 
 pub use draw::Frame;
 pub use profile::{Profile, StageTimes};
 pub use simulation::Simulation;
 pub use stage::{Stage, StagePlan};
+pub use teams::Lanes;
 pub use world::bytes_needed;
 
 use gpuwars_kernels::game::control::{Command, Status};
@@ -105,7 +107,8 @@ pub struct Pipeline<'d> {
 
 impl<'d> Pipeline<'d> {
     /// A world of `spec` with every slot free, its generators seeded from `seed`, and the
-    /// game `game` if given; its step replays as a CUDA graph on the GPU when `graphs`.
+    /// game `game` if given; its step replays as a CUDA graph on the GPU when `graphs`, its
+    /// neighbour queries with `lanes` threads a body.
     /// Fails with [`Error::OutOfMemory`] before allocating anything if its buffers do not
     /// fit the device.
     pub fn configured(
@@ -113,9 +116,9 @@ impl<'d> Pipeline<'d> {
         spec: &WorldSpec,
         seed: u32,
         game: Option<GameConfig>,
-        graphs: bool,
+        (graphs, lanes): (bool, Lanes),
     ) -> Result<Self, Error> {
-        let world = World::new(device, spec, seed, game)?;
+        let world = World::new(device, spec, seed, game, lanes)?;
         let mut all = Vec::new();
         let mut stages = Vec::new();
         for stage in Stage::ALL {

@@ -15,8 +15,10 @@ use gpuwars_kernels::registry;
 use gpuwars_kernels::sim::Space;
 use gpuwars_kernels::sim::broad::CellIndex;
 use gpuwars_kernels::sim::narrow::CollideArgs;
+use gpuwars_kernels::sim::teams::Teams;
 
 use super::GameConfig;
+use super::teams::{self, Lanes};
 use crate::backend::{Binder, Buffers};
 use crate::sim::layout::{self, Layout};
 use crate::sim::state::{self, Scratch, WorldState, made};
@@ -30,6 +32,10 @@ pub(crate) struct Config {
     pub collide: Option<Kernel<CollideArgs>>,
     /// Whether the grid is built (something collides, looks around, or the autopilot may fly).
     pub grid: bool,
+    /// The narrow phase's threads per body of each kind.
+    pub narrow_teams: Teams,
+    /// The machines' threads per body of each kind, if a kind has a machine.
+    pub think_teams: Option<Teams>,
 }
 
 /// The game's buffers on the device.
@@ -73,6 +79,7 @@ impl World {
         spec: &WorldSpec,
         seed: u32,
         game: Option<GameConfig>,
+        lanes: Lanes,
     ) -> Result<Self, Error> {
         spec.validate().map_err(invalid_world)?;
         let layout = Layout::new(spec);
@@ -96,6 +103,10 @@ impl World {
             bytes_needed(spec, sized),
         )?;
         let collides = spec.collision_masks().iter().any(|&m| m != 0);
+        // Threads the GPU holds at once: teams only fill lanes that would otherwise idle.
+        let resident = device
+            .gpu_properties()
+            .map(|p| u64::from(p.multiprocessors) * u64::from(p.threads_per_multiprocessor));
         let config = Config {
             collide: collides.then_some(if spec.has_rects() {
                 registry::COLLIDE
@@ -105,6 +116,10 @@ impl World {
             }),
             // A game's autopilot looks through the grid whenever it flies.
             grid: collides || game.is_some(),
+            narrow_teams: teams::narrow(lanes, resident, spec, &layout, &space),
+            think_teams: game
+                .as_ref()
+                .and_then(|g| teams::think(lanes, resident, g, &layout, &space)),
         };
         let state = WorldState::new(device, spec, &layout, seed)?;
         let scratch = Scratch::new(device, &layout, &space, kinds)?;

@@ -1000,7 +1000,7 @@ impl<'d> Round<'d> {
             options.seed,
             Options {
                 lag: options.lag,
-                graphs: true,
+                ..Options::default()
             },
         )?;
         Ok(Round {

@@ -95,6 +95,9 @@ kernels! {
     BIRTHS = births(master::BirthArgs) => master::births;
     /// The enemies' machines, every live enemy in grid order: perceive, transition, steer.
     THINK = think(ai::ThinkArgs) => ai::think;
+    /// The enemies' machines with teams of threads for the bodies that expect many
+    /// neighbours.
+    THINK_IN_TEAMS = think_in_teams(ai::ThinkArgs) => ai::think_in_teams;
     /// Sets up every slot's generator from its seed and the parameter table.
     SEED_STREAMS = seed_streams(streams::SeedArgs) => streams::seed_streams;
     /// Points the camera: the frame's view from the ship's position (one thread).

@@ -46,6 +46,13 @@ pub trait Lanes: Copy {
     fn shuffle_xor(self, mask: u32) -> Self;
 }
 
+/// A value a lane can hand to the other lanes of its [`Team`], word by word in registers.
+pub trait Handed: Copy {
+    /// The value that warp lane `source` holds, among the lanes `members` (GPU only).
+    #[cfg(target_arch = "nvptx64")]
+    fn shuffle_from(self, source: u32, members: u32) -> Self;
+}
+
 impl Lanes for u32 {
     #[cfg(target_arch = "nvptx64")]
     #[inline(always)]
@@ -63,6 +70,54 @@ impl Lanes for u32 {
             );
         }
         out
+    }
+}
+
+impl Handed for u32 {
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_from(self, source: u32, members: u32) -> Self {
+        let out: u32;
+        // SAFETY: every lane named by `members` executes this shuffle (the team's contract);
+        // it reads registers only.
+        unsafe {
+            core::arch::asm!(
+                "shfl.sync.idx.b32 {out}, {value}, {source}, 31, {members};",
+                out = out(reg32) out,
+                value = in(reg32) self,
+                source = in(reg32) source,
+                members = in(reg32) members,
+                options(nomem, nostack),
+            );
+        }
+        out
+    }
+}
+
+impl Handed for i32 {
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_from(self, source: u32, members: u32) -> Self {
+        (self as u32).shuffle_from(source, members) as i32
+    }
+}
+
+impl Handed for f32 {
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_from(self, source: u32, members: u32) -> Self {
+        f32::from_bits(self.to_bits().shuffle_from(source, members))
+    }
+}
+
+impl Handed for Vec2 {
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_from(self, source: u32, members: u32) -> Self {
+        Vec2::new(
+            self.x.shuffle_from(source, members),
+            self.y.shuffle_from(source, members),
+        )
     }
 }
 
@@ -176,5 +231,127 @@ pub fn exclusive_sum_u32(lane: u32, value: impl Fn(u32) -> u32) -> u32 {
     #[cfg(not(target_arch = "nvptx64"))]
     {
         (0..lane).fold(0u32, |sum, l| sum.wrapping_add(value(l)))
+    }
+}
+
+/// A team of `width` consecutive lanes of a warp (a power of two up to 32, aligned to its
+/// width) that shares one body's work: each lane takes every `width`-th item, and what the
+/// lanes find is handed to all of them in lane order, so that the team folds it exactly as
+/// one thread walking the items in order would.
+///
+/// On the CPU the emulator cannot let one thread wait for another, so there lane 0 is the
+/// whole team: it takes every item itself (a stride of 1) and the other lanes do nothing
+/// (see [`Team::is_copy`]). Either way the result is that of the plain loop, bit for bit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Team {
+    /// The calling thread's place in the team.
+    lane: u32,
+    /// Lanes in the team.
+    width: u32,
+    /// The warp lane of the team's lane 0.
+    first: u32,
+}
+
+impl Team {
+    /// A team of one: the calling thread alone.
+    pub const ALONE: Team = Team {
+        lane: 0,
+        width: 1,
+        first: 0,
+    };
+
+    /// The team of `width` lanes (a power of two from 1 to 32) that the thread at `warp_lane`
+    /// belongs to.
+    #[inline(always)]
+    pub fn new(warp_lane: u32, width: u32) -> Self {
+        let lane = warp_lane % width;
+        Team {
+            lane,
+            width,
+            first: warp_lane - lane,
+        }
+    }
+
+    /// The calling thread's place in the team, 0 to `width - 1`.
+    #[inline(always)]
+    pub fn lane(&self) -> u32 {
+        self.lane
+    }
+
+    /// Whether the calling thread only repeats lane 0's work: the other lanes on the CPU,
+    /// where lane 0 takes all the team's items. Never on the GPU.
+    #[inline(always)]
+    pub fn is_copy(&self) -> bool {
+        is_copy_of_lane0(self.lane)
+    }
+
+    /// Whether the calling thread writes the team's results: lane 0.
+    #[inline(always)]
+    pub fn leads(&self) -> bool {
+        self.lane == 0
+    }
+
+    /// The calling thread's first item of `start .. end` and its distance to the next: on
+    /// the GPU its lane and the team's width, on the CPU (lane 0 alone) 0 and 1.
+    #[inline(always)]
+    pub fn stride(&self) -> (u32, u32) {
+        if cfg!(target_arch = "nvptx64") {
+            (self.lane, self.width)
+        } else {
+            (0, 1)
+        }
+    }
+
+    /// Gives `fold` every lane's `found` value that is `Some`, in lane order, in every lane:
+    /// one step of a walk over items taken [`Team::stride`] by stride.
+    #[inline(always)]
+    pub fn fold_found<R: Handed + Default>(&self, found: Option<R>, mut fold: impl FnMut(R)) {
+        #[cfg(target_arch = "nvptx64")]
+        if self.width > 1 {
+            let mut rest = self.ballot(found.is_some());
+            let value = found.unwrap_or_default();
+            while rest != 0 {
+                let from = rest.trailing_zeros();
+                rest &= rest - 1;
+                fold(self.broadcast(value, from));
+            }
+            return;
+        }
+        if let Some(value) = found {
+            fold(value);
+        }
+    }
+
+    /// The team's lanes as a warp's member mask.
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn members(&self) -> u32 {
+        (u32::MAX >> (WARP - self.width)) << self.first
+    }
+
+    /// Bit `l` set where team lane `l` has `p` true.
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn ballot(&self, p: bool) -> u32 {
+        let all: u32;
+        // SAFETY: every lane of the team executes this vote (the team's contract), and the
+        // member mask names exactly those lanes; it reads registers only.
+        unsafe {
+            core::arch::asm!(
+                "{{ .reg .pred p; setp.ne.u32 p, {p}, 0; vote.sync.ballot.b32 {out}, p, {members}; }}",
+                out = out(reg32) all,
+                p = in(reg32) u32::from(p),
+                members = in(reg32) self.members(),
+                options(nomem, nostack),
+            );
+        }
+        (all >> self.first) & (u32::MAX >> (WARP - self.width))
+    }
+
+    /// Team lane `from`'s `value`, in every lane.
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn broadcast<R: Handed>(&self, value: R, from: u32) -> R {
+        value.shuffle_from(self.first + from, self.members())
     }
 }

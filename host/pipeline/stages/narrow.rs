@@ -7,7 +7,7 @@ use crate::backend::Binder;
 use crate::pipeline::world::World;
 use crate::primitives::threads;
 
-/// The narrow phase of substep `substep`, a thread a slot, if anything collides.
+/// The narrow phase of substep `substep`, a team of threads a slot, if anything collides.
 pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
     let Some(kernel) = world.config.collide else {
         return Vec::new();
@@ -18,6 +18,8 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
     let args = CollideArgs {
         bodies: world.state.bodies(&mut b),
         kinds: b.view(&world.state.tables.info),
+        ranges: b.view(&world.state.tables.ranges),
+        teams: world.config.narrow_teams,
         space: world.space,
         grid: world.cells(&mut b),
         contacts: world.scratch.contacts(&mut b),
@@ -28,11 +30,13 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         substep,
         reserved: 0,
     };
+    let threads_needed = u32::try_from(args.teams.threads(&world.layout.ranges))
+        .expect("at most 32 threads a slot of at most 2^24 slots");
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
     vec![unsafe {
         threads(
             kernel,
-            world.layout.slots,
+            threads_needed,
             args,
             b,
             52 * u64::from(world.layout.slots),

@@ -15,7 +15,9 @@ use glam::Vec2;
 use super::fsm::{Machine, Percept, State, next_state};
 use super::rules::Brain;
 use crate::sim::broad::{CellIndex, kind_bit};
-use crate::sim::{Bodies, Contacts, KindInfo, Space};
+use crate::sim::teams::Teams;
+use crate::sim::{Bodies, Contacts, KindInfo, SlotRange, Space};
+use crate::warp::{Handed, Team};
 use crate::{DevSlice, Thread, kernel_args};
 
 /// Seconds a steering force takes to bring the velocity to the wanted one.
@@ -46,10 +48,11 @@ kernel_args! {
         pub contacts: Contacts,
         /// Each kind's brain (machine 0 for kinds without one).
         pub brains: DevSlice<Brain>,
-        /// The first slot of the first kind with a machine.
-        pub first_slot: u32,
-        /// One past the last slot of the last kind with a machine.
-        pub end_slot: u32,
+        /// Each kind's slots.
+        pub ranges: DevSlice<SlotRange>,
+        /// How many threads each kind's bodies get, from the first kind with a machine to
+        /// the last.
+        pub teams: Teams,
         /// The ship's slot.
         pub ship: u32,
         /// The kind of the ship's shots.
@@ -93,10 +96,42 @@ pub fn threat(d: Vec2, rel: Vec2, radius: f32) -> Option<(f32, Vec2)> {
     Some((time, away))
 }
 
+/// What one body a query found means to the looking body, as the lane that found it hands
+/// it on (four words: the fewer, the fewer registers the one-thread kernel needs).
+#[derive(Clone, Copy, Default)]
+struct Seen {
+    /// [`SEEN_SHIP`], [`SEEN_SIMILAR`] or [`SEEN_THREAT`].
+    what: u32,
+    /// The ship or a similar body: the offset to it; a threat: the way out of its path.
+    toward: Vec2,
+    /// A threat: seconds to its closest approach.
+    time: f32,
+}
+
+impl Handed for Seen {
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_from(self, source: u32, members: u32) -> Self {
+        Seen {
+            what: self.what.shuffle_from(source, members),
+            toward: self.toward.shuffle_from(source, members),
+            time: self.time.shuffle_from(source, members),
+        }
+    }
+}
+
+/// [`Seen::what`] of the ship.
+const SEEN_SHIP: u32 = 0;
+/// [`Seen::what`] of a body of the looker's own kind.
+const SEEN_SIMILAR: u32 = 1;
+/// [`Seen::what`] of a shot coming its way.
+const SEEN_THREAT: u32 = 2;
+
 /// What slot `slot`, a `machine` body driven by `brain`, sees: only bodies within its vision, found
-/// through the grid's 3×3 neighbourhood. A kamikaze looks only for the ship.
+/// through the grid's 3×3 neighbourhood by the slot's `team` (every lane gets the same). A
+/// kamikaze looks only for the ship.
 #[inline(always)]
-pub fn look(args: &ThinkArgs, brain: &Brain, machine: Machine, slot: u32) -> Sight {
+pub fn look(args: &ThinkArgs, brain: &Brain, machine: Machine, slot: u32, team: Team) -> Sight {
     let b = &args.bodies;
     let pos = b.pos.get(slot);
     let vel = b.vel.get(slot);
@@ -116,33 +151,60 @@ pub fn look(args: &ThinkArgs, brain: &Brain, machine: Machine, slot: u32) -> Sig
     if dodges {
         mask |= kind_bit(args.shot_kind);
     }
-    args.grid
-        .for_each_near(&args.space, pos, mask, |other, kind, at| {
+    args.grid.for_each_near_in(
+        team,
+        &args.space,
+        pos,
+        mask,
+        |other, kind, at| {
             if other == slot {
-                return;
+                return None;
             }
-            let d = args.space.offset(pos, at);
-            let dist2 = d.length_squared();
+            let offset = args.space.offset(pos, at);
+            let dist2 = offset.length_squared();
             if dist2 > vision2 {
-                return;
+                return None;
             }
             if other == args.ship {
-                sight.ship = Some(d);
+                Some(Seen {
+                    what: SEEN_SHIP,
+                    toward: offset,
+                    time: 0.0,
+                })
             } else if social && kind == brain.kind {
-                sum += d;
-                similar += 1;
-                if dist2 < personal * personal {
-                    sight.crowd -= d.normalize_or_zero();
-                }
-            } else if dodges
-                && kind == args.shot_kind
-                && let Some((time, away)) = threat(d, b.vel.get(other) - vel, radius)
-                && time < soonest
-            {
-                soonest = time;
-                sight.dodge = Some(away);
+                Some(Seen {
+                    what: SEEN_SIMILAR,
+                    toward: offset,
+                    time: 0.0,
+                })
+            } else if dodges && kind == args.shot_kind {
+                let (time, away) = threat(offset, b.vel.get(other) - vel, radius)?;
+                Some(Seen {
+                    what: SEEN_THREAT,
+                    toward: away,
+                    time,
+                })
+            } else {
+                None
             }
-        });
+        },
+        |seen| match seen.what {
+            SEEN_SHIP => sight.ship = Some(seen.toward),
+            SEEN_SIMILAR => {
+                sum += seen.toward;
+                similar += 1;
+                if seen.toward.length_squared() < personal * personal {
+                    sight.crowd -= seen.toward.normalize_or_zero();
+                }
+            }
+            _ => {
+                if seen.time < soonest {
+                    soonest = seen.time;
+                    sight.dodge = Some(seen.toward);
+                }
+            }
+        },
+    );
     if similar > 0 {
         sight.group = Some(sum / similar as f32);
     }
@@ -183,32 +245,52 @@ fn wanted_velocity(
     }
 }
 
-/// Thread `i` takes slot `first_slot + i` and, if a body of a kind with a machine lives
-/// there, runs that machine on it: perceive, transition, act.
+/// Each slot of the kinds with a machine gets its team of threads (see [`Teams`]) and, if a
+/// body of a kind with a machine lives there, runs that machine on it: perceive (the team),
+/// transition and act (its first lane).
 #[inline(always)]
 pub fn think(t: Thread, args: &ThinkArgs) {
-    let slot = args.first_slot.wrapping_add(t.global());
-    if slot >= args.end_slot || !args.bodies.is_alive(slot) {
+    think_with::<false>(t, args);
+}
+
+/// [`think`] for teams wider than one thread: a kernel of its own, so that the one-thread
+/// kernel carries none of the teams' code (and registers).
+#[inline(always)]
+pub fn think_in_teams(t: Thread, args: &ThinkArgs) {
+    think_with::<true>(t, args);
+}
+
+#[inline(always)]
+fn think_with<const TEAMS: bool>(t: Thread, args: &ThinkArgs) {
+    let Some((slot, team)) = args.teams.member(t, &args.ranges) else {
+        return;
+    };
+    // Without teams the width is known to be 1, and the teams' code compiles out.
+    let team = if TEAMS { team } else { Team::ALONE };
+    if !args.bodies.is_alive(slot) {
         return;
     }
     let brain = args.brains.get(args.bodies.kind.get(slot));
     match Machine::from_u32(brain.machine) {
-        Machine::Kamikaze => think_as::<{ Machine::Kamikaze as u32 }>(args, &brain, slot),
-        Machine::Group => think_as::<{ Machine::Group as u32 }>(args, &brain, slot),
-        Machine::Tricky => think_as::<{ Machine::Tricky as u32 }>(args, &brain, slot),
+        Machine::Kamikaze => think_as::<{ Machine::Kamikaze as u32 }>(args, &brain, slot, team),
+        Machine::Group => think_as::<{ Machine::Group as u32 }>(args, &brain, slot, team),
+        Machine::Tricky => think_as::<{ Machine::Tricky as u32 }>(args, &brain, slot, team),
         Machine::None => {}
     }
 }
 
 /// One body of a `MACHINE` kind driven by `brain`: perceive, transition, act.
 #[inline(always)]
-fn think_as<const MACHINE: u32>(args: &ThinkArgs, brain: &Brain, slot: u32) {
+fn think_as<const MACHINE: u32>(args: &ThinkArgs, brain: &Brain, slot: u32, team: Team) {
     let b = &args.bodies;
     if b.is_frozen() {
         return;
     }
     let machine = Machine::from_u32(MACHINE);
-    let sight = look(args, brain, machine, slot);
+    let sight = look(args, brain, machine, slot, team);
+    if !team.leads() {
+        return;
+    }
     let energy = b.energy.get(slot);
     let full = args.kinds.get(brain.kind).energy;
     let percept = Percept {

@@ -28,6 +28,7 @@ pub mod kinds;
 pub mod narrow;
 pub mod scatter;
 pub mod space;
+pub mod teams;
 
 pub use bodies::{Bodies, Contacts};
 pub use kinds::{KindInfo, KindTables, SlotRange};

@@ -12,8 +12,10 @@ use glam::Vec2;
 use super::bodies::{Bodies, Contacts};
 use super::broad::CellIndex;
 use super::contact::{contact, tie_break};
-use super::kinds::{Bound, KindInfo};
+use super::kinds::{Bound, KindInfo, SlotRange};
 use super::space::Space;
+use super::teams::Teams;
+use crate::warp::Handed;
 use crate::{DevSlice, Thread, kernel_args};
 
 kernel_args! {
@@ -23,6 +25,10 @@ kernel_args! {
         pub bodies: Bodies,
         /// Kind table.
         pub kinds: DevSlice<KindInfo>,
+        /// Each kind's slots.
+        pub ranges: DevSlice<SlotRange>,
+        /// How many threads each kind's bodies get (every kind's).
+        pub teams: Teams,
         /// The world and its grid.
         pub space: Space,
         /// The sorted grid of this step.
@@ -114,8 +120,9 @@ pub fn respond(
     Response { push, kick }
 }
 
-/// Thread `i` sums the responses of slot `i` to every body it overlaps and applies the
-/// energy losses to slot `i` only. Any mix of circles and rectangles.
+/// Each slot's team of threads (see [`Teams`]) sums the responses of the slot to every body
+/// it overlaps, and its first lane writes them and applies the energy losses to that slot
+/// only. Any mix of circles and rectangles.
 #[inline(always)]
 pub fn collide(t: Thread, args: &CollideArgs) {
     collide_bounds::<true>(t, args);
@@ -138,11 +145,33 @@ fn bound<const RECTS: bool>(info: &KindInfo) -> Bound {
     }
 }
 
+/// One contact's share of a body's response, as the lane that found it hands it on.
+#[derive(Clone, Copy, Default)]
+struct Touch {
+    push: Vec2,
+    kick: Vec2,
+    damage: i32,
+}
+
+impl Handed for Touch {
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_from(self, source: u32, members: u32) -> Self {
+        Touch {
+            push: self.push.shuffle_from(source, members),
+            kick: self.kick.shuffle_from(source, members),
+            damage: self.damage.shuffle_from(source, members),
+        }
+    }
+}
+
 #[inline(always)]
 fn collide_bounds<const RECTS: bool>(t: Thread, args: &CollideArgs) {
     let bodies = &args.bodies;
     let out = &args.contacts;
-    let slot = t.global();
+    let Some((slot, team)) = args.teams.member(t, &args.ranges) else {
+        return;
+    };
     if slot >= bodies.slots() || bodies.is_frozen() {
         return;
     }
@@ -157,37 +186,47 @@ fn collide_bounds<const RECTS: bool>(t: Thread, args: &CollideArgs) {
         let vel = bodies.vel.get(slot);
         let inv = inverse_mass(bodies.mass.get(slot));
         // Only the kinds it collides with: the grid's buckets skip the others unread.
-        args.grid.for_each_near(
+        args.grid.for_each_near_in(
+            team,
             &args.space,
             pos,
             info.collides_with,
             |other, other_kind, at| {
                 if other == slot {
-                    return;
+                    return None;
                 }
                 let other_info = args.kinds.get(other_kind);
                 let d = args.space.offset(pos, at);
                 let tie = tie_break(slot, other);
-                if let Some(c) = contact(bound::<RECTS>(&info), bound::<RECTS>(&other_info), d, tie)
-                {
-                    let r = respond(
-                        c.normal,
-                        c.depth,
-                        (inv, inverse_mass(bodies.mass.get(other))),
-                        (vel, bodies.vel.get(other)),
-                        info.restitution.max(other_info.restitution),
-                    );
-                    push += r.push;
-                    kick += r.kick;
-                    count += 1;
-                    damage = damage.saturating_add(other_info.damage);
-                }
+                let c = contact(bound::<RECTS>(&info), bound::<RECTS>(&other_info), d, tie)?;
+                let r = respond(
+                    c.normal,
+                    c.depth,
+                    (inv, inverse_mass(bodies.mass.get(other))),
+                    (vel, bodies.vel.get(other)),
+                    info.restitution.max(other_info.restitution),
+                );
+                Some(Touch {
+                    push: r.push,
+                    kick: r.kick,
+                    damage: other_info.damage,
+                })
+            },
+            |touch| {
+                push += touch.push;
+                kick += touch.kick;
+                count += 1;
+                damage = damage.saturating_add(touch.damage);
             },
         );
-        if damage != 0 && args.substep == 0 {
-            let energy = bodies.energy.get(slot);
-            bodies.energy.set(slot, energy.saturating_sub(damage));
-        }
+    }
+    if !team.leads() {
+        return;
+    }
+    // Damage comes from contacts only, so only a live body has any.
+    if damage != 0 && args.substep == 0 {
+        let energy = bodies.energy.get(slot);
+        bodies.energy.set(slot, energy.saturating_sub(damage));
     }
     out.push.set(slot, args.relax.apply(push, count));
     out.kick.set(slot, kick);

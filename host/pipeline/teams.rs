@@ -1,0 +1,152 @@
+//! How many threads the neighbour queries give each body (the kernels' [`Teams`]).
+//!
+//! A body that expects many neighbours walks them with a team of lanes, so that a crowded
+//! query no longer holds its warp (and at a small world's size, the whole launch) for
+//! hundreds of steps. The results are the same bit for bit whatever the widths (the kernels
+//! fold what the lanes find in the order of one thread), so the choice is speed only.
+
+use gpuwars_kernels::game::fsm::Machine;
+use gpuwars_kernels::sim::broad::kind_bit;
+use gpuwars_kernels::sim::teams::{MAX_WIDTH, Teams};
+use gpuwars_kernels::warp::WARP;
+
+use super::GameConfig;
+use crate::sim::WorldSpec;
+use crate::sim::layout::Layout;
+use gpuwars_kernels::sim::Space;
+
+/// How many lanes a body's neighbour queries get.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Lanes {
+    /// Chosen from the neighbours a body of each kind expects, as far as the GPU has threads
+    /// to spare; one thread a body on the CPU (where a team's lanes would only repeat its
+    /// first lane's work).
+    #[default]
+    Auto,
+    /// This many lanes (a power of two, 1 to 32) for every kind's bodies, on any backend.
+    Fixed(u32),
+}
+
+/// Expected grid entries a lane of a team walks before the team grows (`Lanes::Auto`).
+const ENTRIES_PER_LANE: f64 = 2.0;
+
+/// The team width of each kind of `first ..= last` under `lanes`, for queries looking for
+/// the kinds `masks[k]`, on a GPU holding `resident` threads at once (`None`: the CPU).
+///
+/// `Auto` gives a kind a lane for every [`ENTRIES_PER_LANE`] entries its query expects on
+/// an even spread (its 3×3 cells' share of each kind it looks for), then halves the widest
+/// teams until the launch fits the threads the GPU holds at once: past that, the extra
+/// lanes would only queue behind the other bodies' threads (at a million bodies, teams of
+/// 4 made `think` 3 times slower on the H200).
+fn widths(
+    lanes: Lanes,
+    resident: Option<u64>,
+    layout: &Layout,
+    space: &Space,
+    masks: &[u32],
+    (first, last): (usize, usize),
+) -> Vec<u32> {
+    let kinds = masks.len();
+    let mut widths = match (lanes, resident) {
+        (Lanes::Fixed(width), _) => vec![width.clamp(1, MAX_WIDTH); kinds],
+        (Lanes::Auto, None) => return vec![1; kinds],
+        (Lanes::Auto, Some(_)) => {
+            // A query reads 3×3 cells: that share of each kind, on an even spread.
+            let share = (9.0 / f64::from(space.cols * space.rows)).min(1.0);
+            masks
+                .iter()
+                .map(|&mask| {
+                    let expected: f64 = (0..kinds as u32)
+                        .filter(|&k| mask & kind_bit(k) != 0)
+                        .map(|k| f64::from(layout.ranges[k as usize].capacity) * share)
+                        .sum();
+                    let lanes = (expected / ENTRIES_PER_LANE).ceil().max(1.0) as u32;
+                    lanes.next_power_of_two().min(MAX_WIDTH)
+                })
+                .collect()
+        }
+    };
+    if let (Lanes::Auto, Some(resident)) = (lanes, resident) {
+        let threads = |widths: &[u32]| -> u64 {
+            (first..=last)
+                .map(|k| {
+                    u64::from(layout.ranges[k].capacity.next_multiple_of(WARP))
+                        * u64::from(widths[k])
+                })
+                .sum()
+        };
+        while threads(&widths) > resident {
+            let Some(&widest) = widths[first..=last].iter().max().filter(|&&w| w > 1) else {
+                break;
+            };
+            for w in &mut widths[first..=last] {
+                if *w == widest {
+                    *w /= 2;
+                }
+            }
+        }
+    }
+    widths
+}
+
+/// The padded slots of kinds `first ..= last`.
+fn padded(layout: &Layout, first: usize, last: usize) -> (u32, u32) {
+    let end = &layout.ranges[last];
+    (
+        layout.ranges[first].start,
+        end.start + end.capacity.next_multiple_of(WARP),
+    )
+}
+
+/// The narrow phase's teams: every kind, looking for the kinds it collides with.
+pub(super) fn narrow(
+    lanes: Lanes,
+    resident: Option<u64>,
+    spec: &WorldSpec,
+    layout: &Layout,
+    space: &Space,
+) -> Teams {
+    let masks = spec.collision_masks();
+    let kinds = layout.ranges.len();
+    let widths = widths(lanes, resident, layout, space, &masks, (0, kinds - 1));
+    Teams::new((0, kinds as u32), padded(layout, 0, kinds - 1), |k| {
+        widths[k as usize]
+    })
+}
+
+/// The machines' teams: the kinds from the first with a machine to the last, each looking
+/// for the ship, and unless a kamikaze for its own kind and the shots it dodges; `None` if
+/// no kind has a machine.
+pub(super) fn think(
+    lanes: Lanes,
+    resident: Option<u64>,
+    game: &GameConfig,
+    layout: &Layout,
+    space: &Space,
+) -> Option<Teams> {
+    let rules = &game.rules;
+    let masks: Vec<u32> = game
+        .brains
+        .iter()
+        .map(|brain| match Machine::from_u32(brain.machine) {
+            Machine::None => 0,
+            Machine::Kamikaze => kind_bit(rules.ship_kind),
+            Machine::Group | Machine::Tricky => {
+                let dodges = if brain.avoid_bullets != 0 {
+                    kind_bit(rules.shot_kind)
+                } else {
+                    0
+                };
+                kind_bit(rules.ship_kind) | kind_bit(brain.kind) | dodges
+            }
+        })
+        .collect();
+    let first = masks.iter().position(|&m| m != 0)?;
+    let last = masks.iter().rposition(|&m| m != 0)?;
+    let widths = widths(lanes, resident, layout, space, &masks, (first, last));
+    Some(Teams::new(
+        (first as u32, last as u32 + 1),
+        padded(layout, first, last),
+        |k| widths[k as usize],
+    ))
+}
