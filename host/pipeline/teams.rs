@@ -30,14 +30,19 @@ pub enum Lanes {
 /// Expected grid entries a lane of a team walks before the team grows (`Lanes::Auto`).
 const ENTRIES_PER_LANE: f64 = 2.0;
 
+/// Runs of entries a query reads per kind it looks for, in the usual case: one for each
+/// row of its 3×3 cells (the block's three columns are one run unless it wraps).
+const RUNS_PER_KIND: u32 = 3;
+
 /// The team width of each kind of `first ..= last` under `lanes`, for queries looking for
 /// the kinds `masks[k]`, on a GPU holding `resident` threads at once (`None`: the CPU).
 ///
-/// `Auto` gives a kind a lane for every [`ENTRIES_PER_LANE`] entries its query expects on
-/// an even spread (its 3×3 cells' share of each kind it looks for), then halves the widest
-/// teams until the launch fits the threads the GPU holds at once: past that, the extra
-/// lanes would only queue behind the other bodies' threads (at a million bodies, teams of
-/// 4 made `think` 3 times slower on the H200).
+/// `Auto` gives a kind a lane for each run of entries its query reads (the lanes load their
+/// bounds side by side) or for every [`ENTRIES_PER_LANE`] entries it expects on an even
+/// spread (its 3×3 cells' share of each kind it looks for), whichever is more; then it
+/// halves the widest teams until the launch fits the threads the GPU holds at once: past
+/// that, the extra lanes would only queue behind the other bodies' threads (at a million
+/// bodies, teams of 4 made `think` 3 times slower on the H200).
 fn widths(
     lanes: Lanes,
     resident: Option<u64>,
@@ -60,8 +65,9 @@ fn widths(
                         .filter(|&k| mask & kind_bit(k) != 0)
                         .map(|k| f64::from(layout.ranges[k as usize].capacity) * share)
                         .sum();
-                    let lanes = (expected / ENTRIES_PER_LANE).ceil().max(1.0) as u32;
-                    lanes.next_power_of_two().min(MAX_WIDTH)
+                    let runs = RUNS_PER_KIND * mask.count_ones();
+                    let lanes = ((expected / ENTRIES_PER_LANE).ceil() as u32).max(runs);
+                    lanes.max(1).next_power_of_two().min(MAX_WIDTH)
                 })
                 .collect()
         }

@@ -302,6 +302,21 @@ impl Team {
         }
     }
 
+    /// Team lane `from`'s `value`, in every lane; on the CPU, where lane 0 is the whole team
+    /// (`from` is then 0), its own.
+    #[inline(always)]
+    pub fn share<R: Handed>(&self, value: R, from: u32) -> R {
+        #[cfg(target_arch = "nvptx64")]
+        {
+            value.shuffle_from(self.first + from, self.members())
+        }
+        #[cfg(not(target_arch = "nvptx64"))]
+        {
+            let _ = from;
+            value
+        }
+    }
+
     /// Gives `fold` every lane's `found` value that is `Some`, in lane order, in every lane:
     /// one step of a walk over items taken [`Team::stride`] by stride.
     #[inline(always)]
@@ -313,7 +328,7 @@ impl Team {
             while rest != 0 {
                 let from = rest.trailing_zeros();
                 rest &= rest - 1;
-                fold(self.broadcast(value, from));
+                fold(self.share(value, from));
             }
             return;
         }
@@ -346,12 +361,5 @@ impl Team {
             );
         }
         (all >> self.first) & (u32::MAX >> (WARP - self.width))
-    }
-
-    /// Team lane `from`'s `value`, in every lane.
-    #[cfg(target_arch = "nvptx64")]
-    #[inline(always)]
-    fn broadcast<R: Handed>(&self, value: R, from: u32) -> R {
-        value.shuffle_from(self.first + from, self.members())
     }
 }

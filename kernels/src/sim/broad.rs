@@ -304,63 +304,6 @@ impl CellIndex {
         mask: u32,
         mut visit: impl FnMut(u32, u32, Vec2),
     ) {
-        self.for_each_run(space, pos, mask, |kind, start, end| {
-            for entry in start..end {
-                visit(self.slots.get(entry), kind, self.pos.get(entry));
-            }
-        });
-    }
-
-    /// [`CellIndex::for_each_near`] shared by a `team` of lanes: each lane `test`s every
-    /// team-width-th entry (`Some` for the bodies that count), and every lane `fold`s the
-    /// results in the order of the plain query, so the fold ends the same bit for bit as
-    /// `for_each_near` with `test` and `fold` in one closure would. Every lane of the team
-    /// must call it with the same `pos` and `mask`.
-    #[inline(always)]
-    pub fn for_each_near_in<R: Handed + Default>(
-        &self,
-        team: Team,
-        space: &Space,
-        pos: Vec2,
-        mask: u32,
-        test: impl Fn(u32, u32, Vec2) -> Option<R>,
-        mut fold: impl FnMut(R),
-    ) {
-        let (lane, width) = team.stride();
-        if width == 1 {
-            // One thread walks every entry: the plain query.
-            self.for_each_near(space, pos, mask, |slot, kind, at| {
-                if let Some(found) = test(slot, kind, at) {
-                    fold(found);
-                }
-            });
-            return;
-        }
-        self.for_each_run(space, pos, mask, |kind, start, end| {
-            let mut first = start;
-            while first < end {
-                let entry = first + lane;
-                let found = if entry < end {
-                    test(self.slots.get(entry), kind, self.pos.get(entry))
-                } else {
-                    None
-                };
-                team.fold_found(found, &mut fold);
-                first += width;
-            }
-        });
-    }
-
-    /// Calls `visit(kind, start, end)` for each run of entries `start .. end` that
-    /// [`CellIndex::for_each_near`] visits, in its order, cut at the cap.
-    #[inline(always)]
-    fn for_each_run(
-        &self,
-        space: &Space,
-        pos: Vec2,
-        mask: u32,
-        mut visit: impl FnMut(u32, u32, u32),
-    ) {
         let ((rows, row_count), (cols, col_count)) = space.neighbourhood(pos);
         // The block's columns as runs of consecutive columns, in visiting order. Written out
         // here rather than shared with `column_runs`: through a helper, the runs went to
@@ -389,13 +332,73 @@ impl CellIndex {
                         .start
                         .get(row + last + 1)
                         .min(start.saturating_add(left));
-                    visit(kind, start, end);
+                    for entry in start..end {
+                        visit(self.slots.get(entry), kind, self.pos.get(entry));
+                    }
                     left -= end.saturating_sub(start);
                     if left == 0 {
                         return;
                     }
                 }
             }
+        }
+    }
+
+    /// [`CellIndex::for_each_near`] shared by a `team` of lanes: the lanes load the bounds of
+    /// the runs of entries side by side, each lane `test`s every team-width-th entry of a run
+    /// (`Some` for the bodies that count), and every lane `fold`s the results in the order
+    /// of the plain query, so the fold ends the same bit for bit as
+    /// `for_each_near` with `test` and `fold` in one closure would. Every lane of the team
+    /// must call it with the same `pos` and `mask`.
+    #[inline(always)]
+    pub fn for_each_near_in<R: Handed + Default>(
+        &self,
+        team: Team,
+        space: &Space,
+        pos: Vec2,
+        mask: u32,
+        test: impl Fn(u32, u32, Vec2) -> Option<R>,
+        mut fold: impl FnMut(R),
+    ) {
+        let (lane, width) = team.stride();
+        if width == 1 {
+            // One thread walks every entry: the plain query.
+            self.for_each_near(space, pos, mask, |slot, kind, at| {
+                if let Some(found) = test(slot, kind, at) {
+                    fold(found);
+                }
+            });
+            return;
+        }
+        let runs = self.near_runs(space, pos, mask);
+        let count = runs.count();
+        let mut left = if self.cap == 0 { u32::MAX } else { self.cap };
+        let mut base = 0;
+        while base < count {
+            // Each lane loads one run's bounds, so the team waits for memory once for up to
+            // `width` runs, not once a run; then the runs are walked in order.
+            let (kind, start, end) = runs.get(self, space, base + lane);
+            for j in 0..width.min(count - base) {
+                let kind = team.share(kind, j);
+                let start = team.share(start, j);
+                let end = team.share(end, j).min(start.saturating_add(left));
+                let mut first = start;
+                while first < end {
+                    let entry = first + lane;
+                    let found = if entry < end {
+                        test(self.slots.get(entry), kind, self.pos.get(entry))
+                    } else {
+                        None
+                    };
+                    team.fold_found(found, &mut fold);
+                    first += width;
+                }
+                left -= end.saturating_sub(start);
+                if left == 0 {
+                    return;
+                }
+            }
+            base += width;
         }
     }
 
