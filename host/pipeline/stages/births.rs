@@ -8,7 +8,11 @@ use crate::backend::Binder;
 use crate::pipeline::world::World;
 use crate::primitives::threads;
 
-/// A thread a slot, in games.
+/// Threads enough for a large wave at once, and no more: each takes every `BIRTH_THREADS`-th
+/// birth, so a step that orders none costs a short launch at any size.
+const BIRTH_THREADS: u32 = 65_536;
+
+/// Up to [`BIRTH_THREADS`] threads (no more than the slots), in games.
 pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     let Some(game) = &world.game else {
         return Vec::new();
@@ -30,7 +34,7 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     vec![unsafe {
         threads(
             registry::BIRTHS,
-            world.layout.slots,
+            world.layout.slots.min(BIRTH_THREADS),
             args,
             b,
             8 * u64::from(world.layout.slots),

@@ -379,34 +379,44 @@ kernel_args! {
 /// Tries at a position far enough from the ship before the last one is taken as it is.
 pub const PLACE_TRIES: u32 = 8;
 
-/// Thread `j` looks at free-list entry `j`: it lies in some kind's range, and if it is among
-/// the first `births[kind]` entries there, that slot comes alive at a random place at least
-/// the spawn distance from the ship (up to [`PLACE_TRIES`] draws from the slot's generator).
+/// Thread `i` of the launch's `n` takes the births `i`, `i + n`, … of each kind in turn:
+/// birth `j` of kind `k` is the slot at entry `j` of its free list (one of the first
+/// `births[k]`), which comes alive at a random place at least the spawn distance from the
+/// ship (up to [`PLACE_TRIES`] draws from the slot's generator). The work follows the births
+/// ordered, not the slots: most steps order none.
 #[inline(always)]
 pub fn births(t: Thread, args: &BirthArgs) {
     let b = &args.bodies;
-    let j = t.global();
-    if j >= b.slots() {
-        return;
-    }
-    let kind = b.kind.get(j);
-    let range = args.ranges.get(kind);
-    if j < range.start || j - range.start >= args.births.get(kind) {
-        return;
-    }
-    let slot = args.free.list.get(j);
+    let threads = t.grid_dim * t.block_dim;
     let ship = args.rules.ship.start;
-    let ship_pos = b.pos.get(ship);
     let far = args.rules.spawn_distance * args.rules.spawn_distance;
-    let speed = args.birth_speed.get(kind);
-    let mut place = random_place(b, slot, &args.space, speed);
-    let mut tries = 1;
-    while tries < PLACE_TRIES
-        && b.is_alive(ship)
-        && args.space.offset(ship_pos, place.pos).length_squared() < far
-    {
-        place = random_place(b, slot, &args.space, speed);
-        tries += 1;
+    // The kinds with births first, from loads that do not wait for one another (a kind mask
+    // has 32 bits, as many as a world has kinds at most).
+    let mut pending = 0u32;
+    for kind in 0..args.births.len().min(u32::BITS) {
+        pending |= u32::from(args.births.get(kind) != 0) << kind;
     }
-    birth(b, &args.space, slot, place, args.kinds.get(kind).energy);
+    while pending != 0 {
+        let kind = pending.trailing_zeros();
+        pending &= pending - 1;
+        let range = args.ranges.get(kind);
+        let count = args.births.get(kind).min(range.capacity);
+        let mut j = t.global();
+        while j < count {
+            let slot = args.free.list.get(range.start + j);
+            let ship_pos = b.pos.get(ship);
+            let speed = args.birth_speed.get(kind);
+            let mut place = random_place(b, slot, &args.space, speed);
+            let mut tries = 1;
+            while tries < PLACE_TRIES
+                && b.is_alive(ship)
+                && args.space.offset(ship_pos, place.pos).length_squared() < far
+            {
+                place = random_place(b, slot, &args.space, speed);
+                tries += 1;
+            }
+            birth(b, &args.space, slot, place, args.kinds.get(kind).energy);
+            j += threads;
+        }
+    }
 }
