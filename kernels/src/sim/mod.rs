@@ -8,7 +8,8 @@
 //! 3. [`broad::place_in_cells`] and [`broad::order_cells`]: every body in its bucket, each
 //!    bucket in increasing slot order whatever order the threads ran in;
 //! 4. [`narrow::collide`]: each body tests the bodies of the kinds it collides with in its 3×3
-//!    cell neighbourhood and sums its own response (position push, velocity kick, energy loss);
+//!    cell neighbourhood and sums its own response (position push, velocity kick, energy loss),
+//!    alone or with a team of lanes ([`teams`]) that folds what it finds in the same order;
 //! 5. [`integrate::integrate`]: explicit Euler and the world's boundary rule; bodies out of
 //!    energy die;
 //! 6. [`free_list::mark_free`], a prefix sum, [`free_list::gather_free`]: the free slots of
