@@ -53,7 +53,7 @@ pub enum Value<'a> {
     /// A whole number, `None` if beyond 128 bits (JSON's beyond 64 bits are floats, as
     /// serde_json reads them).
     Integer(Option<i128>),
-    /// A float, as [`written_float`] reads a TOML one.
+    /// A float, as `written_float` reads a TOML one.
     Float(f64),
     /// `true` or `false`.
     Bool(bool),

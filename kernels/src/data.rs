@@ -1,7 +1,7 @@
 //! Device data declared once.
 //!
 //! A group of device arrays (the bodies, the grid, the free lists, the game's buffers) is
-//! written once, with [`device_data!`], as a struct generic over a [`Store`]: how each array
+//! written once, with [`device_data!`](crate::device_data), as a struct generic over a [`Store`]: how each array
 //! is held. The same declaration is the kernels' view of it (`Group<View>`, the default: one
 //! [`DevSlice`] an array, a padding-free kernel argument), the host's buffers
 //! (`Group<Buffers>` on the host side), what a snapshot reads back (`Group<Vecs>`), and the
@@ -9,7 +9,7 @@
 //! every array of a store from its name and length, `convert` turns one store into another
 //! array by array: the host never lists a group's fields by hand.
 //!
-//! A kernel's argument struct is declared with [`kernel_args!`], which adds the layout
+//! A kernel's argument struct is declared with [`kernel_args!`](crate::kernel_args), which adds the layout
 //! (`#[repr(C)]`), the padding check (`bytemuck::NoUninit`) and the one `unsafe impl` of
 //! [`KernelArgs`](crate::KernelArgs) in the crate, with the reason it holds.
 

@@ -1,6 +1,6 @@
 //! Every kernel entry point, listed once.
 //!
-//! [`kernels!`] turns each line into a typed [`Kernel`] constant for the host, an entry in
+//! `kernels!` turns each line into a typed [`Kernel`] constant for the host, an entry in
 //! [`ALL`], and, on nvptx, the `extern "ptx-kernel"` entry point that calls the body. Because
 //! the entry's name and the constant's `name` come from the same identifier, they cannot drift.
 

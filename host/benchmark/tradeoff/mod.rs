@@ -4,7 +4,7 @@
 //! - **Physics** ([`PhysicsRow`]): a ring of balls orbiting a central attractor and
 //!   bouncing off each other, under each choice (integrator, substeps, time step, contact
 //!   relaxation, grid cell size, neighbour cap). Error: the position RMS after a fixed time
-//!   against the [`reference`] (f64, every pair, 32 substeps per step, same start), and the
+//!   against the [`reference`](mod@reference) (f64, every pair, 32 substeps per step, same start), and the
 //!   contacts the grid's queries missed against a brute-force count. Speed: simulated
 //!   seconds per wall second on a larger crowd of the same density.
 //! - **Analytic** ([`analytic`]): constant force, head-on collision, circular orbit, per
@@ -239,9 +239,9 @@ fn crowd_choices() -> Vec<(f32, Physics)> {
     choices
 }
 
-/// The crowd of `bodies` balls: a clamped square field whose area is [`COVER`] balls, a
+/// The crowd of `bodies` balls: a clamped square field whose area is `COVER` balls, a
 /// central attractor whose circular orbit at a quarter of the side has speed
-/// [`ORBIT_SPEED`].
+/// `ORBIT_SPEED`.
 pub fn crowd(bodies: u32, dt: f32, physics: Physics) -> WorldSpec {
     let area = f64::from(bodies) * std::f64::consts::PI * f64::from(RADIUS).powi(2) / COVER;
     let side = area.sqrt() as f32;
