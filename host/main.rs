@@ -20,6 +20,7 @@ use gpuwars::game::engine::footprint;
 use gpuwars::game::replay::Replay;
 use gpuwars::game::scene;
 use gpuwars::info::Info;
+use gpuwars::pipeline::Lanes;
 use gpuwars::play::{self, PlayOptions, PlayReport};
 use gpuwars::{BackendKind, Device};
 
@@ -200,6 +201,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             mute,
             run,
         } => {
+            if window && (run.no_graphs || run.profile || run.lanes != Lanes::Auto) {
+                bail!(
+                    "--no-graphs, --profile and --lanes apply to a headless replay, not to --window"
+                );
+            }
             let replay = Replay::load(&file)?;
             let origin = format!("{} (scene `{}`)", file.display(), replay.scene);
             let scene = Scene::from_toml(&replay.scene_toml, &origin)?;

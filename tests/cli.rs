@@ -122,6 +122,30 @@ fn bad_flags_name_the_allowed_values() {
         stderr.contains("allowed a whole number from 1 to 1,024"),
         "{stderr}"
     );
+    let out = gpuwars(&["demo", "--lanes", "3"]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("allowed: auto, 1, 2, 4, 8, 16 or 32"),
+        "{stderr}"
+    );
+}
+
+/// A flag the windowed replay cannot honour is refused before anything is read or opened,
+/// not silently ignored.
+#[test]
+fn a_windowed_replay_refuses_the_headless_run_flags() {
+    for flag in [&["--lanes", "8"][..], &["--no-graphs"], &["--profile"]] {
+        let mut args = vec!["replay", "no-such-file.json", "--window"];
+        args.extend_from_slice(flag);
+        let out = gpuwars(&args);
+        assert!(!out.status.success(), "{flag:?}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            stderr.contains("apply to a headless replay, not to --window"),
+            "{flag:?}: {stderr}"
+        );
+    }
 }
 
 #[test]
