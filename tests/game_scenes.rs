@@ -21,7 +21,12 @@ fn scene(name: &str) -> Scene {
 
 /// Plays `steps` autopilot steps of `scene` and returns the game's state hash.
 fn hash_after(device: &Device, scene: &Scene, seed: u32, steps: u32) -> u64 {
-    let mut game = Game::new(device, scene, seed).unwrap();
+    hash_with(device, scene, seed, steps, Options::default())
+}
+
+/// [`hash_after`], the game run as `options` say.
+fn hash_with(device: &Device, scene: &Scene, seed: u32, steps: u32, options: Options) -> u64 {
+    let mut game = Game::with_options(device, scene, seed, options).unwrap();
     for _ in 0..steps {
         game.step(None).unwrap();
     }
@@ -245,11 +250,7 @@ fn teams_of_any_width_play_the_game_of_one_thread_a_body(device: &Device) {
             lanes,
             ..Options::default()
         };
-        let mut game = Game::with_options(device, scene, 1, options).unwrap();
-        for _ in 0..240 {
-            game.step(None).unwrap();
-        }
-        game.state_hash().unwrap()
+        hash_with(device, scene, 1, 240, options)
     };
     for name in ["paper", "group", "tricky", "arena"] {
         let scene = scene(name);

@@ -5,10 +5,10 @@
 //! hundreds of steps. The results are the same bit for bit whatever the widths (the kernels
 //! fold what the lanes find in the order of one thread), so the choice is speed only.
 
+use gpuwars_kernels::game::ai::sight_mask;
 use gpuwars_kernels::game::fsm::Machine;
 use gpuwars_kernels::sim::broad::kind_bit;
 use gpuwars_kernels::sim::teams::{MAX_WIDTH, Teams};
-use gpuwars_kernels::warp::WARP;
 
 use super::GameConfig;
 use crate::sim::WorldSpec;
@@ -52,56 +52,47 @@ fn widths(
     (first, last): (usize, usize),
 ) -> Vec<u32> {
     let kinds = masks.len();
-    let mut widths = match (lanes, resident) {
-        (Lanes::Fixed(width), _) => vec![width.clamp(1, MAX_WIDTH); kinds],
+    let resident = match (lanes, resident) {
+        (Lanes::Fixed(width), _) => return vec![width.clamp(1, MAX_WIDTH); kinds],
         (Lanes::Auto, None) => return vec![1; kinds],
-        (Lanes::Auto, Some(_)) => {
-            // A query reads 3×3 cells: that share of each kind, on an even spread.
-            let share = (9.0 / f64::from(space.cols * space.rows)).min(1.0);
-            masks
-                .iter()
-                .map(|&mask| {
-                    let expected: f64 = (0..kinds as u32)
-                        .filter(|&k| mask & kind_bit(k) != 0)
-                        .map(|k| f64::from(layout.ranges[k as usize].capacity) * share)
-                        .sum();
-                    let runs = RUNS_PER_KIND * mask.count_ones();
-                    let lanes = ((expected / ENTRIES_PER_LANE).ceil() as u32).max(runs);
-                    lanes.max(1).next_power_of_two().min(MAX_WIDTH)
-                })
-                .collect()
-        }
+        (Lanes::Auto, Some(resident)) => resident,
     };
-    if let (Lanes::Auto, Some(resident)) = (lanes, resident) {
-        let threads = |widths: &[u32]| -> u64 {
-            (first..=last)
-                .map(|k| {
-                    u64::from(layout.ranges[k].capacity.next_multiple_of(WARP))
-                        * u64::from(widths[k])
-                })
-                .sum()
+    // A query reads 3×3 cells: that share of each kind, on an even spread.
+    let share = (9.0 / f64::from(space.cols * space.rows)).min(1.0);
+    let mut widths: Vec<u32> = masks
+        .iter()
+        .map(|&mask| {
+            let expected: f64 = (0..kinds as u32)
+                .filter(|&k| mask & kind_bit(k) != 0)
+                .map(|k| f64::from(layout.ranges[k as usize].capacity) * share)
+                .sum();
+            let runs = RUNS_PER_KIND * mask.count_ones();
+            let lanes = ((expected / ENTRIES_PER_LANE).ceil() as u32).max(runs);
+            lanes.max(1).next_power_of_two().min(MAX_WIDTH)
+        })
+        .collect();
+    let threads = |widths: &[u32]| {
+        Teams::new((first as u32, last as u32 + 1), (0, 0), |k| {
+            widths[k as usize]
+        })
+        .threads(&layout.ranges)
+    };
+    while threads(&widths) > resident {
+        let Some(&widest) = widths[first..=last].iter().max().filter(|&&w| w > 1) else {
+            break;
         };
-        while threads(&widths) > resident {
-            let Some(&widest) = widths[first..=last].iter().max().filter(|&&w| w > 1) else {
-                break;
-            };
-            for w in &mut widths[first..=last] {
-                if *w == widest {
-                    *w /= 2;
-                }
+        for w in &mut widths[first..=last] {
+            if *w == widest {
+                *w /= 2;
             }
         }
     }
     widths
 }
 
-/// The padded slots of kinds `first ..= last`.
+/// The slots of kinds `first ..= last`, padding included.
 fn padded(layout: &Layout, first: usize, last: usize) -> (u32, u32) {
-    let end = &layout.ranges[last];
-    (
-        layout.ranges[first].start,
-        end.start + end.capacity.next_multiple_of(WARP),
-    )
+    (layout.ranges[first].start, layout.ranges[last].padded_end())
 }
 
 /// The narrow phase's teams: every kind, looking for the kinds it collides with.
@@ -136,15 +127,7 @@ pub(super) fn think(
         .iter()
         .map(|brain| match Machine::from_u32(brain.machine) {
             Machine::None => 0,
-            Machine::Kamikaze => kind_bit(rules.ship_kind),
-            Machine::Group | Machine::Tricky => {
-                let dodges = if brain.avoid_bullets != 0 {
-                    kind_bit(rules.shot_kind)
-                } else {
-                    0
-                };
-                kind_bit(rules.ship_kind) | kind_bit(brain.kind) | dodges
-            }
+            machine => sight_mask(brain, machine, rules.ship_kind, rules.shot_kind),
         })
         .collect();
     let first = masks.iter().position(|&m| m != 0)?;

@@ -5,7 +5,7 @@ use gpuwars_kernels::sim::{KindInfo, SlotRange, Space, kinds};
 use super::spec::{Boundary, Shape, WorldSpec};
 
 /// Slots per warp: each kind's range starts on a multiple of it.
-pub const WARP: u32 = 32;
+pub const WARP: u32 = gpuwars_kernels::warp::WARP;
 /// Most grid cells: a world of tiny bodies gets coarser cells rather than a huge grid.
 pub const MAX_CELLS: u32 = 1 << 22;
 /// Cells are made this much larger than the largest reach, so that rounding in the cell
@@ -33,7 +33,7 @@ impl Layout {
                     start,
                     capacity: kind.capacity,
                 };
-                start += kind.capacity.next_multiple_of(WARP);
+                start = range.padded_end();
                 range
             })
             .collect();
@@ -47,8 +47,7 @@ impl Layout {
     pub fn slot_kinds(&self) -> Vec<u32> {
         let mut kinds = vec![0; self.slots as usize];
         for (k, range) in self.ranges.iter().enumerate() {
-            let end = range.start + range.capacity.next_multiple_of(WARP);
-            kinds[range.start as usize..end as usize].fill(k as u32);
+            kinds[range.start as usize..range.padded_end() as usize].fill(k as u32);
         }
         kinds
     }

@@ -129,6 +129,21 @@ const SEEN_SIMILAR: u32 = 1;
 /// [`Seen::what`] of a shot coming its way.
 const SEEN_THREAT: u32 = 2;
 
+/// The kinds a `machine` body driven by `brain` looks for (bit `k`: kind `k`): the ship's,
+/// and unless it is a kamikaze its own kind and, if it avoids bullets, the shots'.
+#[inline(always)]
+pub fn sight_mask(brain: &Brain, machine: Machine, ship_kind: u32, shot_kind: u32) -> u32 {
+    let social = machine != Machine::Kamikaze;
+    let mut mask = kind_bit(ship_kind);
+    if social {
+        mask |= kind_bit(brain.kind);
+        if brain.avoid_bullets != 0 {
+            mask |= kind_bit(shot_kind);
+        }
+    }
+    mask
+}
+
 /// What slot `slot`, a `machine` body driven by `brain`, sees: only bodies within its vision, found
 /// through the grid's 3×3 neighbourhood by the slot's `team` (every lane gets the same). A
 /// kamikaze looks only for the ship.
@@ -145,14 +160,7 @@ pub fn look(args: &ThinkArgs, brain: &Brain, machine: Machine, slot: u32, team: 
     let mut sight = Sight::default();
     let (mut sum, mut similar) = (Vec2::ZERO, 0u32);
     let mut soonest = f32::INFINITY;
-    // Only the kinds this machine reacts to: the ship, its own kind, the shots it dodges.
-    let mut mask = kind_bit(b.kind.get(args.ship));
-    if social {
-        mask |= kind_bit(brain.kind);
-    }
-    if dodges {
-        mask |= kind_bit(args.shot_kind);
-    }
+    let mask = sight_mask(brain, machine, b.kind.get(args.ship), args.shot_kind);
     args.grid.for_each_near_in(
         team,
         &args.space,

@@ -390,6 +390,8 @@ pub fn births(t: Thread, args: &BirthArgs) {
     let threads = t.grid_dim * t.block_dim;
     let ship = args.rules.ship.start;
     let far = args.rules.spawn_distance * args.rules.spawn_distance;
+    // Births write other slots than the ship's: its place holds for the whole launch.
+    let ship_pos = b.pos.get(ship);
     // The kinds with births first, from loads that do not wait for one another (a kind mask
     // has 32 bits, as many as a world has kinds at most).
     let mut pending = 0u32;
@@ -401,11 +403,10 @@ pub fn births(t: Thread, args: &BirthArgs) {
         pending &= pending - 1;
         let range = args.ranges.get(kind);
         let count = args.births.get(kind).min(range.capacity);
+        let speed = args.birth_speed.get(kind);
         let mut j = t.global();
         while j < count {
             let slot = args.free.list.get(range.start + j);
-            let ship_pos = b.pos.get(ship);
-            let speed = args.birth_speed.get(kind);
             let mut place = random_place(b, slot, &args.space, speed);
             let mut tries = 1;
             while tries < PLACE_TRIES

@@ -97,6 +97,18 @@ impl SlotRange {
     pub fn end(&self) -> u32 {
         self.start + self.capacity
     }
+
+    /// Slots the range takes, its padding included: the capacity rounded up to a warp.
+    #[inline(always)]
+    pub fn span(&self) -> u32 {
+        self.capacity.next_multiple_of(crate::warp::WARP)
+    }
+
+    /// One past the range's last slot, padding included (the next range's start).
+    #[inline(always)]
+    pub fn padded_end(&self) -> u32 {
+        self.start + self.span()
+    }
 }
 
 crate::device_data! {

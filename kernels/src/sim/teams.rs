@@ -88,7 +88,7 @@ impl Teams {
     pub fn threads(&self, ranges: &[SlotRange]) -> u64 {
         (self.first_kind..self.end_kind)
             .map(|k| {
-                let span = ranges[k as usize].capacity.next_multiple_of(WARP);
+                let span = ranges[k as usize].span();
                 u64::from(span) * u64::from(self.width(k))
             })
             .sum()
@@ -106,7 +106,7 @@ impl Teams {
         // Threads before kind `k`'s first.
         let mut before = 0u32;
         for k in self.first_kind..self.end_kind {
-            let span = ranges.get(k).capacity.next_multiple_of(WARP);
+            let span = ranges.get(k).span();
             let log2 = self.width(k).trailing_zeros();
             let i = global - before;
             if i < span << log2 {
