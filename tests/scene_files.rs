@@ -765,7 +765,7 @@ fn the_physics_table_reads_every_choice() {
     use gpuwars::sim::{Integrator, Physics};
     let text = with_physics(
         "integrator = \"verlet\"\nsubsteps = 4\nrelaxation = 0.5\naveraged = true\n\
-         cell_scale = 2\nneighbour_cap = 16\nvision_scale = 0.75",
+         cell_scale = 2\nneighbour_cap = 16\nvision_scale = 0.75\nrenumber_every = 4",
     );
     let scene = Scene::from_toml(&text, "paper.toml").unwrap();
     assert_eq!(
@@ -778,6 +778,7 @@ fn the_physics_table_reads_every_choice() {
             cell_scale: 2.0,
             neighbour_cap: 16,
             vision_scale: 0.75,
+            renumber_every: Some(4),
         }
     );
     // Without the table, and with an empty one, the paper's defaults.
@@ -789,7 +790,7 @@ fn the_physics_table_reads_every_choice() {
 
 #[test]
 fn bad_physics_choices_name_the_key_and_the_allowed_values() {
-    let cases: [(&str, &str, &[&str]); 8] = [
+    let cases: [(&str, &str, &[&str]); 9] = [
         ("substeps = 0", "physics.substeps", &["from 1 to 64"]),
         ("substeps = 65", "physics.substeps", &["from 1 to 64"]),
         ("substeps = 2.0", "physics.substeps", &["whole number"]),
@@ -806,6 +807,11 @@ fn bad_physics_choices_name_the_key_and_the_allowed_values() {
             &["euler", "explicit", "verlet"],
         ),
         ("averaged = 1", "physics.averaged", &["true or false"]),
+        (
+            "renumber_every = 65537",
+            "physics.renumber_every",
+            &["from 0 to 65,536"],
+        ),
     ];
     for (body, field, says) in cases {
         let text = with_physics(body);

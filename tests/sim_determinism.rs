@@ -5,13 +5,24 @@ mod common;
 
 use common::sim::ten_thousand;
 use gpuwars::pipeline::Simulation;
+use gpuwars::sim::WorldSpec;
 use gpuwars::{Device, Error};
 
 /// Builds the 10,000-body world with `seed`, scatters its bodies (scaled by `1 / shrink`),
 /// runs `steps` steps and returns the state hash and the number of live bodies.
 fn run(device: &Device, seed: u32, shrink: u32, steps: u32) -> Result<(u64, usize), Error> {
-    let (spec, scatter) = ten_thousand();
-    let mut sim = Simulation::new(device, &spec, seed)?;
+    run_spec(device, &ten_thousand().0, seed, (shrink, steps))
+}
+
+/// [`run`] with the world `spec` (the 10,000-body world's kinds, changed).
+fn run_spec(
+    device: &Device,
+    spec: &WorldSpec,
+    seed: u32,
+    (shrink, steps): (u32, u32),
+) -> Result<(u64, usize), Error> {
+    let scatter = ten_thousand().1;
+    let mut sim = Simulation::new(device, spec, seed)?;
     for (kind, count, speed) in scatter {
         sim.scatter(kind, count.div_ceil(shrink), speed)?;
     }
@@ -24,17 +35,26 @@ fn run(device: &Device, seed: u32, shrink: u32, steps: u32) -> Result<(u64, usiz
 
 /// The golden hash of the 10,000-body world, seed 1, after 1,000 steps. Regenerate it only
 /// on purpose (a deliberate change of the simulation), and say why in the commit. Last
-/// regenerated when the grid queries began visiting neighbours kind by kind, row by row
-/// (three runs of buckets per kind instead of nine cells), which changes the order in which
-/// each body sums its contacts (before: 0xe022_9a38_ec73_13a1; before the hash took in the
+/// regenerated when worlds of 8,192 slots and more began renumbering their bodies in the
+/// grid's order every 16 steps: the same bodies, bit for bit, in other slots, and the hash
+/// takes in each body's slot (before: 0xdf1e_b5eb_b275_000e; before the grid queries visited
+/// neighbours kind by kind, row by row, 0xe022_9a38_ec73_13a1; before the hash took in the
 /// bodies' ages, 0xb3d1_5c4d_54eb_fb08).
-const GOLDEN_10K_1000: u64 = 0xdf1e_b5eb_b275_000e;
+const GOLDEN_10K_1000: u64 = 0x8a68_5bc3_f2af_ccdb;
+
+/// The same world never renumbered: the golden hash from before renumbering, which pins the
+/// physics apart from the slots.
+const GOLDEN_10K_1000_IN_PLACE: u64 = 0xdf1e_b5eb_b275_000e;
 
 #[test]
 fn the_ten_thousand_body_world_reaches_its_golden_hash() {
     let (hash, live) = run(common::cpu(), 1, 1, 1000).unwrap();
     println!("hash {hash:#018x}, {live} bodies alive");
     assert_eq!(hash, GOLDEN_10K_1000, "got {hash:#018x}");
+    let mut in_place = ten_thousand().0;
+    in_place.physics.renumber_every = Some(0);
+    let (hash, _) = run_spec(common::cpu(), &in_place, 1, (1, 1000)).unwrap();
+    assert_eq!(hash, GOLDEN_10K_1000_IN_PLACE, "got {hash:#018x}");
 }
 
 #[test]

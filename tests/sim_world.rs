@@ -200,10 +200,14 @@ fn placing_into_padding_or_missing_slots_is_an_error(device: &Device) {
 fn a_world_takes_the_bytes_its_memory_check_counts() {
     let mut dense = common::sim::ten_thousand().0;
     dense.vision = 3.0;
-    for spec in [valid(), dense] {
+    // 10,000 slots renumber unless the physics says never.
+    let mut in_place = dense.clone();
+    in_place.physics.renumber_every = Some(0);
+    for (spec, renumbers) in [(valid(), false), (in_place, false), (dense, true)] {
         let device = Device::cpu(Some(1), "tests").unwrap();
         let sim = Simulation::new(&device, &spec, 1).unwrap();
-        let expected = state::bytes_needed(sim.layout(), sim.space(), spec.kinds.len());
+        let (layout, kinds) = (sim.layout(), spec.kinds.len());
+        let expected = state::bytes_needed(layout, sim.space(), kinds, renumbers);
         assert_eq!(device.allocated_bytes(), expected);
     }
 }

@@ -31,8 +31,8 @@ use super::spec::{
 };
 // Errors of the file's own rules read like the world's: a field and what is allowed.
 use crate::sim::spec::{
-    Boundary, Field, Integrator, KindSpec, MAX_CELL_SCALE, MAX_MASS, MAX_SIDE, MAX_SLOTS,
-    MAX_SUBSTEPS, MAX_VISION_SCALE, MIN_MASS, Physics, Shape, SpecError, WorldSpec,
+    Boundary, Field, Integrator, KindSpec, MAX_CELL_SCALE, MAX_MASS, MAX_RENUMBER_EVERY, MAX_SIDE,
+    MAX_SLOTS, MAX_SUBSTEPS, MAX_VISION_SCALE, MIN_MASS, Physics, Shape, SpecError, WorldSpec,
     error as invalid,
 };
 
@@ -278,6 +278,7 @@ fn read_physics(node: &Node<'_>) -> Result<Physics, SceneError> {
         "cell_scale",
         "neighbour_cap",
         "vision_scale",
+        "renumber_every",
     ])?;
     let d = Physics::default();
     let integrators = Integrator::ALL.map(|i| (i.name(), i));
@@ -294,6 +295,9 @@ fn read_physics(node: &Node<'_>) -> Result<Physics, SceneError> {
         neighbour_cap: table.or("neighbour_cap", d.neighbour_cap, |n| n.whole(0, MAX_SLOTS))?,
         vision_scale: table.or("vision_scale", d.vision_scale, |n| {
             n.real(above(0.0, MAX_VISION_SCALE))
+        })?,
+        renumber_every: table.or("renumber_every", d.renumber_every, |n| {
+            n.whole(0, MAX_RENUMBER_EVERY).map(Some)
         })?,
     })
 }

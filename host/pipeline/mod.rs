@@ -10,6 +10,7 @@
 //! | `master` | the master before the physics (one warp) | games |
 //! | `births` | the enemies the master thread ordered come alive | games |
 //! | `broad` | the grid: bucket counts, their prefix sum, placement, canonical order | games, and worlds where something collides |
+//! | `renumber` | every few steps, the bodies move to slots in the grid's order within their kinds' ranges (gather, settle) | worlds with a grid of 8,192 slots or more, or as the scene's physics says |
 //! | `narrow` | contacts and their response (`collide_circles` without rectangles) | worlds where something collides |
 //! | `think` | every enemy's machine, in one launch over the enemy kinds' slots | games with enemies |
 //! | `integrate` | Euler, the boundary rule, deaths | always |
@@ -88,9 +89,11 @@ pub fn mind_slots(layout: &Layout, machines: &[bool]) -> Option<(u32, u32)> {
     Some((layout.ranges[first].start, layout.ranges[last].end()))
 }
 
-/// The plans of a world's step: the whole step, and each stage alone (for the profile).
+/// The plans of a world's step: the whole step, the step that also renumbers (in worlds
+/// that do), and each stage alone (for the profile).
 struct Plans {
     step: Plan,
+    renumbering: Option<Plan>,
     stages: Vec<StagePlan>,
 }
 
@@ -119,7 +122,8 @@ impl<'d> Pipeline<'d> {
         (graphs, lanes): (bool, Lanes),
     ) -> Result<Self, Error> {
         let world = World::new(device, spec, seed, game, lanes)?;
-        let mut all = Vec::new();
+        // Every stage's ops, and those of the steps that do not renumber.
+        let (mut all, mut plain) = (Vec::new(), Vec::new());
         let mut stages = Vec::new();
         for stage in Stage::ALL {
             let ops = stage.ops(&world);
@@ -128,12 +132,20 @@ impl<'d> Pipeline<'d> {
             }
             // The same ops serve the stage's own plan (for the profile) and the whole step.
             all.extend(ops.iter().cloned());
+            if stage != Stage::Renumber {
+                plain.extend(ops.iter().cloned());
+            }
             let plan = device.plan(ops, graphs)?;
             stages.push(StagePlan { stage, plan });
         }
+        let renumbering = match world.config.renumber_every {
+            0 => None,
+            _ => Some(device.plan(all, graphs)?),
+        };
         let pipeline = Pipeline {
             plans: Plans {
-                step: device.plan(all, graphs)?,
+                step: device.plan(plain, graphs)?,
+                renumbering,
                 stages,
             },
             world,
@@ -154,9 +166,20 @@ impl<'d> Pipeline<'d> {
         }
     }
 
+    /// Whether the next step renumbers the bodies: every `renumber_every` steps from the
+    /// first, counted on the host (the same count on every backend).
+    fn renumbers_next(&self) -> bool {
+        let every = u64::from(self.world.config.renumber_every);
+        every != 0 && self.steps.is_multiple_of(every)
+    }
+
     /// Queues one step, without waiting for it.
     pub fn step(&mut self) -> Result<(), Error> {
-        self.device.run(&self.plans.step)?;
+        let plan = match &self.plans.renumbering {
+            Some(plan) if self.renumbers_next() => plan,
+            _ => &self.plans.step,
+        };
+        self.device.run(plan)?;
         self.steps += 1;
         Ok(())
     }
@@ -165,9 +188,14 @@ impl<'d> Pipeline<'d> {
     /// the CPU), and adds the times to `profile`; it waits for the step.
     pub fn step_profiled(&mut self, profile: &mut Profile) -> Result<(), Error> {
         let device = self.device;
+        let renumbers = self.renumbers_next();
         let mut marks = vec![device.mark()?];
         for stage in &self.plans.stages {
-            device.run(&stage.plan)?;
+            // The renumbering's time is counted in the steps that renumber only (nothing in
+            // the others): its mean over the steps is its share of each.
+            if stage.stage != Stage::Renumber || renumbers {
+                device.run(&stage.plan)?;
+            }
             marks.push(device.mark()?);
         }
         for (stage, pair) in self.plans.stages.iter().zip(marks.windows(2)) {
@@ -183,7 +211,7 @@ impl<'d> Pipeline<'d> {
         &self.plans.stages
     }
 
-    /// Kernel launches per step.
+    /// Kernel launches per step (of a step that does not renumber).
     pub fn launches_per_step(&self) -> usize {
         self.plans.step.launches()
     }

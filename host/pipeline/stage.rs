@@ -20,6 +20,9 @@ pub enum Stage {
     /// The grid: bucket counts, their prefix sum, placement, canonical order; games, and
     /// worlds where something collides.
     Broad,
+    /// The bodies move to slots in the grid's order within their kinds' ranges (gather,
+    /// settle); every few steps, in worlds that renumber.
+    Renumber,
     /// Contacts and their response; worlds where something collides.
     Narrow,
     /// Every enemy's machine, in one launch over the enemy kinds' slots; games with enemies.
@@ -38,11 +41,12 @@ pub enum Stage {
 
 impl Stage {
     /// Every stage, in the order a step runs them.
-    pub const ALL: [Stage; 11] = [
+    pub const ALL: [Stage; 12] = [
         Stage::Pilot,
         Stage::Master,
         Stage::Births,
         Stage::Broad,
+        Stage::Renumber,
         Stage::Narrow,
         Stage::Think,
         Stage::Integrate,
@@ -59,6 +63,7 @@ impl Stage {
             Stage::Master => "master",
             Stage::Births => "births",
             Stage::Broad => "broad",
+            Stage::Renumber => "renumber",
             Stage::Narrow => "narrow",
             Stage::Think => "think",
             Stage::Integrate => "integrate",
@@ -76,6 +81,7 @@ impl Stage {
             Stage::Master => stages::master::ops(world),
             Stage::Births => stages::births::ops(world),
             Stage::Broad => stages::broad::ops(world),
+            Stage::Renumber => stages::renumber::ops(world),
             Stage::Narrow => stages::narrow::ops(world, 0),
             Stage::Think => stages::think::ops(world),
             Stage::Integrate => stages::integrate::ops(world, 0),

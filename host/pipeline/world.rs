@@ -36,6 +36,8 @@ pub(crate) struct Config {
     pub narrow_teams: Teams,
     /// The machines' threads per body of each kind, if a kind has a machine.
     pub think_teams: Option<Teams>,
+    /// Every how many steps the bodies move to slots in the grid's order (0: never).
+    pub renumber_every: u32,
 }
 
 /// The game's buffers on the device.
@@ -67,7 +69,24 @@ pub fn bytes_needed(spec: &WorldSpec, game: Option<(u32, usize)>) -> u64 {
         made(GameData::<Unmade>::build(&mut sizes, kinds, waves));
         made(Particles::<Unmade>::build(&mut sizes, particles as usize));
     }
-    state::bytes_needed(&layout, &layout::space(spec), kinds) + sizes.bytes
+    let renumbers = renumber_every(spec, &layout, game.is_some()) != 0;
+    state::bytes_needed(&layout, &layout::space(spec), kinds, renumbers) + sizes.bytes
+}
+
+/// Whether a world of `spec` builds the grid: something collides, or a game's autopilot may
+/// look through it.
+fn builds_grid(spec: &WorldSpec, plays: bool) -> bool {
+    plays || spec.collision_masks().iter().any(|&m| m != 0)
+}
+
+/// Every how many steps a world renumbers its bodies (0: never): as its physics says, in
+/// worlds with a grid, whose order it takes.
+fn renumber_every(spec: &WorldSpec, layout: &Layout, plays: bool) -> u32 {
+    if builds_grid(spec, plays) {
+        spec.physics.renumber_period(layout.slots)
+    } else {
+        0
+    }
 }
 
 impl World {
@@ -115,14 +134,16 @@ impl World {
                 registry::COLLIDE_CIRCLES
             }),
             // A game's autopilot looks through the grid whenever it flies.
-            grid: collides || game.is_some(),
+            grid: builds_grid(spec, game.is_some()),
             narrow_teams: teams::narrow(lanes, resident, spec, &layout, &space),
             think_teams: game
                 .as_ref()
                 .and_then(|g| teams::think(lanes, resident, g, &layout, &space)),
+            renumber_every: renumber_every(spec, &layout, game.is_some()),
         };
         let state = WorldState::new(device, spec, &layout, seed)?;
-        let scratch = Scratch::new(device, &layout, &space, kinds)?;
+        let renumbers = config.renumber_every != 0;
+        let scratch = Scratch::new(device, &layout, &space, (kinds, renumbers))?;
         let game = match game {
             Some(config) => {
                 let mut data = GameData::build(&mut device.zeroed(), kinds, config.waves.len())?;

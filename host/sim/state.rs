@@ -11,6 +11,7 @@ use gpuwars_kernels::rng::Mt607Params;
 use gpuwars_kernels::rng::streams::SeedArgs;
 use gpuwars_kernels::sim::broad::{CellIndex, Grid};
 use gpuwars_kernels::sim::free_list::{FreeMarks, FreeSlots};
+use gpuwars_kernels::sim::renumber::Moved;
 use gpuwars_kernels::sim::{Bodies, Contacts, KindTables, Space};
 
 use super::layout::{self, Layout};
@@ -28,14 +29,16 @@ pub(crate) struct WorldState {
     pub free: FreeSlots<Buffers>,
 }
 
-/// What a step rebuilds: the narrow phase's response, the grid, the free lists' marks, and
-/// the prefix sums' scratch of the last two.
+/// What a step rebuilds: the narrow phase's response, the grid, the free lists' marks, the
+/// prefix sums' scratch of the last two, and the renumbering's buffers in worlds that
+/// renumber.
 pub(crate) struct Scratch {
     pub contacts: Contacts<Buffers>,
     pub grid: Grid<Buffers>,
     pub grid_scan: PrefixSum,
     pub marks: FreeMarks<Buffers>,
     pub marks_scan: PrefixSum,
+    pub moved: Option<Moved<Buffers>>,
     /// Kinds and cells of the grid's buckets.
     pub kinds: u32,
     pub cells: u32,
@@ -53,8 +56,9 @@ pub(crate) fn made<T>(result: Result<T, Infallible>) -> T {
 }
 
 /// Bytes of device memory the buffers of a world of this layout and grid take, the
-/// generators' set-up (seeds and parameter table) included.
-pub fn bytes_needed(layout: &Layout, space: &Space, kinds: usize) -> u64 {
+/// generators' set-up (seeds and parameter table) included, and the renumbering's buffers
+/// if it `renumbers`.
+pub fn bytes_needed(layout: &Layout, space: &Space, kinds: usize, renumbers: bool) -> u64 {
     let (slots, buckets) = (layout.slots as usize, buckets(space, kinds));
     let mut sizes = Sizes::default();
     let s = &mut sizes;
@@ -64,6 +68,9 @@ pub fn bytes_needed(layout: &Layout, space: &Space, kinds: usize) -> u64 {
     made(Contacts::<Unmade>::build(s, slots));
     made(Grid::<Unmade>::build(s, slots, buckets));
     made(FreeMarks::<Unmade>::build(s, slots));
+    if renumbers {
+        made(Moved::<Unmade>::build(s, slots));
+    }
     made(s.array::<u32>("seeds", slots));
     made(s.array::<Mt607Params>("table", rng::TABLE.len()));
     made(s.array::<u32>("grid scan", PrefixSum::scratch_len(buckets)));
@@ -148,12 +155,13 @@ impl WorldState {
 }
 
 impl Scratch {
-    /// Scratch for a world of this layout and grid with `kinds` kinds.
+    /// Scratch for a world of this layout and grid with `kinds` kinds, with the
+    /// renumbering's buffers if it `renumbers`.
     pub fn new(
         device: &Device,
         layout: &Layout,
         space: &Space,
-        kinds: usize,
+        (kinds, renumbers): (usize, bool),
     ) -> Result<Self, Error> {
         let slots = layout.slots as usize;
         let buckets = buckets(space, kinds);
@@ -163,6 +171,10 @@ impl Scratch {
             grid_scan: PrefixSum::new(device, buckets)?,
             marks: FreeMarks::build(&mut device.zeroed(), slots)?,
             marks_scan: PrefixSum::new(device, slots)?,
+            moved: match renumbers {
+                true => Some(Moved::build(&mut device.zeroed(), slots)?),
+                false => None,
+            },
             kinds: kinds as u32,
             cells: space.cells(),
         })

@@ -8,7 +8,7 @@ use crate::game::{ai, autopilot, effects, master};
 use crate::primitives::{histogram, scan, sort, touch};
 use crate::render::{self, camera, particles, radar};
 use crate::rng::streams;
-use crate::sim::{broad, free_list, integrate, narrow, scatter};
+use crate::sim::{broad, free_list, integrate, narrow, renumber, scatter};
 use crate::{Kernel, KernelInfo};
 
 macro_rules! kernels {
@@ -73,6 +73,12 @@ kernels! {
     ORDER_CELLS = order_cells(broad::OrderArgs) => broad::order_cells;
     /// Merges the sorted runs of large buckets in pairs (a bounded grid's ordering).
     MERGE_RUNS = merge_runs(broad::MergeArgs) => broad::merge_runs;
+    /// Copies each body bound for a new slot (the grid's order within its kind's range)
+    /// into the renumbering's buffers.
+    GATHER_IN_CELL_ORDER = gather_in_cell_order(renumber::RenumberArgs) => renumber::gather_in_cell_order;
+    /// Each slot takes the body gathered for it, or is free; the grid's entries name the new
+    /// slots.
+    SETTLE_IN_CELL_ORDER = settle_in_cell_order(renumber::RenumberArgs) => renumber::settle_in_cell_order;
     /// Narrow phase: each body's collision response to its neighbours, and energy losses.
     COLLIDE = collide(narrow::CollideArgs) => narrow::collide;
     /// The narrow phase for worlds of circles only (no rectangle tests).

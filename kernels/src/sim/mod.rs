@@ -7,12 +7,14 @@
 //! 2. a prefix sum of the counts (`crate::primitives::scan`): where each bucket starts;
 //! 3. [`broad::place_in_cells`] and [`broad::order_cells`]: every body in its bucket, each
 //!    bucket in increasing slot order whatever order the threads ran in;
-//! 4. [`narrow::collide`]: each body tests the bodies of the kinds it collides with in its 3×3
+//! 4. every few steps in large worlds, [`renumber`]: each kind's bodies move to the slots of
+//!    its range in the grid's order, so that neighbours in a warp are neighbours in the field;
+//! 5. [`narrow::collide`]: each body tests the bodies of the kinds it collides with in its 3×3
 //!    cell neighbourhood and sums its own response (position push, velocity kick, energy loss),
 //!    alone or with a team of lanes ([`teams`]) that folds what it finds in the same order;
-//! 5. [`integrate::integrate`]: explicit Euler and the world's boundary rule; bodies out of
+//! 6. [`integrate::integrate`]: explicit Euler and the world's boundary rule; bodies out of
 //!    energy die;
-//! 6. [`free_list::mark_free`], a prefix sum, [`free_list::gather_free`]: the free slots of
+//! 7. [`free_list::mark_free`], a prefix sum, [`free_list::gather_free`]: the free slots of
 //!    each kind's range, in slot order, for the master thread to hand out.
 //!
 //! Every kernel writes only its own slot's elements, and reads what others write only in a
@@ -27,6 +29,7 @@ pub mod free_list;
 pub mod integrate;
 pub mod kinds;
 pub mod narrow;
+pub mod renumber;
 pub mod scatter;
 pub mod space;
 pub mod teams;
