@@ -208,7 +208,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
             let replay = Replay::load(&file)?;
             let origin = format!("{} (scene `{}`)", file.display(), replay.scene);
-            let scene = Scene::from_toml(&replay.scene_toml, &origin)?;
+            let scene = replay.scene(&origin)?;
             let progress = announce(&device, &scene) && !json;
             if window {
                 let options = PlayOptions {

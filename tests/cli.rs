@@ -562,6 +562,7 @@ fn inputs_that_would_hang_are_refused_at_once() {
     // A replay of a billion steps: refused before its inputs are allocated.
     let file = dir.path().join("billion.json");
     let replay = gpuwars::game::replay::Replay {
+        version: gpuwars::game::replay::VERSION,
         scene: "kamikaze".into(),
         scene_toml: gpuwars::game::scene::BUILT_IN[1].source.into(),
         seed: 1,

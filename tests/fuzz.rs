@@ -17,7 +17,7 @@ use gpuwars::benchmark::compare;
 use gpuwars::cli::{BenchCommand, Cli, Command};
 use gpuwars::files::FileError;
 use gpuwars::game::engine::footprint;
-use gpuwars::game::replay::{MAX_STEPS, Replay};
+use gpuwars::game::replay::{FIRST_VERSION, MAX_STEPS, Replay, VERSION};
 use gpuwars::game::scene::BUILT_IN;
 use gpuwars::game::{Game, Scene};
 use gpuwars::kernels::game::control::Input;
@@ -749,6 +749,7 @@ fn any_text() -> impl Strategy<Value = String> {
 
 prop_compose! {
     fn any_replay()(
+        version in FIRST_VERSION..=VERSION,
         scene in any_text(),
         scene_toml in any_text(),
         seed in any::<u32>(),
@@ -757,7 +758,7 @@ prop_compose! {
         runs in prop::collection::vec((1usize..50, any_input()), 0..40),
     ) -> Replay {
         let inputs = runs.iter().flat_map(|&(n, input)| std::iter::repeat_n(input, n)).collect();
-        Replay { scene, scene_toml, seed, backend, state_hash, inputs }
+        Replay { version, scene, scene_toml, seed, backend, state_hash, inputs }
     }
 }
 
@@ -782,6 +783,7 @@ fn sample_replay() -> Replay {
     })
     .collect();
     Replay {
+        version: VERSION,
         scene: "kamikaze".into(),
         scene_toml: BUILT_IN[1].source.into(),
         seed: 7,

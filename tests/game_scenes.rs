@@ -223,7 +223,7 @@ fn a_replay_reproduces_the_game(device: &Device) {
         let (report, replay) = demo::demo(device, &scene, 3, 400, RunOptions::default()).unwrap();
         let text = replay.to_json();
         let read = gpuwars::game::replay::Replay::parse(&text, "memory").unwrap();
-        let scene_again = Scene::from_toml(&read.scene_toml, "replay").unwrap();
+        let scene_again = read.scene("replay").unwrap();
         let again = demo::replay(device, &scene_again, &read, RunOptions::default()).unwrap();
         assert_eq!(again.state_hash, report.state_hash, "{name}");
         assert_eq!(again.score, report.score);

@@ -9,10 +9,10 @@ use std::path::Path;
 use std::process::Command;
 use std::sync::Mutex;
 
+use gpuwars::game::Game;
 use gpuwars::game::demo::{self, RunOptions};
 use gpuwars::game::highscore::{self, HighScores};
 use gpuwars::game::replay::Replay;
-use gpuwars::game::{Game, Scene};
 use gpuwars::kernels::game::control::{AIM_STEPS, Input, MOVE_SCALE};
 
 /// One window at a time: two would share the machine's cores and the display server.
@@ -128,7 +128,7 @@ xdotool keyup w keyup Up key Escape";
 
     // The same game, headless: the same final state as the window's.
     let cpu = common::cpu();
-    let scene = Scene::from_toml(&replay.scene_toml, "the replay").unwrap();
+    let scene = replay.scene("the replay").unwrap();
     let report = demo::replay(cpu, &scene, &replay, RunOptions::default()).unwrap();
     assert_eq!(report.state_hash, format!("{:#018x}", replay.state_hash));
     assert!(stdout.contains(&report.state_hash), "{stdout}");

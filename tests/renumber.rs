@@ -10,6 +10,9 @@ use common::sim::{circle, kind, ten_thousand, world};
 use glam::Vec2;
 use gpuwars::Device;
 use gpuwars::backend::Schedule;
+use gpuwars::game::demo::{self, RunOptions};
+use gpuwars::game::replay::{FIRST_VERSION, Replay, VERSION};
+use gpuwars::game::scene::built_in;
 use gpuwars::game::{Game, Scene};
 use gpuwars::pipeline::Simulation;
 use gpuwars::sim::layout::{Layout, space};
@@ -203,8 +206,34 @@ fn a_renumbering_game_is_the_same_on_every_thread_count_and_schedule() {
     }
 }
 
+/// A replay recorded before renumbering (version 1, whose scene has no `renumber_every`)
+/// plays its scene as it was played then, never renumbering, and reaches its recorded hash;
+/// read as the current version, the same inputs play another game.
+fn a_replay_from_before_renumbering_plays_as_recorded(device: &Device) {
+    let mut then = built_in("paper").unwrap().unwrap();
+    assert!(then.world.physics.renumber_every.is_none());
+    then.world.physics.renumber_every = Some(0);
+    let (report, mut recorded) = demo::demo(device, &then, 2, 60, RunOptions::default()).unwrap();
+    // The scene's text is the built-in one, without the key, as a version-1 build wrote it.
+    recorded.version = FIRST_VERSION;
+    let old = Replay::parse(&recorded.to_json(), "version 1").unwrap();
+    let replayed = |replay: &Replay| {
+        let scene = replay.scene("the replay").unwrap();
+        demo::replay(device, &scene, replay, RunOptions::default())
+            .unwrap()
+            .state_hash
+    };
+    assert_eq!(replayed(&old), report.state_hash);
+    let now = Replay {
+        version: VERSION,
+        ..old
+    };
+    assert_ne!(replayed(&now), report.state_hash);
+}
+
 on_both_backends!(
     renumbering_changes_no_body,
     renumbering_puts_each_kind_in_the_grids_order,
     kills_burst_where_renumbered_enemies_died,
+    a_replay_from_before_renumbering_plays_as_recorded,
 );

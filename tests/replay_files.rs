@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use gpuwars::game::replay::{Replay, ReplayError};
+use gpuwars::game::replay::{FIRST_VERSION, Replay, ReplayError, VERSION};
 use gpuwars::kernels::game::control::Input;
 use proptest::prelude::*;
 
@@ -30,6 +30,7 @@ fn sample() -> Replay {
         (2, input(1, 2, 3, 1)),
     ];
     Replay {
+        version: VERSION,
         scene: "paper".into(),
         scene_toml: "name = \"paper\"\n# a \\ and a \"quote\",\ta tab, ünïcödé ✓\n[world]\n".into(),
         seed: u32::MAX,
@@ -134,6 +135,7 @@ fn reads_any_layout_and_either_case_of_hash() {
         "state_hash": "0X00000000000000FF", "scene_toml": "", "scene": "x",
         "version": 1, "format": "gpuwars-replay"}"#;
     let replay = Replay::parse(text, "compact").expect("a valid replay");
+    assert_eq!(replay.version, FIRST_VERSION);
     assert_eq!(replay.state_hash, 0xff);
     assert_eq!(replay.inputs, vec![input(1, -1, 7, 1); 2]);
 }
@@ -279,8 +281,8 @@ fn wrong_types() {
     let (text, line) = mutate("\"scene\": \"paper\"", "\"scene\": 5");
     expect_error(&text, Some(line), "scene", &["expected a string"]);
 
-    let (text, line) = mutate("\"version\": 1", "\"version\": null");
-    expect_error(&text, Some(line), "version", &["null", "allowed 1"]);
+    let (text, line) = mutate("\"version\": 2", "\"version\": null");
+    expect_error(&text, Some(line), "version", &["null", "allowed 1 to 2"]);
 
     let run = run_index(RUN);
     let (text, line) = mutate(RUN, "[1, 5, -5, 100]");
@@ -403,13 +405,24 @@ fn wrong_format_or_version() {
         &["\"gpuwars-save\"", "\"gpuwars-replay\""],
     );
 
-    let version_2 = "unsupported version 2 (this build reads version 1)";
-    let (text, line) = mutate("\"version\": 1", "\"version\": 2");
-    expect_error(&text, Some(line), "version", &[version_2]);
+    for (version, problem) in [
+        (
+            0,
+            "unsupported version 0 (this build reads versions 1 to 2)",
+        ),
+        (
+            3,
+            "unsupported version 3 (this build reads versions 1 to 2)",
+        ),
+    ] {
+        let (text, line) = mutate("\"version\": 2", &format!("\"version\": {version}"));
+        expect_error(&text, Some(line), "version", &[problem]);
+    }
 
     // A later version's new keys do not hide the version.
+    let (text, line) = mutate("\"version\": 2", "\"version\": 3");
     let text = text.replace("\"seed\"", "\"new_key\": [1, 2],\n  \"seed\"");
-    expect_error(&text, Some(line), "version", &[version_2]);
+    expect_error(&text, Some(line), "version", &["unsupported version 3"]);
 }
 
 #[test]
@@ -624,7 +637,7 @@ fn errors_speak_of_the_file_not_of_rust() {
             "found an object",
         ),
         (
-            "\"version\": 1",
+            "\"version\": 2",
             "\"version\": true",
             "version",
             "found true",

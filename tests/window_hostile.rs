@@ -10,7 +10,6 @@ use std::path::Path;
 use std::process::Command;
 use std::sync::Mutex;
 
-use gpuwars::game::Scene;
 use gpuwars::game::demo::{self, RunOptions};
 use gpuwars::game::replay::Replay;
 
@@ -158,7 +157,7 @@ fn survives(events: &str, end: &str) {
     // The recording is whole: it replays headless to the state the window's game ended in.
     let replay = Replay::load(&dir.path().join("played.json")).unwrap();
     assert!(!replay.inputs.is_empty(), "{end}: nothing was played");
-    let scene = Scene::from_toml(&replay.scene_toml, "the replay").unwrap();
+    let scene = replay.scene("the replay").unwrap();
     let report = demo::replay(common::cpu(), &scene, &replay, RunOptions::default()).unwrap();
     assert_eq!(report.state_hash, format!("{:#018x}", replay.state_hash));
     assert!(stdout.contains(&report.state_hash), "{end}: {stdout}");

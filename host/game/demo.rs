@@ -418,6 +418,7 @@ pub fn demo(
     };
     let (report, inputs, state_hash) = play(&mut game, setup_s, seed, steps, options, |_| pilot)?;
     let replay = Replay {
+        version: super::replay::VERSION,
         scene: scene.name.clone(),
         scene_toml: scene.source.clone(),
         seed,

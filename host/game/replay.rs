@@ -6,7 +6,7 @@
 //! ```json
 //! {
 //!   "format": "gpuwars-replay",
-//!   "version": 1,
+//!   "version": 2,
 //!   "scene": "paper",
 //!   "scene_toml": "<the whole scene TOML text>",
 //!   "seed": 1,
@@ -30,13 +30,20 @@ use std::path::Path;
 
 use gpuwars_kernels::game::control::Input;
 
+use super::Scene;
+use super::scene::SceneError;
 use crate::files::positioned::{Doc, Entry, Node, Value};
 use crate::files::{MAX_SCENE_BYTES, excerpt, json_problem, line_of, read_text, thousands};
 
 /// The `format` of every replay file.
 pub const FORMAT: &str = "gpuwars-replay";
-/// The `version` this build reads and writes.
-pub const VERSION: u64 = 1;
+/// The `version` this build writes. Version 2 began when worlds of 8,192 slots and more
+/// began renumbering their bodies by default (`Physics::renumber_every`), which changed
+/// the game those scenes play.
+pub const VERSION: u64 = 2;
+/// The oldest `version` this build reads: a version-1 replay is played as it was recorded,
+/// its scene never renumbering (see [`Replay::scene`]).
+pub const FIRST_VERSION: u64 = 1;
 /// The most steps a replay, and a game played without a window, may hold: 4.6 hours of
 /// game time at 60 steps a second, 16 MB of inputs in memory.
 pub const MAX_STEPS: u64 = 1_000_000;
@@ -52,6 +59,8 @@ const KEYS: &str = "format, version, scene, scene_toml, seed, backend, steps, st
 /// One recorded game.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Replay {
+    /// The file's version: [`VERSION`] for a game this build records.
+    pub version: u64,
     /// Short name of the scene (`paper`, …).
     pub scene: String,
     /// The whole TOML text of the scene, so that the replay does not depend on a file that may
@@ -93,10 +102,11 @@ impl Replay {
         // Value's Display escapes a string exactly as JSON needs, and cannot fail.
         let string = |s: &str| serde_json::Value::from(s).to_string();
         format!(
-            "{{\n  \"format\": {},\n  \"version\": {VERSION},\n  \"scene\": {},\n  \
+            "{{\n  \"format\": {},\n  \"version\": {},\n  \"scene\": {},\n  \
              \"scene_toml\": {},\n  \"seed\": {},\n  \"backend\": {},\n  \"steps\": {},\n  \
              \"state_hash\": \"0x{:016x}\",\n  \"inputs\": {inputs}\n}}\n",
             string(FORMAT),
+            self.version,
             string(&self.scene),
             string(&self.scene_toml),
             self.seed,
@@ -114,6 +124,7 @@ impl Replay {
         let entries = read_header(&doc)?;
         let fields = read_fields(&entries, None)?;
         let missing = |key: &str| ReplayError::new(origin, None, key, "missing");
+        let version = fields.version.ok_or_else(|| missing("version"))?;
         let scene = fields.scene.ok_or_else(|| missing("scene"))?;
         let scene_toml = fields.scene_toml.ok_or_else(|| missing("scene_toml"))?;
         let seed = fields.seed.ok_or_else(|| missing("seed"))?;
@@ -142,6 +153,7 @@ impl Replay {
             inputs.extend(std::iter::repeat_n(input, repeat as usize));
         }
         Ok(Replay {
+            version,
             scene,
             scene_toml,
             seed,
@@ -149,6 +161,17 @@ impl Replay {
             state_hash,
             inputs,
         })
+    }
+
+    /// The replay's scene, read from its `scene_toml` (`origin` names it in errors), as the
+    /// game that recorded it played it: a replay older than [`VERSION`] was recorded before
+    /// worlds renumbered their bodies by default, so its scene renumbers only if it says so.
+    pub fn scene(&self, origin: &str) -> Result<Scene, SceneError> {
+        let mut scene = Scene::from_toml(&self.scene_toml, origin)?;
+        if self.version < VERSION {
+            scene.world.physics.renumber_every.get_or_insert(0);
+        }
+        Ok(scene)
     }
 
     /// Reads and parses a file: a regular file of at most [`MAX_REPLAY_BYTES`] bytes of
@@ -244,7 +267,7 @@ fn read_header<'a>(doc: &'a Doc<'a>) -> Result<Vec<Entry<'a>>, ReplayError> {
 #[derive(Default)]
 struct Fields {
     format: Option<()>,
-    version: Option<()>,
+    version: Option<u64>,
     scene: Option<String>,
     scene_toml: Option<String>,
     seed: Option<u32>,
@@ -266,7 +289,7 @@ fn read_fields(entries: &[Entry<'_>], header: Option<bool>) -> Result<Fields, Re
             key if header.is_some() && !HEADER.contains(&key) => {}
             // A key without its `:` is seen (twice, say), its value never read.
             "format" if !read => store(&mut f.format, entry, || Ok(()))?,
-            "version" if !read => store(&mut f.version, entry, || Ok(()))?,
+            "version" if !read => store(&mut f.version, entry, || Ok(VERSION))?,
             "format" => store(&mut f.format, entry, || match text()? {
                 format if format == FORMAT => Ok(()),
                 other => Err(node.fail(format!(
@@ -275,11 +298,14 @@ fn read_fields(entries: &[Entry<'_>], header: Option<bool>) -> Result<Fields, Re
                 ))),
             })?,
             "version" => store(&mut f.version, entry, || {
-                whole(node, &VERSION.to_string(), |v| match u64::try_from(v) {
-                    Ok(VERSION) => Ok(()),
-                    _ => Err(format!(
-                        "unsupported version {v} (this build reads version {VERSION})"
-                    )),
+                let allowed = span(FIRST_VERSION, VERSION);
+                whole(node, &allowed, |v| {
+                    u64::try_from(v)
+                        .ok()
+                        .filter(|v| (FIRST_VERSION..=VERSION).contains(v))
+                        .ok_or_else(|| {
+                            format!("unsupported version {v} (this build reads versions {allowed})")
+                        })
                 })
             })?,
             "scene" => store(&mut f.scene, entry, text)?,

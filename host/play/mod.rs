@@ -955,6 +955,7 @@ impl<'d> App<'d> {
         let played = record.inputs.len() as u64;
         if let Some(path) = &self.options.record {
             let replay = Replay {
+                version: crate::game::replay::VERSION,
                 scene: self.scene.name.clone(),
                 scene_toml: self.scene.source.clone(),
                 seed: self.options.seed,
