@@ -173,6 +173,44 @@ fn free_lists_follow_births_and_deaths(device: &Device) {
     assert_eq!(s.free.count, [1, 68, 28]);
 }
 
+/// In the 10,000-body world, where bodies die and are renumbered every third step, each
+/// kind's free list is, after every step, exactly its usable slots without a live body in
+/// slot order, and its count their number: a brute force over the snapshot. Scattering
+/// half the bodies leaves free slots in every tile of some ranges.
+fn free_lists_are_every_free_slot_in_order(device: &Device) {
+    let (mut spec, scatter) = common::sim::ten_thousand();
+    spec.physics.renumber_every = Some(3);
+    let mut sim = Simulation::new(device, &spec, 5).unwrap();
+    for (kind, count, speed) in scatter {
+        sim.scatter(kind, count / 2, speed).unwrap();
+    }
+    let ranges = sim.layout().ranges.clone();
+    let mut holes = 0;
+    for step in 0..40 {
+        sim.step().unwrap();
+        let s = sim.snapshot().unwrap();
+        for (k, range) in ranges.iter().enumerate() {
+            let free: Vec<u32> = (range.start..range.end())
+                .filter(|&i| s.bodies.alive[i as usize] == 0)
+                .collect();
+            assert_eq!(
+                s.free.count[k] as usize,
+                free.len(),
+                "step {step}, kind {k}"
+            );
+            let start = range.start as usize;
+            assert_eq!(
+                s.free.list[start..start + free.len()],
+                free[..],
+                "step {step}, kind {k}"
+            );
+            // A free slot before a live one of its kind: the list is not just the range's tail.
+            holes += free.windows(2).filter(|w| w[1] != w[0] + 1).count();
+        }
+    }
+    assert!(holes > 0, "no free slot between live ones");
+}
+
 fn placing_into_padding_or_missing_slots_is_an_error(device: &Device) {
     let mut sim = Simulation::new(device, &valid(), 9).unwrap();
     let padding = sim.place(&[(5, Vec2::ZERO, Vec2::ZERO)]).unwrap_err();
@@ -232,6 +270,7 @@ fn a_world_too_large_for_the_device_is_refused(device: &Device) {
 
 on_both_backends!(
     free_lists_follow_births_and_deaths,
+    free_lists_are_every_free_slot_in_order,
     placing_into_padding_or_missing_slots_is_an_error,
     a_world_too_large_for_the_device_is_refused,
 );

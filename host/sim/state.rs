@@ -67,14 +67,15 @@ pub fn bytes_needed(layout: &Layout, space: &Space, kinds: usize, renumbers: boo
     made(FreeSlots::<Unmade>::build(s, slots, kinds));
     made(Contacts::<Unmade>::build(s, slots));
     made(Grid::<Unmade>::build(s, slots, buckets));
-    made(FreeMarks::<Unmade>::build(s, slots));
+    let tiles = FreeMarks::tiles_for(layout.slots) as usize;
+    made(FreeMarks::<Unmade>::build(s, slots, tiles));
     if renumbers {
         made(Moved::<Unmade>::build(s, slots));
     }
     made(s.array::<u32>("seeds", slots));
     made(s.array::<Mt607Params>("table", rng::TABLE.len()));
     made(s.array::<u32>("grid scan", PrefixSum::scratch_len(buckets)));
-    made(s.array::<u32>("free scan", PrefixSum::scratch_len(slots)));
+    made(s.array::<u32>("free scan", PrefixSum::scratch_len(tiles)));
     sizes.bytes
 }
 
@@ -165,12 +166,13 @@ impl Scratch {
     ) -> Result<Self, Error> {
         let slots = layout.slots as usize;
         let buckets = buckets(space, kinds);
+        let tiles = FreeMarks::tiles_for(layout.slots) as usize;
         Ok(Scratch {
             contacts: Contacts::build(&mut device.zeroed(), slots)?,
             grid: Grid::build(&mut device.zeroed(), slots, buckets)?,
             grid_scan: PrefixSum::new(device, buckets)?,
-            marks: FreeMarks::build(&mut device.zeroed(), slots)?,
-            marks_scan: PrefixSum::new(device, slots)?,
+            marks: FreeMarks::build(&mut device.zeroed(), slots, tiles)?,
+            marks_scan: PrefixSum::new(device, tiles)?,
             moved: match renumbers {
                 true => Some(Moved::build(&mut device.zeroed(), slots)?),
                 false => None,

@@ -197,6 +197,17 @@ pub fn sum_u32(lane: u32, value: impl Fn(u32) -> u32) -> u32 {
     reduce(lane, value, u32::wrapping_add)
 }
 
+/// The wrapping sum of `value(lane)` over the warp's 32 lanes, for lane 0 only: on the CPU the
+/// other lanes skip the work and get 0 (see [`is_copy_of_lane0`]), so only lane 0 may use it.
+#[inline(always)]
+pub fn sum_u32_in_lane0(lane: u32, value: impl Fn(u32) -> u32) -> u32 {
+    if is_copy_of_lane0(lane) {
+        0
+    } else {
+        sum_u32(lane, value)
+    }
+}
+
 /// The sum of `value(lane)` over the warp's 32 lanes, in every lane: a fixed tree of float
 /// additions, the same on every backend.
 #[inline(always)]

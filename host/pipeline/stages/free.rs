@@ -1,15 +1,15 @@
-//! `free`: the free lists: flags, their prefix sum into ranks, the lists and counts (each
-//! kind's last slot writes its count, so they need no clearing).
+//! `free`: the free lists: flags and each tile's count of them, the tiles' prefix sum, the
+//! lists and counts (each kind's last slot writes its count, so they need no clearing).
 
 use gpuwars_kernels::registry;
-use gpuwars_kernels::sim::free_list::{GatherArgs, MarkArgs};
+use gpuwars_kernels::sim::free_list::{FreeMarks, GatherArgs, MarkArgs};
 
 use crate::Op;
 use crate::backend::Binder;
 use crate::pipeline::world::World;
 use crate::primitives::threads;
 
-/// Mark, scan, gather: a thread a slot each.
+/// Mark and gather, a thread a slot each, with the scan of the tiles' counts between them.
 pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     let (slots, state, marks) = (world.layout.slots, &world.state, &world.scratch.marks);
     // SAFETY (both binders): the views go into the op made with each.
@@ -18,23 +18,25 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         bodies: state.bodies(&mut b),
         ranges: b.view(&state.tables.ranges),
         flags: b.view(&marks.flags),
+        tiles: b.view(&marks.tiles),
     };
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
     let mut ops =
         vec![unsafe { threads(registry::MARK_FREE, slots, mark, b, 12 * u64::from(slots)) }];
+    // In place, over one more element than the tiles: the last becomes the total.
     ops.extend(
         world
             .scratch
             .marks_scan
-            .ops(&marks.flags, &marks.ranks, slots)
-            .expect("the scan was made for the slots"),
+            .ops(&marks.tiles, &marks.tiles, FreeMarks::tiles_for(slots))
+            .expect("the scan was made for the tiles"),
     );
     let mut b = unsafe { Binder::new() };
     let gather = GatherArgs {
         kind: b.view(&state.bodies.kind),
         ranges: b.view(&state.tables.ranges),
         flags: b.view(&marks.flags),
-        ranks: b.view(&marks.ranks),
+        tiles: b.view(&marks.tiles),
         list: b.view(&state.free.list),
         count: b.view(&state.free.count),
     };
@@ -45,7 +47,7 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
             slots,
             gather,
             b,
-            16 * u64::from(slots),
+            12 * u64::from(slots),
         )
     });
     ops

@@ -2,15 +2,18 @@
 //! indicate available positions for individuals creation"), rebuilt after every step by
 //! stream compaction so that it needs neither atomics nor a sequential scan:
 //!
-//! 1. [`mark_free`]: `flags[i]` = 1 where slot `i` is a usable slot without a live body;
-//! 2. the host takes the exclusive prefix sum of the flags;
-//! 3. [`gather_free`]: each free slot writes itself into its range's list at its rank, and
-//!    the last slot of each range writes the range's count.
+//! 1. [`mark_free`]: `flags[i]` = 1 where slot `i` is a usable slot without a live body, and
+//!    each warp's count of its 32 slots' flags (a tile: ranges are aligned to warps);
+//! 2. the exclusive prefix sum of the tiles' counts, 32 times shorter than the slots;
+//! 3. [`gather_free`]: each free slot writes itself into its range's list at its rank (its
+//!    tile's offset and the free slots before it in the tile, a warp scan), and the last slot
+//!    of each range writes the range's count.
 //!
 //! Lists come out in increasing slot order; the master thread takes slots from the front.
 
 use super::bodies::Bodies;
 use super::kinds::SlotRange;
+use crate::warp::{self, WARP};
 use crate::{DevSlice, Thread, device_data, kernel_args};
 
 device_data! {
@@ -25,11 +28,19 @@ device_data! {
 
 device_data! {
     /// The rebuild's own arrays, remade every step.
-    pub struct FreeMarks(slots) {
+    pub struct FreeMarks(slots, tiles) {
         /// 1 for a free usable slot, else 0 (written by [`mark_free`]).
         flags: [u32; slots],
-        /// The flags' exclusive prefix sums.
-        ranks: [u32; slots],
+        /// The free slots of each tile of 32 slots, then their exclusive prefix sums in place;
+        /// one more element for the total (see [`FreeMarks::tiles_for`]).
+        tiles: [u32; tiles],
+    }
+}
+
+impl FreeMarks {
+    /// Elements of [`FreeMarks::tiles`] for `slots` slots (a multiple of [`WARP`]).
+    pub const fn tiles_for(slots: u32) -> u32 {
+        slots / WARP + 1
     }
 }
 
@@ -42,6 +53,8 @@ kernel_args! {
         pub ranges: DevSlice<SlotRange>,
         /// Output: 1 for a free usable slot, else 0; one per slot.
         pub flags: DevSlice<u32>,
+        /// Output: the free slots of each tile of 32 slots.
+        pub tiles: DevSlice<u32>,
     }
 }
 
@@ -51,16 +64,22 @@ fn usable(slot: u32, range: SlotRange) -> bool {
     slot >= range.start && slot < range.end()
 }
 
-/// Thread `i` writes `flags[i]`.
+/// Thread `i` writes `flags[i]`; lane 0 of each warp writes its tile's count. The slots
+/// come in whole warps (a multiple of [`WARP`]), so a warp returns early whole.
 #[inline(always)]
 pub fn mark_free(t: Thread, args: &MarkArgs) {
     let slot = t.global();
     if slot >= args.flags.len() {
         return;
     }
-    let range = args.ranges.get(args.bodies.kind.get(slot));
-    let free = usable(slot, range) && !args.bodies.is_alive(slot);
-    args.flags.set(slot, free as u32);
+    let b = &args.bodies;
+    let free = |s: u32| usable(s, args.ranges.get(b.kind.get(s))) && !b.is_alive(s);
+    args.flags.set(slot, free(slot) as u32);
+    let (lane, first) = (t.lane(), slot - t.lane());
+    let count = warp::sum_u32_in_lane0(lane, |l| free(first + l) as u32);
+    if lane == 0 {
+        args.tiles.set(slot / WARP, count);
+    }
 }
 
 kernel_args! {
@@ -72,8 +91,8 @@ kernel_args! {
         pub ranges: DevSlice<SlotRange>,
         /// The flags of [`mark_free`].
         pub flags: DevSlice<u32>,
-        /// Their exclusive prefix sums.
-        pub ranks: DevSlice<u32>,
+        /// The exclusive prefix sums of the tiles' counts of free slots, and their total.
+        pub tiles: DevSlice<u32>,
         /// Output: the free slots of kind `k` at `list[start_k ..][.. count_k]`; one per slot.
         pub list: DevSlice<u32>,
         /// Output: the number of free slots of each kind. A kind without slots has no writer: its
@@ -90,13 +109,21 @@ pub fn gather_free(t: Thread, args: &GatherArgs) {
     if slot >= args.flags.len() {
         return;
     }
+    let (lane, tile) = (t.lane(), slot / WARP);
+    let offset = args.tiles.get(tile);
+    // Warp-uniform: only a tile with free slots scans its flags.
+    let before = if args.tiles.get(tile + 1) == offset {
+        0
+    } else {
+        warp::exclusive_sum_u32(lane, |l| args.flags.get(tile * WARP + l))
+    };
     let kind = args.kind.get(slot);
     let range = args.ranges.get(kind);
     if !usable(slot, range) {
         return;
     }
-    let first = args.ranks.get(range.start);
-    let rank = args.ranks.get(slot) - first;
+    // A range starts a tile: the free slots before it are its first tile's offset.
+    let rank = offset + before - args.tiles.get(range.start / WARP);
     let flag = args.flags.get(slot);
     if flag != 0 {
         args.list.set(range.start + rank, slot);

@@ -14,8 +14,9 @@
 //!    alone or with a team of lanes ([`teams`]) that folds what it finds in the same order;
 //! 6. [`integrate::integrate`]: explicit Euler and the world's boundary rule; bodies out of
 //!    energy die;
-//! 7. [`free_list::mark_free`], a prefix sum, [`free_list::gather_free`]: the free slots of
-//!    each kind's range, in slot order, for the master thread to hand out.
+//! 7. [`free_list::mark_free`], a prefix sum of the counts of each warp's tile,
+//!    [`free_list::gather_free`]: the free slots of each kind's range, in slot order, for the
+//!    master thread to hand out.
 //!
 //! Every kernel writes only its own slot's elements, and reads what others write only in a
 //! later launch: no barriers, no float atomics, the same bits on every backend. The one
