@@ -69,6 +69,22 @@ kernel_args! {
     }
 }
 
+/// Copies what a body carries from step to step (every array [`Moved`] holds but the free
+/// flag, which lives outside the bodies) from element `$from` of `$src` to element `$to` of
+/// `$dst`: the same fields in [`Bodies`] and in [`Moved`], named once.
+macro_rules! carry {
+    ($dst:expr, $to:expr, $src:expr, $from:expr) => {{
+        let (dst, src) = (&$dst, &$src);
+        dst.pos.set($to, src.pos.get($from));
+        dst.vel.set($to, src.vel.get($from));
+        dst.force.set($to, src.force.get($from));
+        dst.dir.set($to, src.dir.get($from));
+        dst.energy.set($to, src.energy.get($from));
+        dst.state.set($to, src.state.get($from));
+        dst.age.set($to, src.age.get($from));
+    }};
+}
+
 /// What the renumbering gives a slot of a kind's range.
 enum Destination {
     /// The body at this grid entry: the kind's `r`-th live body in grid order goes to the
@@ -108,16 +124,9 @@ pub fn gather_in_cell_order(t: Thread, args: &RenumberArgs) {
     let Some(Destination::Body(entry)) = destination(args, i) else {
         return;
     };
-    let (b, m) = (&args.bodies, &args.moved);
     let from = args.entries.get(entry);
-    m.pos.set(i, b.pos.get(from));
-    m.vel.set(i, b.vel.get(from));
-    m.force.set(i, b.force.get(from));
-    m.dir.set(i, b.dir.get(from));
-    m.energy.set(i, b.energy.get(from));
-    m.state.set(i, b.state.get(from));
-    m.age.set(i, b.age.get(from));
-    m.was_free.set(i, args.was_free.get(from));
+    carry!(args.moved, i, args.bodies, from);
+    args.moved.was_free.set(i, args.was_free.get(from));
 }
 
 /// Thread `i`: slot `i` takes the body [`gather_in_cell_order`] copied for it, and its grid
@@ -136,15 +145,8 @@ pub fn settle_in_cell_order(t: Thread, args: &RenumberArgs) {
         }
         Some(Destination::Body(entry)) => entry,
     };
-    let m = &args.moved;
-    b.pos.set(i, m.pos.get(i));
-    b.vel.set(i, m.vel.get(i));
-    b.force.set(i, m.force.get(i));
-    b.dir.set(i, m.dir.get(i));
-    b.energy.set(i, m.energy.get(i));
-    b.state.set(i, m.state.get(i));
-    b.age.set(i, m.age.get(i));
+    carry!(args.bodies, i, args.moved, i);
     b.alive.set(i, 1);
-    args.was_free.set(i, m.was_free.get(i));
+    args.was_free.set(i, args.moved.was_free.get(i));
     args.entries.set(entry, i);
 }
