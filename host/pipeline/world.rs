@@ -143,7 +143,7 @@ impl World {
         };
         let state = WorldState::new(device, spec, &layout, seed)?;
         let renumbers = config.renumber_every != 0;
-        let scratch = Scratch::new(device, &layout, &space, (kinds, renumbers))?;
+        let scratch = Scratch::new(device, &layout, &space, kinds, renumbers)?;
         let game = match game {
             Some(config) => {
                 let mut data = GameData::build(&mut device.zeroed(), kinds, config.waves.len())?;

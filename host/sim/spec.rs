@@ -162,25 +162,14 @@ impl Physics {
             (1.0, true),
             MAX_CELL_SCALE,
         )?;
-        if self.neighbour_cap > MAX_SLOTS {
-            return Err(error(
-                "physics.neighbour_cap",
-                format!(
-                    "{} is out of range (allowed 0 for no limit, or up to {})",
-                    thousands(self.neighbour_cap),
-                    thousands(MAX_SLOTS)
-                ),
-            ));
-        }
-        if let Some(every) = self.renumber_every.filter(|&n| n > MAX_RENUMBER_EVERY) {
-            return Err(error(
-                "physics.renumber_every",
-                format!(
-                    "{} is out of range (allowed 0 for never, or up to {})",
-                    thousands(every),
-                    thousands(MAX_RENUMBER_EVERY)
-                ),
-            ));
+        check_up_to(
+            "physics.neighbour_cap",
+            self.neighbour_cap,
+            "no limit",
+            MAX_SLOTS,
+        )?;
+        if let Some(every) = self.renumber_every {
+            check_up_to("physics.renumber_every", every, "never", MAX_RENUMBER_EVERY)?;
         }
         check_range(
             "physics.vision_scale",
@@ -337,6 +326,21 @@ pub(crate) fn error(field: impl fmt::Display, problem: impl fmt::Display) -> Spe
         field: field.to_string(),
         problem: problem.to_string(),
     }
+}
+
+/// `value` at most `max`, where 0 means `zero` ("no limit", "never").
+fn check_up_to(field: &str, value: u32, zero: &str, max: u32) -> Result<(), SpecError> {
+    if value <= max {
+        return Ok(());
+    }
+    Err(error(
+        field,
+        format!(
+            "{} is out of range (allowed 0 for {zero}, or up to {})",
+            thousands(value),
+            thousands(max)
+        ),
+    ))
 }
 
 /// `value` must be in `(low, high]` (or `[low, high]` if `low_inclusive`); NaN never is.

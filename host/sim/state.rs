@@ -162,7 +162,8 @@ impl Scratch {
         device: &Device,
         layout: &Layout,
         space: &Space,
-        (kinds, renumbers): (usize, bool),
+        kinds: usize,
+        renumbers: bool,
     ) -> Result<Self, Error> {
         let slots = layout.slots as usize;
         let buckets = buckets(space, kinds);
