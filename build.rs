@@ -1,10 +1,12 @@
-//! Compiles `kernels/` to one self-contained PTX module with rustc's nvptx64 backend.
+//! Compiles `kernels/` to self-contained PTX modules with rustc's nvptx64 backend.
 //!
 //! A nested `cargo rustc` builds the kernels crate for `nvptx64-nvidia-cuda` as a staticlib
 //! with fat LTO (profile `ptx` in Cargo.toml) and `--emit=asm`: LTO pulls `core` and every
 //! dependency into the one module, so the PTX has no `.extern` and loads on its own. The result
 //! is written to `$OUT_DIR/gpuwars_kernels.ptx` (for inspection) and embedded by `host/ptx.rs`.
-//! Baseline `sm_70`: the driver JIT-compiles it for any Volta-or-newer card.
+//! Baseline `sm_70`: the driver JIT-compiles it for any Volta-or-newer card. A second module,
+//! `gpuwars_kernels_sm90.ptx`, is built from the same source for Hopper with programmatic
+//! dependent launch (every entry first waits for the launch before it).
 //!
 //! It also turns the committed table of MT607 parameter sets (`data/mt607_params.txt`, made by
 //! `examples/mt607_table.rs`) into a Rust array, `$OUT_DIR/mt607_params.rs`, so that a damaged
@@ -16,7 +18,37 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, exit};
 
 const TARGET: &str = "nvptx64-nvidia-cuda";
-const ARCH: &str = "sm_70";
+
+/// One PTX module built from `kernels/`.
+struct Module {
+    /// The file written to `$OUT_DIR`.
+    file: &'static str,
+    /// The GPU architecture it targets (`-C target-cpu`).
+    arch: &'static str,
+    /// Further `rustc` arguments: the PTX version and the cfg of what only it has.
+    flags: &'static [&'static str],
+}
+
+/// The baseline module, JIT-compiled by the driver for any Volta-or-newer card; and the
+/// Hopper module, whose kernels wait for the launch before them so that the host can launch
+/// them early (programmatic dependent launch needs sm_90 and PTX 7.8).
+const MODULES: [Module; 2] = [
+    Module {
+        file: "gpuwars_kernels.ptx",
+        arch: "sm_70",
+        flags: &[],
+    },
+    Module {
+        file: "gpuwars_kernels_sm90.ptx",
+        arch: "sm_90",
+        flags: &[
+            "-C",
+            "target-feature=+ptx78",
+            "--cfg",
+            "gpuwars_dependent_launch",
+        ],
+    },
+];
 
 fn main() {
     let root = PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").expect("set by cargo"));
@@ -27,26 +59,41 @@ fn main() {
         "cargo::rerun-if-changed={}",
         kernels.join("Cargo.toml").display()
     );
-    println!("cargo::rustc-env=GPUWARS_PTX_ARCH={ARCH}");
+    println!("cargo::rustc-env=GPUWARS_PTX_ARCH={}", MODULES[0].arch);
+    println!(
+        "cargo::rustc-env=GPUWARS_PTX_DEPENDENT_ARCH={}",
+        MODULES[1].arch
+    );
     embed_commit(&root);
     embed_rng_table(&root.join("data").join("mt607_params.txt"), &out_dir);
 
     let rustc = env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
     check_rust_src(&rustc);
+    for module in &MODULES {
+        let ptx = cap_registers(build_ptx(&root, &out_dir, module));
+        let dest = out_dir.join(module.file);
+        fs::write(&dest, ptx)
+            .unwrap_or_else(|e| fail(&format!("cannot write {}: {e}", dest.display())));
+    }
+}
 
-    // Its own target dir: the outer build holds the lock on ours.
-    let target_dir = out_dir.join("ptx-target");
+/// The PTX text of `module`, built by a nested cargo.
+fn build_ptx(root: &Path, out_dir: &Path, module: &Module) -> String {
+    // Its own target dir: the outer build holds the lock on ours; one per module, so that
+    // each keeps its incremental state.
+    let target_dir = out_dir.join(format!("ptx-target-{}", module.arch));
     let deps = target_dir.join(TARGET).join("ptx").join("deps");
     let cargo = env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut nested = Command::new(cargo);
     nested
-        .current_dir(&root)
+        .current_dir(root)
         .args(["rustc", "--quiet", "--package", "gpuwars-kernels", "--lib"])
         .args(["--profile", "ptx", "--target", TARGET, "-Zbuild-std=core"])
         .args(["--crate-type", "staticlib", "--target-dir"])
         .arg(&target_dir)
         .args(["--", "--emit=asm", "-C"])
-        .arg(format!("target-cpu={ARCH}"))
+        .arg(format!("target-cpu={}", module.arch))
+        .args(module.flags)
         // -Zbuild-std is unstable; this is the documented way to use it on a stable toolchain.
         .env("RUSTC_BOOTSTRAP", "1");
     // What the outer build passes to its own rustc must not leak into the nvptx build.
@@ -67,7 +114,10 @@ fn main() {
         .unwrap_or_else(|e| fail(&format!("cannot run cargo: {e}")));
     if !output.status.success() {
         eprintln!("{}", String::from_utf8_lossy(&output.stderr));
-        fail("the nvptx build of kernels/ failed (its messages are above)");
+        fail(&format!(
+            "the nvptx build of kernels/ for {} failed (its messages are above)",
+            module.arch
+        ));
     }
 
     let asm = newest_asm(&deps)
@@ -80,10 +130,7 @@ fn main() {
             line.trim()
         ));
     }
-    let ptx = cap_registers(ptx);
-    let dest = out_dir.join("gpuwars_kernels.ptx");
-    fs::write(&dest, ptx)
-        .unwrap_or_else(|e| fail(&format!("cannot write {}: {e}", dest.display())));
+    ptx
 }
 
 /// Register caps (`.maxnreg`, what CUDA C's launch bounds give) for the entries whose speed

@@ -38,6 +38,19 @@ pub struct Cli {
     /// logical CPU are used, more only wait on each other).
     #[arg(long, global = true, env = "GPUWARS_CPU_THREADS", value_parser = whole(1u16, 1024))]
     pub cpu_threads: Option<u16>,
+    /// On Hopper and newer GPUs, launch each kernel before the one it follows has ended,
+    /// its threads waiting for it on the GPU (programmatic dependent launch): on (the
+    /// default) or off, to compare.
+    #[arg(
+        long,
+        global = true,
+        env = "GPUWARS_DEPENDENT_LAUNCH",
+        default_value = "on",
+        value_name = "on|off",
+        action = clap::ArgAction::Set,
+        value_parser = clap::builder::BoolishValueParser::new()
+    )]
+    pub dependent_launch: bool,
     /// What to do; none plays in a window when a display is there, else runs the demo.
     #[command(subcommand)]
     pub command: Option<Command>,

@@ -18,6 +18,9 @@ pub struct Info {
     pub device: Option<GpuProperties>,
     /// The embedded PTX module.
     pub ptx: PtxInfo,
+    /// Whether kernels are launched before the one they follow ends (programmatic
+    /// dependent launch, GPU of sm_90 or newer only).
+    pub dependent_launch: bool,
     /// Worker threads of the CPU emulation (when it is the backend).
     pub cpu_threads: Option<usize>,
     /// Logical CPUs of this machine.
@@ -57,6 +60,7 @@ impl Info {
                 entry_points: entry_points.into_iter().map(str::to_string).collect(),
                 missing_kernels,
             },
+            dependent_launch: device.dependent_launch(),
             cpu_threads: device.cpu_threads(),
             host_cpus: std::thread::available_parallelism().map_or(1, usize::from),
         }
@@ -74,6 +78,15 @@ impl Info {
                 d.multiprocessors,
                 d.memory_bytes as f64 / (1u64 << 30) as f64,
                 d.driver_cuda_version
+            );
+            out += &format!(
+                "launches:     the {} module, {}\n",
+                d.ptx_arch,
+                if self.dependent_launch {
+                    "each kernel launched before the one it follows ends (programmatic dependent launch)"
+                } else {
+                    "each kernel launched when the one it follows ends"
+                }
             );
         }
         if let Some(threads) = self.cpu_threads {

@@ -78,6 +78,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         threads
     });
     let device = Device::select(cli.backend, threads)?;
+    device.set_dependent_launch(cli.dependent_launch);
     match command {
         Command::Scenes
         | Command::Bench {

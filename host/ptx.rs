@@ -1,4 +1,5 @@
-//! The kernels' PTX module, built by `build.rs` and embedded in the binary.
+//! The kernels' PTX modules, built by `build.rs` and embedded in the binary: the baseline
+//! for every card, and the Hopper one with programmatic dependent launch.
 
 /// The PTX text handed to the CUDA driver.
 pub const PTX: &str = include_str!(concat!(env!("OUT_DIR"), "/gpuwars_kernels.ptx"));
@@ -8,6 +9,13 @@ pub const PTX_PATH: &str = concat!(env!("OUT_DIR"), "/gpuwars_kernels.ptx");
 
 /// The GPU architecture the PTX targets (the driver JIT-compiles it for newer ones).
 pub const ARCH: &str = env!("GPUWARS_PTX_ARCH");
+
+/// The same kernels for [`DEPENDENT_ARCH`] and newer, each entry first waiting for the launch
+/// before it (`griddepcontrol`), so that they may be launched before it ends.
+pub const DEPENDENT_PTX: &str = include_str!(concat!(env!("OUT_DIR"), "/gpuwars_kernels_sm90.ptx"));
+
+/// The GPU architecture [`DEPENDENT_PTX`] targets.
+pub const DEPENDENT_ARCH: &str = env!("GPUWARS_PTX_DEPENDENT_ARCH");
 
 /// Names of the `.entry` points declared in a PTX module, in order.
 pub fn entry_points(ptx: &str) -> Vec<&str> {

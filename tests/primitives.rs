@@ -4,6 +4,7 @@ mod common;
 
 use common::{EDGE_SIZES, random_below, rng_for};
 use gpuwars::Device;
+use gpuwars::benchmark::floor;
 use gpuwars::primitives::{CountingSort, PrefixSum, histogram};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
@@ -192,7 +193,34 @@ fn primitives_reject_sizes_beyond_their_buffers(device: &Device) {
     assert!(err.contains("indices_out buffer holds only 2"), "{err}");
 }
 
+/// The launch floor runs every launch of every variant (it checks each element's count
+/// itself), over more threads than one block has, and leaves the device's launch mode as
+/// it found it.
+fn launch_floor_runs_every_variant(device: &Device) {
+    let was = device.dependent_launch();
+    let past_one_block = floor::ONE_BLOCK_MAX_THREADS + 1;
+    for (launches, threads) in [(1, 1), (5, 3_000), (2, past_one_block)] {
+        let floor = floor::measure(device, launches, threads).expect("the floor runs");
+        assert_eq!((floor.launches, floor.threads), (launches, threads));
+        for s in [floor.graph_s, floor.stream_s]
+            .into_iter()
+            .chain(floor.one_block_s)
+        {
+            assert!(s > 0.0 && s.is_finite(), "{floor:?}");
+        }
+        assert_eq!(floor.one_block_s.is_some(), threads < past_one_block);
+        // Dependent launch is measured exactly where the device can turn it on.
+        let can = device.set_dependent_launch(true);
+        device.set_dependent_launch(was);
+        assert_eq!(floor.dependent_s.is_some(), can, "{floor:?}");
+        assert_eq!(device.dependent_launch(), was);
+    }
+    assert!(floor::measure(device, 0, 10).is_err());
+    assert!(floor::measure(device, 3, 0).is_err());
+}
+
 on_both_backends!(
+    launch_floor_runs_every_variant,
     prefix_sum_matches_reference,
     prefix_sum_in_place_and_reused,
     prefix_sum_property,

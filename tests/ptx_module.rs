@@ -1,36 +1,89 @@
-//! The embedded PTX module: one `.entry` per kernel of the registry, nothing left to link.
+//! The embedded PTX modules: one `.entry` per kernel of the registry, nothing left to link;
+//! in the Hopper module, every entry waits for the launch before it before touching memory.
 
 use gpuwars::kernels::registry;
 use gpuwars::ptx;
 
+/// Both modules, with the architecture each targets.
+const MODULES: [(&str, &str); 2] = [
+    (ptx::PTX, ptx::ARCH),
+    (ptx::DEPENDENT_PTX, ptx::DEPENDENT_ARCH),
+];
+
 #[test]
 fn every_kernel_has_an_entry_point() {
-    let entries = ptx::entry_points(ptx::PTX);
-    for kernel in registry::ALL {
-        assert!(
-            entries.contains(&kernel.name),
-            "no .entry for kernel `{}`",
-            kernel.name
-        );
+    for (module, arch) in MODULES {
+        let entries = ptx::entry_points(module);
+        for kernel in registry::ALL {
+            assert!(
+                entries.contains(&kernel.name),
+                "no .entry for kernel `{}` in the {arch} module",
+                kernel.name
+            );
+        }
+        assert_eq!(entries.len(), registry::ALL.len(), "entries: {entries:?}");
     }
-    assert_eq!(entries.len(), registry::ALL.len(), "entries: {entries:?}");
 }
 
 #[test]
 fn module_is_self_contained() {
     // A `.extern` is a call that LTO did not resolve: the driver would refuse the module.
-    let externs: Vec<&str> = ptx::PTX.lines().filter(|l| l.contains(".extern")).collect();
-    assert!(externs.is_empty(), "{externs:?}");
+    for (module, arch) in MODULES {
+        let externs: Vec<&str> = module.lines().filter(|l| l.contains(".extern")).collect();
+        assert!(externs.is_empty(), "{arch}: {externs:?}");
+    }
 }
 
 #[test]
-fn module_targets_the_baseline_architecture() {
-    assert!(
-        ptx::PTX
+fn modules_target_their_architectures() {
+    for (module, arch) in MODULES {
+        assert!(
+            module
+                .lines()
+                .any(|l| l.trim() == format!(".target {arch}"))
+        );
+        assert!(module.lines().any(|l| l.trim() == ".address_size 64"));
+    }
+}
+
+/// The body of entry `name` in `module`: from its `.entry` line to the next entry or the end.
+fn entry_body<'m>(module: &'m str, name: &str) -> &'m str {
+    let head = format!(".entry {name}(");
+    let start = module.find(&head).expect("the entry exists");
+    let rest = &module[start + head.len()..];
+    let end = rest.find(".entry ").unwrap_or(rest.len());
+    &rest[..end]
+}
+
+/// Whether a PTX instruction line reads or writes memory other than the parameters.
+fn touches_memory(line: &str) -> bool {
+    let op = line.trim_start();
+    ["ld.", "st.", "atom.", "red.", "call"]
+        .iter()
+        .any(|p| op.starts_with(p))
+        && !op.starts_with("ld.param")
+}
+
+#[test]
+fn dependent_entries_wait_for_the_launch_before_them_first() {
+    // Launched early, a kernel that read or wrote before `griddepcontrol.wait` would race
+    // with the launch it follows.
+    for kernel in registry::ALL {
+        let body = entry_body(ptx::DEPENDENT_PTX, kernel.name);
+        let wait = body
+            .find("griddepcontrol.wait;")
+            .unwrap_or_else(|| panic!("`{}` never waits", kernel.name));
+        let first_access = body
             .lines()
-            .any(|l| l.trim() == format!(".target {}", ptx::ARCH))
-    );
-    assert!(ptx::PTX.lines().any(|l| l.trim() == ".address_size 64"));
+            .find(|l| touches_memory(l))
+            .map(|l| body.find(l).expect("a line of the body"));
+        assert!(
+            first_access.is_none_or(|at| wait < at),
+            "`{}` touches memory before it waits",
+            kernel.name
+        );
+    }
+    assert!(!ptx::PTX.contains("griddepcontrol"));
 }
 
 #[test]

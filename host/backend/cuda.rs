@@ -14,6 +14,7 @@
 
 use std::borrow::Cow;
 use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::thread::ThreadId;
 
@@ -43,6 +44,9 @@ pub struct GpuProperties {
     pub threads_per_multiprocessor: u32,
     /// Driver's CUDA version, e.g. "13.0".
     pub driver_cuda_version: String,
+    /// The architecture of the PTX module loaded: the baseline, or the Hopper one whose
+    /// kernels can be launched before the launch they follow ends.
+    pub ptx_arch: String,
 }
 
 /// An open GPU: context, stream and every kernel of the module.
@@ -55,6 +59,9 @@ pub(super) struct Gpu {
     capture: Mutex<Option<(ThreadId, Arc<CudaStream>)>>,
     functions: HashMap<&'static str, CudaFunction>,
     properties: GpuProperties,
+    /// Whether launches carry programmatic stream serialization (start before the launch
+    /// they follow ends); `None` when the card cannot (before sm_90).
+    dependent_launch: Option<AtomicBool>,
 }
 
 /// The kernel's argument struct as its single by-value parameter.
@@ -238,8 +245,18 @@ impl Gpu {
         stream
             .synchronize()
             .map_err(in_flight.failed("checking the device's context"))?;
+        let (major, _) = ctx
+            .compute_capability()
+            .map_err(in_flight.failed("querying device 0"))?;
+        // Hopper and newer get the module whose kernels wait for their predecessor.
+        let dependent = major >= 9;
+        let (source, arch) = if dependent {
+            (ptx::DEPENDENT_PTX, ptx::DEPENDENT_ARCH)
+        } else {
+            (ptx::PTX, ptx::ARCH)
+        };
         let module = ctx
-            .load_module(Ptx::from_src(ptx::PTX))
+            .load_module(Ptx::from_src(source))
             .map_err(in_flight.failed("loading the kernels' PTX"))?;
         let mut functions = HashMap::new();
         for info in registry::ALL {
@@ -248,7 +265,7 @@ impl Gpu {
                 .map_err(in_flight.failed("finding a kernel in the PTX"))?;
             functions.insert(info.name, function);
         }
-        let properties = properties(&ctx).map_err(in_flight.failed("querying device 0"))?;
+        let properties = properties(&ctx, arch).map_err(in_flight.failed("querying device 0"))?;
         Ok(Gpu {
             ctx,
             stream,
@@ -256,7 +273,25 @@ impl Gpu {
             capture: Mutex::new(None),
             functions,
             properties,
+            dependent_launch: dependent.then(|| AtomicBool::new(true)),
         })
+    }
+
+    /// Whether launches made from now on start before the launch they follow ends
+    /// (programmatic dependent launch); always `false` before sm_90.
+    pub(super) fn dependent_launch(&self) -> bool {
+        self.dependent_launch
+            .as_ref()
+            .is_some_and(|on| on.load(Ordering::Relaxed))
+    }
+
+    /// Turns programmatic dependent launch on or off for the launches (and captures) made
+    /// from now on; returns whether it is on (never before sm_90).
+    pub(super) fn set_dependent_launch(&self, on: bool) -> bool {
+        if let Some(flag) = &self.dependent_launch {
+            flag.store(on, Ordering::Relaxed);
+        }
+        self.dependent_launch()
     }
 
     pub(super) fn properties(&self) -> &GpuProperties {
@@ -352,11 +387,17 @@ impl Gpu {
         };
         let param = Param(args);
         let stream = self.launch_stream();
-        let mut launch = stream.launch_builder(function);
-        launch.arg(&param);
-        // SAFETY: the parameter is the kernel's argument struct; the caller vouches for the
-        // buffers it views.
-        unsafe { launch.launch(config) }.map_err(|e| {
+        let launched = if self.dependent_launch() {
+            // SAFETY: as below; the sm_90 module's entries wait for their predecessor.
+            unsafe { launch_dependent(function, &stream, config, &param) }
+        } else {
+            let mut launch = stream.launch_builder(function);
+            launch.arg(&param);
+            // SAFETY: the parameter is the kernel's argument struct; the caller vouches for
+            // the buffers it views.
+            unsafe { launch.launch(config) }.map(drop)
+        };
+        launched.map_err(|e| {
             let during = format!("launching kernel `{}`", kernel.name);
             self.in_flight.error(&during, e)
         })?;
@@ -611,7 +652,55 @@ pub(super) fn address<T>(slice: &CudaSlice<T>) -> u64 {
     addr
 }
 
-fn properties(ctx: &Arc<CudaContext>) -> Result<GpuProperties, DriverError> {
+/// Launches `function` on `stream` with programmatic stream serialization: its blocks may
+/// start once every block of the launch before it has started (each entry of the sm_90
+/// module waits for that launch to finish first, `griddepcontrol.wait`). Captured into a
+/// graph, the edge from the previous kernel node becomes a programmatic one.
+///
+/// # Safety
+/// `param` is the argument struct of `function`, whose views are valid for the launch, and
+/// `function` comes from the sm_90 module.
+unsafe fn launch_dependent<A: KernelArgs>(
+    function: &CudaFunction,
+    stream: &CudaStream,
+    config: LaunchConfig,
+    param: &Param<A>,
+) -> Result<(), DriverError> {
+    stream.context().bind_to_thread()?;
+    let mut attribute = sys::CUlaunchAttribute {
+        id: sys::CUlaunchAttributeID::CU_LAUNCH_ATTRIBUTE_PROGRAMMATIC_STREAM_SERIALIZATION,
+        pad: [0; 4],
+        value: sys::CUlaunchAttributeValue {
+            programmaticStreamSerializationAllowed: 1,
+        },
+    };
+    let launch = sys::CUlaunchConfig {
+        gridDimX: config.grid_dim.0,
+        gridDimY: config.grid_dim.1,
+        gridDimZ: config.grid_dim.2,
+        blockDimX: config.block_dim.0,
+        blockDimY: config.block_dim.1,
+        blockDimZ: config.block_dim.2,
+        sharedMemBytes: config.shared_mem_bytes,
+        hStream: stream.cu_stream(),
+        attrs: &mut attribute,
+        numAttrs: 1,
+    };
+    let mut params = [param as *const Param<A> as *mut core::ffi::c_void];
+    // SAFETY: the configuration and its one attribute live through the call; the driver
+    // copies the parameter it points to (the caller vouches for what it views).
+    unsafe {
+        sys::cuLaunchKernelEx(
+            &launch,
+            function.cu_function(),
+            params.as_mut_ptr(),
+            core::ptr::null_mut(),
+        )
+    }
+    .result()
+}
+
+fn properties(ctx: &Arc<CudaContext>, ptx_arch: &str) -> Result<GpuProperties, DriverError> {
     use sys::CUdevice_attribute::*;
     let (major, minor) = ctx.compute_capability()?;
     let mut version = 0i32;
@@ -626,5 +715,6 @@ fn properties(ctx: &Arc<CudaContext>) -> Result<GpuProperties, DriverError> {
             .attribute(CU_DEVICE_ATTRIBUTE_MAX_THREADS_PER_MULTIPROCESSOR)?
             as u32,
         driver_cuda_version: format!("{}.{}", version / 1000, (version % 1000) / 10),
+        ptx_arch: ptx_arch.to_string(),
     })
 }

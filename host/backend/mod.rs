@@ -350,6 +350,26 @@ impl Device {
         }
     }
 
+    /// Whether kernels launched (or captured) from now on may start before the launch they
+    /// follow ends: programmatic dependent launch, on by default on sm_90 and newer; never on
+    /// older cards or the CPU emulation.
+    pub fn dependent_launch(&self) -> bool {
+        match &self.imp {
+            Imp::Cuda(gpu) => gpu.dependent_launch(),
+            Imp::Cpu(_) => false,
+        }
+    }
+
+    /// Turns programmatic dependent launch on or off for the launches and plans made from
+    /// now on (plans made before keep theirs); returns whether it is on, which it cannot be
+    /// where [`Device::dependent_launch`] says never.
+    pub fn set_dependent_launch(&self, on: bool) -> bool {
+        match &self.imp {
+            Imp::Cuda(gpu) => gpu.set_dependent_launch(on),
+            Imp::Cpu(_) => false,
+        }
+    }
+
     /// Worker threads of the CPU emulation; `None` on the GPU.
     pub fn cpu_threads(&self) -> Option<usize> {
         match &self.imp {

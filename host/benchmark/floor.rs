@@ -1,15 +1,17 @@
 //! The launch floor, measured on the device and in the run it is compared with: a chain of
 //! as many launches as a step makes, each doing one read-modify-write a thread over as many
 //! threads as the step has slots (the least a stage of the step does), replayed as one CUDA
-//! graph (as the step is) and launched one by one. What the step takes above it is its
-//! kernels' own work and latency.
+//! graph (as the step is), as the same graph with programmatic dependent launch (on sm_90
+//! and newer), launched one by one, and run as rounds of one block with a barrier between
+//! them (the floor of a step that would run in one block). What the step takes above it is
+//! its kernels' own work and latency.
 
 use serde::{Deserialize, Serialize};
 
-use gpuwars_kernels::primitives::touch::TouchArgs;
+use gpuwars_kernels::primitives::touch::{TouchArgs, TouchRoundsArgs};
 use gpuwars_kernels::registry;
 
-use crate::backend::Binder;
+use crate::backend::{Binder, Launch, MAX_BLOCK};
 use crate::primitives::threads;
 use crate::{BackendKind, Buffer, Device, Error, Op};
 
@@ -20,11 +22,25 @@ pub struct Floor {
     pub launches: usize,
     /// Threads a launch.
     pub threads: u32,
-    /// Seconds a step, the chain replayed as one CUDA graph (issued one by one on the CPU).
+    /// Seconds a step, the chain replayed as one CUDA graph, each launch waiting for the
+    /// end of the one before (issued one by one on the CPU).
     pub graph_s: f64,
+    /// Seconds a step, the same graph with programmatic dependent launch: each kernel
+    /// starts before the one before ends and waits for it on the GPU. `None` where the
+    /// device cannot (before sm_90, the CPU emulation).
+    pub dependent_s: Option<f64>,
     /// Seconds a step, the chain launched one by one.
     pub stream_s: f64,
+    /// Seconds a step, the chain run as `launches` rounds of one block of up to 1,024
+    /// threads with a barrier between rounds: one launch a step. `None` above
+    /// [`ONE_BLOCK_MAX_THREADS`] threads, where one block is no way to run a step.
+    pub one_block_s: Option<f64>,
 }
+
+/// The most threads whose one-block floor is measured: a block runs 64 of them a thread a
+/// round at this size, already far slower than a graph of whole-GPU launches (at a million,
+/// 3.3 ms against 0.2 on an H100), so larger worlds would only spend the run's time on it.
+pub const ONE_BLOCK_MAX_THREADS: u32 = 65_536;
 
 /// One launch of the chain: a touch of every element of `data`.
 fn touch(data: &Buffer<u32>) -> Op {
@@ -35,23 +51,46 @@ fn touch(data: &Buffer<u32>) -> Op {
     unsafe { threads(registry::TOUCH, data.len() as u32, args, b, 8) }
 }
 
+/// The whole chain in one launch: `rounds` touches of every element of `data` by one block.
+fn touch_rounds(data: &Buffer<u32>, rounds: u32) -> Op {
+    // SAFETY: the view goes into this op only.
+    let mut b = unsafe { Binder::new() };
+    let args = TouchRoundsArgs {
+        data: b.view(data),
+        rounds,
+        reserved: 0,
+    };
+    let launch = Launch {
+        kernel: registry::TOUCH_ROUNDS,
+        grid: 1,
+        block: (data.len() as u32).min(MAX_BLOCK),
+        args,
+    };
+    // SAFETY: one buffer; each element has one thread, whatever the block's size.
+    unsafe { Op::launch(launch, b, 8 * u64::from(rounds) * data.len() as u64) }
+}
+
 /// Measures the floor of a step of `launches` launches over `threads` threads on `device`;
-/// checks that every launch of every step ran.
+/// checks that every launch of every step ran. The device's dependent-launch setting is
+/// the same after as before.
 pub fn measure(device: &Device, launches: usize, threads: u32) -> Result<Floor, Error> {
-    if launches == 0 || threads == 0 {
+    let rounds = u32::try_from(launches).ok().filter(|&n| n > 0);
+    let Some(rounds) = rounds.filter(|_| threads > 0) else {
         return Err(Error::Invalid(format!(
-            "a launch floor of {launches} launches of {threads} threads (allowed: at least 1 \
-             of each)"
+            "a launch floor of {launches} launches of {threads} threads (allowed: 1 to {} \
+             launches, at least 1 thread)",
+            u32::MAX
         )));
-    }
+    };
     let data = device.alloc_zeroed::<u32>(threads as usize)?;
-    let ops: Vec<Op> = (0..launches).map(|_| touch(&data)).collect();
+    let chain: Vec<Op> = (0..launches).map(|_| touch(&data)).collect();
     let (warm, reps) = match device.kind() {
         BackendKind::Cuda => (200, 2_000),
         BackendKind::Cpu => (5, 50),
     };
-    let time = |graph: bool| -> Result<f64, Error> {
-        let plan = device.plan(ops.clone(), graph)?;
+    let mut timed_runs = 0;
+    let mut time = |ops: &[Op], graph: bool| -> Result<f64, Error> {
+        let plan = device.plan(ops.to_vec(), graph)?;
         for _ in 0..warm {
             device.run(&plan)?;
         }
@@ -59,10 +98,32 @@ pub fn measure(device: &Device, launches: usize, threads: u32) -> Result<Floor, 
         for _ in 0..reps {
             device.run(&plan)?;
         }
+        timed_runs += 1;
         Ok(device.mark()?.seconds_since(&start)? / f64::from(reps))
     };
-    let (graph_s, stream_s) = (time(true)?, time(false)?);
-    let runs = 2 * (warm + reps) * launches as u32;
+    let was_dependent = device.dependent_launch();
+    let mut times = || -> Result<_, Error> {
+        device.set_dependent_launch(false);
+        let graph_s = time(&chain, true)?;
+        let dependent_s = if device.set_dependent_launch(true) {
+            Some(time(&chain, true)?)
+        } else {
+            None
+        };
+        device.set_dependent_launch(false);
+        let stream_s = time(&chain, false)?;
+        let one_block_s = if threads <= ONE_BLOCK_MAX_THREADS {
+            Some(time(&[touch_rounds(&data, rounds)], true)?)
+        } else {
+            None
+        };
+        Ok((graph_s, dependent_s, stream_s, one_block_s))
+    };
+    let times = times();
+    device.set_dependent_launch(was_dependent);
+    let (graph_s, dependent_s, stream_s, one_block_s) = times?;
+
+    let runs = timed_runs * (warm + reps) * rounds;
     if let Some(i) = device.download(&data)?.iter().position(|&v| v != runs) {
         return Err(Error::Invalid(format!(
             "the launch floor's element {i} was touched a number of times other than the \
@@ -73,16 +134,34 @@ pub fn measure(device: &Device, launches: usize, threads: u32) -> Result<Floor, 
         launches,
         threads,
         graph_s,
+        dependent_s,
         stream_s,
+        one_block_s,
     })
 }
 
 impl Floor {
+    /// Seconds a step of the graph launched as the step's own is: with programmatic
+    /// dependent launch when `dependent` (and the device could), else without.
+    pub fn graph_like_step_s(&self, dependent: bool) -> f64 {
+        match self.dependent_s {
+            Some(s) if dependent => s,
+            _ => self.graph_s,
+        }
+    }
+
     /// One line saying what the floor is, beside a step of `step_s` seconds.
     pub fn describe(&self, step_s: f64) -> String {
+        let dependent = self.dependent_s.map_or(String::new(), |s| {
+            format!(", {:.1} with dependent launch", s * 1e6)
+        });
+        let one_block = self.one_block_s.map_or(String::new(), |s| {
+            format!(", {:.1} as rounds of one block", s * 1e6)
+        });
         format!(
             "launch floor (measured here): {} dependent launches of one read-modify-write over \
-             {} threads take {:.1} µs a step as a graph, {:.1} one by one; the step takes {:.1}",
+             {} threads take {:.1} µs a step as a graph{dependent}, {:.1} one by one{one_block}; \
+             the step takes {:.1}",
             self.launches,
             crate::files::thousands(self.threads),
             self.graph_s * 1e6,

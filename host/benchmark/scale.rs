@@ -54,7 +54,8 @@ pub struct ScaleRow {
     /// Time per step over the profiled steps, stage by stage summed (µs).
     pub step_us: f64,
     /// The launch floor of a step this size: as many one-touch launches as it makes over
-    /// its slots, replayed as a graph (µs; see `benchmark::floor`).
+    /// its slots, replayed as a graph launched as the step's is (µs; see
+    /// `benchmark::floor`).
     pub floor_us: f64,
     /// Each stage's share of it, in step order: `stage=µs` joined by spaces.
     pub stages: String,
@@ -248,7 +249,7 @@ fn measure(
         setup_s,
         steps_per_s,
         step_us: step_s * 1e6,
-        floor_us: floor.graph_s * 1e6,
+        floor_us: floor.graph_like_step_s(device.dependent_launch()) * 1e6,
         stages,
         bytes_per_step: bytes,
         achieved_bandwidth: achieved,

@@ -59,6 +59,28 @@ impl Thread {
     }
 }
 
+/// Programmatic dependent launch (sm_90 module only): waits until the launch before this one
+/// in the stream has finished and its writes are visible, then lets the launch after this one
+/// start its blocks, which wait here in turn.
+///
+/// Every entry of the sm_90 module calls it first, before any load or store, so a kernel
+/// launched early (with the programmatic stream serialization attribute) never reads what
+/// its predecessor still writes nor writes what it still reads: only the launch's start-up
+/// overlaps the predecessor's tail. Without the attribute, the wait returns at once.
+#[cfg(all(target_arch = "nvptx64", gpuwars_dependent_launch))]
+#[inline(always)]
+pub fn follow_previous_launch() {
+    // SAFETY: both instructions only order this grid against its neighbours in the stream;
+    // without `nomem`, the compiler moves no memory access above them.
+    unsafe {
+        core::arch::asm!(
+            "griddepcontrol.wait;",
+            "griddepcontrol.launch_dependents;",
+            options(nostack)
+        );
+    }
+}
+
 /// A kernel argument struct: plain data passed by value as the kernel's single parameter.
 ///
 /// `NoUninit` is checked at compile time by its derive: the struct is `#[repr(C)]` and has

@@ -43,6 +43,8 @@ macro_rules! kernels {
                 #[unsafe(no_mangle)]
                 /// Entry point (see the constant of the same name in upper case).
                 pub unsafe extern "ptx-kernel" fn $entry(args: $args) {
+                    #[cfg(gpuwars_dependent_launch)]
+                    crate::exec::follow_previous_launch();
                     $body(crate::Thread::current(), &args)
                 }
             )*
@@ -61,6 +63,8 @@ kernels! {
     HISTOGRAM = histogram(histogram::HistogramArgs) => histogram::count_keys;
     /// Adds one to each thread's element: the launch floor's probe.
     TOUCH = touch(touch::TouchArgs) => touch::touch;
+    /// Rounds of one touch a thread with a block barrier between them: the one-block floor.
+    TOUCH_ROUNDS = touch_rounds(touch::TouchRoundsArgs) => touch::touch_rounds;
     /// Counts the digits of each tile of keys (one counting-sort pass).
     SORT_COUNT = sort_count(sort::CountArgs) => sort::count_digits;
     /// Moves each tile's (key, index) pairs to their sorted slots (one counting-sort pass).
