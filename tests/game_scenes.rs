@@ -69,16 +69,15 @@ fn a_scene_launches_only_the_stages_it_uses() {
         0,
         "no rectangles, no rectangle tests"
     );
-    // Every step launches the same sequence: births and the pilot decide on the device
+    // Every step launches the same sequence: births and the autopilot decide on the device
     // whether there is anything to do.
     for kernel in [
         registry::BIRTHS.name,
-        registry::MASTER.name,
+        registry::PILOT_THEN_MASTER.name,
         registry::TALLY.name,
     ] {
         assert_eq!(count(&k, kernel), 10, "{kernel}");
     }
-    assert_eq!(count(&k, registry::AUTOPILOT.name), 10);
     // Given input: the same launches.
     let still = launches(&scene("kamikaze"), 10, false);
     assert_eq!(still, k);

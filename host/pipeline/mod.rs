@@ -6,8 +6,7 @@
 //!
 //! | stage | launches | in |
 //! |---|---|---|
-//! | `pilot` | the autopilot, or the player's input passed through (one warp) | games |
-//! | `master` | the master before the physics (one warp) | games |
+//! | `master` | the step's input (the autopilot's, or the player's passed through), then the master before the physics (one launch of one warp) | games |
 //! | `births` | the enemies the master thread ordered come alive | games |
 //! | `broad` | the grid: bucket counts, their prefix sum, placement, canonical order | games, and worlds where something collides |
 //! | `renumber` | every few steps, the bodies move to slots in the grid's order within their kinds' ranges (gather, settle) | worlds with a grid of 8,192 slots or more, or as the scene's physics says |

@@ -11,9 +11,8 @@ use crate::{Op, Plan};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Stage {
-    /// The autopilot, or the player's input passed through (one warp); games.
-    Pilot,
-    /// The master before the physics (one warp); games.
+    /// The step's input (the autopilot's, or the player's passed through), then the master
+    /// before the physics, in one launch of one warp; games.
     Master,
     /// The enemies the master ordered come alive; games.
     Births,
@@ -41,8 +40,7 @@ pub enum Stage {
 
 impl Stage {
     /// Every stage, in the order a step runs them.
-    pub const ALL: [Stage; 12] = [
-        Stage::Pilot,
+    pub const ALL: [Stage; 11] = [
         Stage::Master,
         Stage::Births,
         Stage::Broad,
@@ -59,7 +57,6 @@ impl Stage {
     /// The stage's name, as profiles and the documentation spell it.
     pub fn name(self) -> &'static str {
         match self {
-            Stage::Pilot => "pilot",
             Stage::Master => "master",
             Stage::Births => "births",
             Stage::Broad => "broad",
@@ -77,7 +74,6 @@ impl Stage {
     /// The stage's ops for `world` (none where the world has no such stage).
     pub(super) fn ops(self, world: &World) -> Vec<Op> {
         match self {
-            Stage::Pilot => stages::pilot::ops(world),
             Stage::Master => stages::master::ops(world),
             Stage::Births => stages::births::ops(world),
             Stage::Broad => stages::broad::ops(world),

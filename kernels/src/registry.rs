@@ -4,7 +4,7 @@
 //! [`ALL`], and, on nvptx, the `extern "ptx-kernel"` entry point that calls the body. Because
 //! the entry's name and the constant's `name` come from the same identifier, they cannot drift.
 
-use crate::game::{ai, autopilot, effects, master};
+use crate::game::{ai, effects, master};
 use crate::primitives::{histogram, scan, sort, touch};
 use crate::render::{self, camera, particles, radar};
 use crate::rng::streams;
@@ -95,8 +95,9 @@ kernels! {
     GATHER_FREE = gather_free(free_list::GatherArgs) => free_list::gather_free;
     /// Brings bodies to life at random places from their slots' generators.
     SCATTER = scatter(scatter::ScatterArgs) => scatter::scatter;
-    /// The master before the physics: ship, shots, spawn counts (one warp).
-    MASTER = master(master::MasterArgs) => master::master;
+    /// The step's input (the autopilot's, or the player's), then the master before the
+    /// physics: ship, shots, spawn counts (one warp).
+    PILOT_THEN_MASTER = pilot_then_master(master::PilotMasterArgs) => master::pilot_then_master;
     /// Explosions: kills burst into particles, the others move and fade.
     BURST_AND_FADE = burst_and_fade(effects::EffectsArgs) => effects::burst_and_fade;
     /// The master after the physics: score, counts, FPS meter, game over (one warp).
@@ -129,6 +130,4 @@ kernels! {
     WRITE_VERTICES = write_vertices(render::VertexArgs) => render::write_vertices;
     /// Writes every particle's vertex for the GL renderer, after the bodies'.
     WRITE_PARTICLE_VERTICES = write_particle_vertices(particles::ParticleVertexArgs) => particles::write_particle_vertices;
-    /// The autopilot: the ship's input from what lies around it (one warp).
-    AUTOPILOT = autopilot(autopilot::AutopilotArgs) => autopilot::autopilot;
 }

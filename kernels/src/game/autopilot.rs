@@ -1,6 +1,6 @@
 //! The autopilot: a deterministic bot that writes the ship's [`Input`] on the device, for the
-//! headless demo, the benchmarks and the tests. It runs in its own one-warp launch before
-//! the master thread every step, and passes the player's input through when the host's
+//! headless demo, the benchmarks and the tests. It runs first in the master's one-warp
+//! launch every step ([`super::master::pilot_then_master`]), and passes the player's input through when the host's
 //! [`Command`] says the player flies. It looks around the ship through the previous step's
 //! grid (buckets of slots; positions as they are now), so a bot-played step needs no
 //! read-back.

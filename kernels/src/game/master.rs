@@ -19,6 +19,7 @@
 
 use glam::Vec2;
 
+use super::autopilot::{AutopilotArgs, autopilot};
 use super::control::{DESTROYED, Events, Input, PLAYING, Status, TOO_SLOW};
 use super::rules::{Rules, Wave};
 use crate::sim::free_list::FreeSlots;
@@ -58,6 +59,26 @@ kernel_args! {
         /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
         pub reserved: u32,
     }
+}
+
+kernel_args! {
+    /// Arguments of [`pilot_then_master`].
+    pub struct PilotMasterArgs {
+        /// The autopilot's (its output `input` is the master's `input`).
+        pub pilot: AutopilotArgs,
+        /// The master's.
+        pub master: MasterArgs,
+    }
+}
+
+/// The step's input ([`autopilot`]: the autopilot's, or the player's passed through) and
+/// then [`master`], in one launch of one warp instead of two: the master's lane 0 reads the
+/// input that the same thread wrote, and the other lanes touch neither the input nor the
+/// bodies the autopilot reads.
+#[inline(always)]
+pub fn pilot_then_master(t: Thread, args: &PilotMasterArgs) {
+    autopilot(t, &args.pilot);
+    master(t, &args.master);
 }
 
 /// The master warp before the physics:
