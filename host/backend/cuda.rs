@@ -653,9 +653,10 @@ pub(super) fn address<T>(slice: &CudaSlice<T>) -> u64 {
 }
 
 /// Launches `function` on `stream` with programmatic stream serialization: its blocks may
-/// start once every block of the launch before it has started (each entry of the sm_90
-/// module waits for that launch to finish first, `griddepcontrol.wait`). Captured into a
-/// graph, the edge from the previous kernel node becomes a programmatic one.
+/// start once every block of the launch before it has signalled its dependents or ended
+/// (each entry of the sm_90 module signals right after waiting for its own predecessor to
+/// finish, `griddepcontrol.wait`, before touching memory). Captured into a graph, the edge
+/// from the previous kernel node becomes a programmatic one.
 ///
 /// # Safety
 /// `param` is the argument struct of `function`, whose views are valid for the launch, and
