@@ -16,7 +16,7 @@ pub struct Info {
     pub backend_reason: String,
     /// The GPU, when the backend is CUDA.
     pub device: Option<GpuProperties>,
-    /// The embedded PTX module.
+    /// The embedded PTX module the GPU loaded (the baseline one without a GPU).
     pub ptx: PtxInfo,
     /// Whether kernels are launched before the one they follow ends (programmatic
     /// dependent launch, GPU of sm_90 or newer only).
@@ -43,7 +43,12 @@ pub struct PtxInfo {
 impl Info {
     /// Gathers the report for an open device.
     pub fn gather(device: &Device) -> Info {
-        let entry_points = ptx::entry_points(ptx::PTX);
+        let loaded = device.gpu_properties().map(|d| d.ptx_arch.as_str());
+        let (module, arch) = match loaded {
+            Some(arch) if arch == ptx::DEPENDENT_ARCH => (ptx::DEPENDENT_PTX, ptx::DEPENDENT_ARCH),
+            _ => (ptx::PTX, ptx::ARCH),
+        };
+        let entry_points = ptx::entry_points(module);
         let missing_kernels = kernels::registry::ALL
             .iter()
             .map(|k| k.name)
@@ -55,8 +60,8 @@ impl Info {
             backend_reason: device.reason().to_string(),
             device: device.gpu_properties().cloned(),
             ptx: PtxInfo {
-                bytes: ptx::PTX.len(),
-                arch: ptx::ARCH,
+                bytes: module.len(),
+                arch,
                 entry_points: entry_points.into_iter().map(str::to_string).collect(),
                 missing_kernels,
             },
