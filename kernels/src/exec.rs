@@ -300,6 +300,46 @@ impl<T: Copy> DevSlice<T> {
         }
     }
 
+    /// Folds `f` over the elements `first, first + stride, …` below `end`, in that order,
+    /// with a single bounds check: four loads at a time, which the GPU keeps in flight
+    /// together. `stride` must not be zero.
+    #[inline(always)]
+    pub fn fold_every<A>(
+        &self,
+        (first, end, stride): (u32, u32, u32),
+        init: A,
+        mut f: impl FnMut(A, T) -> A,
+    ) -> A {
+        if first >= end {
+            return init;
+        }
+        if end > self.len {
+            out_of_bounds(end - 1, self.len);
+        }
+        let base = self.addr as *const T;
+        let (end, stride) = (u64::from(end), u64::from(stride.max(1)));
+        // SAFETY (both loops): every index read is below `end`, at most the length (checked).
+        let read = |i: u64| unsafe { base.wrapping_add(i as usize).read() };
+        let (mut acc, mut i) = (init, u64::from(first));
+        while i + 3 * stride < end {
+            let values = [
+                read(i),
+                read(i + stride),
+                read(i + 2 * stride),
+                read(i + 3 * stride),
+            ];
+            for value in values {
+                acc = f(acc, value);
+            }
+            i += 4 * stride;
+        }
+        while i < end {
+            acc = f(acc, read(i));
+            i += stride;
+        }
+        acc
+    }
+
     /// Writes `N` elements from `start` with a single bounds check.
     #[inline(always)]
     pub fn set_run<const N: usize>(&self, start: u32, values: [T; N]) {

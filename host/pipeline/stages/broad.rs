@@ -1,5 +1,5 @@
-//! `broad`: the grid: bucket counts, their prefix sum into starts, placement, canonical
-//! order.
+//! `broad`: the grid: bucket counts, their prefix sum into starts, placement (which zeroes
+//! the counts for the next build), canonical order.
 
 use gpuwars_kernels::registry;
 use gpuwars_kernels::sim::broad::{self, CountArgs, MergeArgs, OrderArgs, PlaceArgs};
@@ -18,18 +18,17 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     let (g, pos) = (&world.scratch.grid, &world.state.bodies.pos);
     // SAFETY (every binder below): the views go into the op made with it.
     let mut b = unsafe { Binder::new() };
-    let start = b.view(&g.start);
-    // SAFETY (every op below): the world's buffers, sized as the kernels ask (see `World`).
-    let mut ops = vec![unsafe { Op::clear(start, b) }];
-    let mut b = unsafe { Binder::new() };
     let count = CountArgs {
         bodies: world.state.bodies(&mut b),
         space: world.space,
         keys: b.view(&g.keys),
         ranks: b.view(&g.ranks),
-        counts: b.view(&g.start),
+        counts: b.view(&g.counts),
     };
-    ops.push(unsafe {
+    // SAFETY (every op below): the world's buffers, sized as the kernels ask (see `World`);
+    // the counts are zero before the first build (allocated zeroed) and after every other
+    // (`place_in_cells` zeroes them).
+    let mut ops = vec![unsafe {
         threads(
             registry::COUNT_CELLS,
             slots,
@@ -37,12 +36,12 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
             b,
             28 * u64::from(slots),
         )
-    });
+    }];
     ops.extend(
         world
             .scratch
             .grid_scan
-            .ops(&g.start, &g.start, g.start.len() as u32)
+            .ops(&g.counts, &g.start, g.start.len() as u32)
             .expect("the scan was made for the buckets"),
     );
     let mut b = unsafe { Binder::new() };
@@ -51,14 +50,16 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         ranks: b.view(&g.ranks),
         start: b.view(&g.start),
         unordered: b.view(&g.unordered),
+        counts: b.view(&g.counts),
     };
+    let buckets = g.counts.len() as u64;
     ops.push(unsafe {
         threads(
             registry::PLACE_IN_CELLS,
             slots,
             place,
             b,
-            16 * u64::from(slots),
+            16 * u64::from(slots) + 4 * buckets,
         )
     });
     // With a cap, crowded buckets are ordered in runs and merged, so that their cost stays

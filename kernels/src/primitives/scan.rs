@@ -99,15 +99,9 @@ pub fn scan_tiles_after_sums(t: Thread, args: &ScanArgs) {
     let first = tile - lane;
     let count = tiles(args.n);
     let sums = args.tile_offsets;
+    // A warp wholly past the last tile (its block's tail) reads no further than it.
     let before = warp::sum_u32(lane, |l| {
-        let mut sum = 0u32;
-        let mut i = l;
-        // A warp wholly past the last tile (its block's tail) reads no further than it.
-        while i < first.min(count) {
-            sum = sum.wrapping_add(sums.get(i));
-            i += warp::WARP;
-        }
-        sum
+        sums.fold_every((l, first.min(count), warp::WARP), 0u32, u32::wrapping_add)
     });
     let within = warp::exclusive_sum_u32(lane, |l| {
         if first + l < count {

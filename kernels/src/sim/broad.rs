@@ -11,9 +11,10 @@
 //! Build, with no sort and work that grows with the live bodies:
 //! 1. [`count_cells`]: each live body adds itself to its bucket's count with an atomic add,
 //!    which hands out ranks in whatever order threads arrive (the counts do not depend on it);
-//! 2. the host takes the exclusive prefix sum of the counts: each bucket's first entry;
+//! 2. the exclusive prefix sum of the counts: each bucket's first entry;
 //! 3. [`place_in_cells`]: each body writes its slot at its bucket's start plus its rank, a
-//!    scheduling-dependent order inside the bucket;
+//!    scheduling-dependent order inside the bucket, and the counts go back to zero for the
+//!    next build (so no clear runs between the step's launches);
 //! 4. [`order_cells`]: each entry counts the smaller slots in its bucket and moves its slot to
 //!    that rank, which makes every bucket canonical (increasing slots) before anything reads
 //!    it.
@@ -34,8 +35,11 @@ device_data! {
         keys: [u32; slots],
         /// Each slot's arrival rank in its bucket; the merge passes' runs afterwards.
         ranks: [u32; slots],
-        /// Bodies per bucket, scanned in place into each bucket's first entry; one more
-        /// element for the total.
+        /// Bodies per bucket while the grid is built, zero between builds; one more element
+        /// (always zero) for the total.
+        counts: [u32; buckets],
+        /// Each bucket's first entry (the counts' exclusive prefix sums); the last element is
+        /// the number of entries.
         start: [u32; buckets],
         /// Slots by bucket, in arrival order.
         unordered: [u32; slots],
@@ -60,7 +64,8 @@ kernel_args! {
         pub keys: DevSlice<u32>,
         /// Output: each live slot's arrival rank inside its bucket.
         pub ranks: DevSlice<u32>,
-        /// Bodies per bucket, zeroed before; `kinds · cells` buckets.
+        /// Bodies per bucket, zero before (as [`place_in_cells`] leaves them); `kinds ·
+        /// cells` buckets.
         pub counts: DevSlice<u32>,
     }
 }
@@ -93,14 +98,23 @@ kernel_args! {
         pub start: DevSlice<u32>,
         /// Output: the slots grouped by bucket, in arrival order inside a bucket.
         pub unordered: DevSlice<u32>,
+        /// The counts that were scanned into `start`: set back to zero.
+        pub counts: DevSlice<u32>,
     }
 }
 
 /// Thread `i` writes slot `i` into its bucket: each entry has exactly one writer, since the
-/// ranks of a bucket are distinct.
+/// ranks of a bucket are distinct. The threads also zero the counts, every `threads`-th
+/// bucket each, for the next build: nothing in this launch reads them.
 #[inline(always)]
 pub fn place_in_cells(t: Thread, args: &PlaceArgs) {
     let slot = t.global();
+    let threads = t.block_dim * t.grid_dim;
+    let mut bucket = slot;
+    while bucket < args.counts.len() {
+        args.counts.set(bucket, 0);
+        bucket += threads;
+    }
     if slot >= args.keys.len() {
         return;
     }
