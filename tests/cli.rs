@@ -316,7 +316,7 @@ fn demo_profiles_every_stage_and_runs_the_same_game() {
     // The launch floor: the step's launches over its slots, measured in the same run.
     assert_eq!(profile["floor"]["launches"], plain["launches_per_step"]);
     // (`paper`'s 8,288 slots are few enough for the one-block floor.)
-    for variant in ["graph_s", "stream_s", "one_block_s"] {
+    for variant in ["graph_s", "stream_s", "one_block_s", "ring_s"] {
         assert!(
             profile["floor"][variant].as_f64().unwrap() > 0.0,
             "{variant}"

@@ -62,10 +62,47 @@ fn a_plan_keeps_its_buffers_alive(device: &Device) {
     device.synchronize().unwrap();
 }
 
+/// Shared memory (page-locked host memory mapped into the GPU on the GPU): kernels read and
+/// write it where it is, and the host writes, reads and zeroes it; a ring takes only
+/// buffers of it of one length.
+fn shared_memory_is_reached_by_kernels_and_the_host(device: &Device) {
+    let mut rng = rng_for("shared_memory", 0);
+    let n = 3000;
+    let data = random_below(&mut rng, n, 16);
+    let mut keys = device.alloc_shared::<u32>(n).unwrap();
+    device.write(&mut keys, &data).unwrap();
+    let mut counts = device.alloc_shared::<u32>(16).unwrap();
+    let plan = device
+        .plan(vec![histogram(&keys, &counts, n as u32, 24, 128)], true)
+        .unwrap();
+    for _ in 0..2 {
+        device.run(&plan).unwrap();
+    }
+    let expected: Vec<u32> = (0..16)
+        .map(|k| 2 * data.iter().filter(|&&v| v == k).count() as u32)
+        .collect();
+    assert_eq!(device.download(&counts).unwrap(), expected);
+    assert_eq!(device.download(&keys).unwrap(), data);
+    device.zero(&mut counts).unwrap();
+    assert_eq!(device.download(&counts).unwrap(), [0; 16]);
+    // A ring's two buffers hold one slot per step in flight each.
+    let outputs = device.alloc_shared::<u32>(3).unwrap();
+    let err = device.ring(&keys, &outputs).err().expect("lengths differ");
+    assert!(err.to_string().contains("as many of each"), "{err}");
+    let none = device.alloc_shared::<u32>(0).unwrap();
+    assert!(device.ring(&none, &none).is_err());
+    if device.kind() == gpuwars::BackendKind::Cuda {
+        let plain = device.alloc_zeroed::<u32>(3).unwrap();
+        let err = device.ring(&plain, &outputs).err().expect("device memory");
+        assert!(err.to_string().contains("shared memory"), "{err}");
+    }
+}
+
 on_both_backends!(
     launches_outside_the_block_limits_are_refused,
     every_thread_of_the_grid_runs_once,
     a_plan_keeps_its_buffers_alive,
+    shared_memory_is_reached_by_kernels_and_the_host,
 );
 
 /// An out-of-bounds index is an error, not a crash of the host. (CPU only here: on the GPU the

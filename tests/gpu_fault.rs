@@ -49,12 +49,14 @@ fn fault_by_launch(device: &Device) -> Error {
 fn fault_by_ring(device: &Device) -> Error {
     let keys = device.upload(&KEYS).unwrap();
     let counts = device.alloc_zeroed::<u32>(BINS).unwrap();
-    let mut ring = device.ring::<u32, u32>(2).unwrap();
+    let inputs = device.alloc_shared::<u32>(2).unwrap();
+    let outputs = device.alloc_shared::<u32>(2).unwrap();
+    let mut ring = device.ring(&inputs, &outputs).unwrap();
     ring.reserve().unwrap();
-    ring.send(device, KEYS[0], &keys).unwrap();
+    ring.send(device, KEYS[0]).unwrap();
     device
         .launch(out_of_bounds(&keys, &counts))
-        .and_then(|()| ring.receive(device, &counts))
+        .and_then(|()| ring.receive(device))
         .and_then(|()| ring.oldest().map(drop))
         .unwrap_err()
 }

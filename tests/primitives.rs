@@ -202,7 +202,7 @@ fn launch_floor_runs_every_variant(device: &Device) {
     for (launches, threads) in [(1, 1), (5, 3_000), (2, past_one_block)] {
         let floor = floor::measure(device, launches, threads).expect("the floor runs");
         assert_eq!((floor.launches, floor.threads), (launches, threads));
-        for s in [floor.graph_s, floor.stream_s]
+        for s in [floor.graph_s, floor.stream_s, floor.ring_s]
             .into_iter()
             .chain(floor.one_block_s)
         {

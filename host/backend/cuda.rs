@@ -510,63 +510,26 @@ impl Gpu {
         Ok(())
     }
 
-    /// Page-locked host memory of `bytes` bytes, for asynchronous copies.
-    pub(super) fn pinned(&self, bytes: usize) -> Result<Pinned, Error> {
+    /// Page-locked host memory of `bytes` bytes, zeroed, mapped into the GPU's address space:
+    /// kernels read and write it directly, with no copy queued.
+    pub(super) fn mapped(&self, bytes: usize) -> Result<Mapped, Error> {
         self.bind()?;
+        let flags = cudarc::driver::sys::CU_MEMHOSTALLOC_DEVICEMAP;
         // SAFETY: a plain allocation; freed in `Pinned::drop`.
-        let ptr = unsafe { result::malloc_host(bytes.max(1), 0) }
-            .map_err(self.failed("allocating pinned host memory"))?;
-        // cuMemHostAlloc does not promise zeroed memory.
+        let ptr = unsafe { result::malloc_host(bytes.max(1), flags) }
+            .map_err(self.failed("allocating mapped host memory"))?;
         // SAFETY: `bytes` bytes were just allocated.
         unsafe { std::ptr::write_bytes(ptr.cast::<u8>(), 0, bytes) };
-        Ok(Pinned {
+        let memory = Pinned {
             ptr: ptr.cast(),
             ctx: self.ctx.clone(),
-        })
-    }
-
-    /// Queues a copy of `bytes` bytes from host address `src` to device address `dst`.
-    ///
-    /// # Safety
-    /// `src` is pinned memory that stays unchanged until the copy has run; `dst` a live
-    /// device allocation of at least `bytes` bytes.
-    pub(super) unsafe fn upload_async(
-        &self,
-        src: *const u8,
-        dst: u64,
-        bytes: usize,
-    ) -> Result<(), Error> {
-        // SAFETY: forwarded from the caller.
-        unsafe {
-            result::memcpy_htod_async(
-                dst,
-                std::slice::from_raw_parts(src, bytes),
-                self.stream.cu_stream(),
-            )
-        }
-        .map_err(self.failed("copying to the device"))
-    }
-
-    /// Queues a copy of `bytes` bytes from device address `src` to host address `dst`.
-    ///
-    /// # Safety
-    /// `dst` is pinned memory that nothing reads until the copy has run; `src` a live device
-    /// allocation of at least `bytes` bytes.
-    pub(super) unsafe fn download_async(
-        &self,
-        src: u64,
-        dst: *mut u8,
-        bytes: usize,
-    ) -> Result<(), Error> {
-        // SAFETY: forwarded from the caller.
-        unsafe {
-            result::memcpy_dtoh_async(
-                std::slice::from_raw_parts_mut(dst, bytes),
-                src,
-                self.stream.cu_stream(),
-            )
-        }
-        .map_err(self.failed("copying from the device"))
+        };
+        let mut addr = 0;
+        // SAFETY: `ptr` was allocated with the device-map flag, in this context (bound above).
+        unsafe { cudarc::driver::sys::cuMemHostGetDevicePointer_v2(&mut addr, ptr, 0) }
+            .result()
+            .map_err(self.failed("mapping host memory"))?;
+        Ok(Mapped { memory, addr })
     }
 
     /// Makes the context current on the calling thread, as raw driver calls need.
@@ -638,10 +601,25 @@ unsafe impl Sync for Pinned {}
 
 impl Drop for Pinned {
     fn drop(&mut self) {
-        // Nothing may still be copying into it: the owner waits for its fences first.
+        // Nothing may still reach it: `Mapped` waits for the context first.
         let _ = self.ctx.bind_to_thread();
         // SAFETY: allocated by `malloc_host`.
         let _ = unsafe { result::free_host(self.ptr.cast()) };
+    }
+}
+
+/// Page-locked host memory that kernels reach at a device address of their own.
+pub(super) struct Mapped {
+    pub(super) memory: Pinned,
+    /// Where kernels find it.
+    pub(super) addr: u64,
+}
+
+impl Drop for Mapped {
+    fn drop(&mut self) {
+        // Kernels still queued may reach it (the last op holding it can go while they run):
+        // wait for the whole context before the memory goes.
+        let _ = self.memory.ctx.synchronize();
     }
 }
 

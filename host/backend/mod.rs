@@ -179,6 +179,13 @@ enum BufferImp<T: Element> {
         len: usize,
         _element: PhantomData<T>,
     },
+    /// Page-locked host memory mapped into the GPU's address space, `len` elements: what the
+    /// host and the steps in flight exchange without copies (see [`Ring`]).
+    Mapped {
+        memory: cuda::Mapped,
+        len: usize,
+        _element: PhantomData<T>,
+    },
 }
 
 impl<T: Element> BufferImp<T> {
@@ -204,7 +211,7 @@ impl<T: Element> Buffer<T> {
     pub fn len(&self) -> usize {
         match &*self.imp {
             BufferImp::Cpu(b) => b.len(),
-            BufferImp::Cuda { len, .. } => *len,
+            BufferImp::Cuda { len, .. } | BufferImp::Mapped { len, .. } => *len,
         }
     }
 
@@ -225,6 +232,7 @@ impl<T: Element> Buffer<T> {
         match &*self.imp {
             BufferImp::Cpu(b) => b.addr(),
             BufferImp::Cuda { addr, .. } => *addr,
+            BufferImp::Mapped { memory, .. } => memory.addr,
         }
     }
 
@@ -399,6 +407,25 @@ impl Device {
         Ok(Buffer { imp: Arc::new(imp) })
     }
 
+    /// A buffer of `len` zeroed elements that the host and the kernels share without copies:
+    /// page-locked host memory mapped into the GPU's address space (plain host memory under
+    /// the emulation). Kernels reach it across the bus, so it suits a few words a step. Its
+    /// bytes are host memory, not counted as the device's. The host reaches it through a
+    /// [`Ring`], or with [`Device::download`] and [`Device::write`], which wait for the GPU
+    /// first.
+    pub fn alloc_shared<T: Element>(&self, len: usize) -> Result<Buffer<T>, Error> {
+        check_len::<T>(len)?;
+        let imp = match &self.imp {
+            Imp::Cpu(_) => BufferImp::Cpu(cpu::HostBuffer::zeroed(len)),
+            Imp::Cuda(gpu) => BufferImp::Mapped {
+                memory: gpu.mapped(len * size_of::<T>())?,
+                len,
+                _element: PhantomData,
+            },
+        };
+        Ok(Buffer { imp: Arc::new(imp) })
+    }
+
     /// A buffer holding a copy of `data`.
     pub fn upload<T: Element>(&self, data: &[T]) -> Result<Buffer<T>, Error> {
         check_len::<T>(data.len())?;
@@ -429,6 +456,16 @@ impl Device {
                 Ok(())
             }
             (Imp::Cuda(gpu), BufferImp::Cuda { bytes, .. }) => gpu.write(&mut locked(bytes), data),
+            (Imp::Cuda(gpu), BufferImp::Mapped { memory, .. }) => {
+                gpu.synchronize()?;
+                // SAFETY: no kernel runs (waited for above), `&mut buffer` excludes the other
+                // host borrows, and the buffer holds at least `data.len()` elements.
+                unsafe {
+                    let dst = memory.memory.ptr.cast::<T>();
+                    std::ptr::copy_nonoverlapping(data.as_ptr(), dst, data.len());
+                }
+                Ok(())
+            }
             _ => Err(foreign_buffer()),
         }
     }
@@ -442,6 +479,14 @@ impl Device {
                 Ok(unsafe { b.as_slice() }.to_vec())
             }
             (Imp::Cuda(gpu), BufferImp::Cuda { bytes, .. }) => gpu.download(&locked(bytes)),
+            (Imp::Cuda(gpu), BufferImp::Mapped { memory, len, .. }) => {
+                gpu.synchronize()?;
+                // SAFETY: no kernel runs (waited for above); `len` elements of plain bytes.
+                Ok(
+                    unsafe { std::slice::from_raw_parts(memory.memory.ptr.cast::<T>(), *len) }
+                        .to_vec(),
+                )
+            }
             _ => Err(foreign_buffer()),
         }
     }
@@ -456,6 +501,12 @@ impl Device {
                 Ok(())
             }
             (Imp::Cuda(gpu), BufferImp::Cuda { bytes, .. }) => gpu.zero(&mut locked(bytes)),
+            (Imp::Cuda(gpu), BufferImp::Mapped { memory, len, .. }) => {
+                gpu.synchronize()?;
+                // SAFETY: as in `write`.
+                unsafe { std::ptr::write_bytes(memory.memory.ptr.cast::<T>(), 0, *len) };
+                Ok(())
+            }
             _ => Err(foreign_buffer()),
         }
     }

@@ -1,138 +1,136 @@
-//! Steps in flight: each step's input goes up and its output comes back through page-locked
-//! host memory, queued on the device's stream behind the step itself, so the host never
-//! waits for a step it has just queued. It reads each step's output a few steps later, when
-//! the ring is full or it drains it.
+//! Steps in flight: each step's input goes up and its output comes back through memory that
+//! the host and the kernels share ([`Device::alloc_shared`]: page-locked host memory mapped
+//! into the GPU's address space), one element per step in flight, so no copy is queued
+//! between two steps and the host never waits for a step it has just queued. Step `n` uses
+//! element `n % depth` of both buffers (`n` counted modulo 2³², as the kernels count it); the
+//! kernels find it with their own count of the steps begun. The host reads each step's
+//! output a few steps later, when the ring is full or it drains it.
 
 use std::collections::VecDeque;
-use std::marker::PhantomData;
+use std::sync::Arc;
 
-use super::cuda::{Fence, Pinned};
-use super::{Buffer, Device, Element, Error, Imp};
+use super::cuda::Fence;
+use super::{Buffer, BufferImp, Device, Element, Error, Imp};
 
-/// A ring of `depth` steps in flight, each with one input `I` and one output `O`.
+/// A ring of steps in flight, each with one input `I` and one output `O`.
 pub struct Ring<I: Element, O: Element> {
+    /// Shares in the two buffers' memory (held, so it outlives the ring).
+    inputs: Arc<BufferImp<I>>,
+    outputs: Arc<BufferImp<O>>,
     depth: usize,
-    staging: Staging,
+    /// One fence per slot on the GPU, recorded after its step; none under the emulation,
+    /// which runs each step before it returns.
+    fences: Vec<Fence>,
     /// Slots in flight, oldest first.
     in_flight: VecDeque<usize>,
     /// Steps queued so far.
     queued: u64,
     /// The outputs as read back, by slot.
-    outputs: Vec<O>,
-    _inputs: PhantomData<I>,
-}
-
-enum Staging {
-    /// The emulation runs each step before it returns: plain memory, nothing to wait for.
-    Host,
-    /// Pinned copies of `inputs` and `outputs`, and one fence per slot.
-    Pinned {
-        inputs: Pinned,
-        outputs: Pinned,
-        fences: Vec<Fence>,
-    },
+    outputs_read: Vec<O>,
 }
 
 impl Device {
-    /// A ring of `depth` (at least 1) steps in flight. Depth 1 waits for every step.
-    pub fn ring<I: Element, O: Element>(&self, depth: usize) -> Result<Ring<I, O>, Error> {
-        if depth == 0 {
-            return Err(Error::Invalid(
-                "a ring of depth 0 (allowed: 1 or more)".into(),
-            ));
+    /// A ring over `inputs` and `outputs`, buffers of [`Device::alloc_shared`] of one length
+    /// (at least 1): the steps in flight. The kernels of each step read its input at, and
+    /// write its output to, the slot of their own count of the steps, which starts at zero
+    /// as the ring's does. Depth 1 waits for every step.
+    pub fn ring<I: Element, O: Element>(
+        &self,
+        inputs: &Buffer<I>,
+        outputs: &Buffer<O>,
+    ) -> Result<Ring<I, O>, Error> {
+        let depth = inputs.len();
+        if depth == 0 || outputs.len() != depth {
+            return Err(Error::Invalid(format!(
+                "a ring of {depth} inputs and {} outputs (allowed: as many of each, 1 or more)",
+                outputs.len()
+            )));
         }
-        let staging = match &self.imp {
-            Imp::Cpu(_) => Staging::Host,
-            Imp::Cuda(gpu) => Staging::Pinned {
-                inputs: gpu.pinned(depth * size_of::<I>())?,
-                outputs: gpu.pinned(depth * size_of::<O>())?,
-                fences: (0..depth)
-                    .map(|_| gpu.fence(false))
-                    .collect::<Result<_, _>>()?,
-            },
+        let fences = match (&self.imp, &*inputs.imp, &*outputs.imp) {
+            (Imp::Cpu(_), BufferImp::Cpu(_), BufferImp::Cpu(_)) => Vec::new(),
+            (Imp::Cuda(gpu), BufferImp::Mapped { .. }, BufferImp::Mapped { .. }) => (0..depth)
+                .map(|_| gpu.fence(false))
+                .collect::<Result<_, _>>()?,
+            _ => {
+                return Err(Error::Invalid(
+                    "a ring over buffers that are not this device's shared memory".into(),
+                ));
+            }
         };
         Ok(Ring {
+            inputs: inputs.imp.clone(),
+            outputs: outputs.imp.clone(),
             depth,
-            staging,
+            fences,
             in_flight: VecDeque::with_capacity(depth),
             queued: 0,
-            outputs: vec![O::zeroed(); depth],
-            _inputs: PhantomData,
+            outputs_read: vec![O::zeroed(); depth],
         })
     }
 }
 
+/// The host address of element `slot` of a shared buffer.
+fn host_ptr<T: Element>(buffer: &BufferImp<T>, slot: usize) -> *mut T {
+    let base = match buffer {
+        BufferImp::Cpu(b) => b.addr() as *mut T,
+        BufferImp::Mapped { memory, .. } => memory.memory.ptr.cast::<T>(),
+        // `Device::ring` takes no other kind.
+        BufferImp::Cuda { .. } => unreachable!("a ring over device memory"),
+    };
+    base.wrapping_add(slot)
+}
+
 impl<I: Element, O: Element> Ring<I, O> {
-    /// The slot of the next step.
+    /// Steps the ring holds in flight.
+    pub fn depth(&self) -> usize {
+        self.depth
+    }
+
+    /// The slot of the next step: its count modulo 2³², as the kernels keep it.
     fn slot(&self) -> usize {
-        (self.queued % self.depth as u64) as usize
+        (self.queued as u32 as usize) % self.depth()
     }
 
     /// Makes room for one more step: with `depth` steps in flight, waits for the oldest and
     /// returns its output.
     pub fn reserve(&mut self) -> Result<Option<O>, Error> {
-        if self.in_flight.len() < self.depth {
+        if self.in_flight.len() < self.depth() {
             return Ok(None);
         }
         self.oldest()
     }
 
-    /// Queues the copy of `input` into element 0 of `dst`, for the step about to be queued
-    /// (call [`Ring::reserve`] first).
-    pub fn send(&mut self, device: &Device, input: I, dst: &Buffer<I>) -> Result<(), Error> {
-        self.check_room()?;
-        let slot = self.slot();
-        if dst.is_empty() {
-            return Err(Error::Invalid("sending into an empty buffer".into()));
-        }
-        match (&self.staging, &device.imp) {
-            (Staging::Host, Imp::Cpu(emu)) => {
+    /// Writes `input` into the slot of the step about to be queued (call [`Ring::reserve`]
+    /// first).
+    pub fn send(&mut self, device: &Device, input: I) -> Result<(), Error> {
+        self.check(device)?;
+        let at = host_ptr(&self.inputs, self.slot());
+        match &device.imp {
+            Imp::Cpu(emu) => {
                 let _order = emu.in_order();
-                // SAFETY: element 0 of a live host buffer, in the device's order.
-                unsafe { (dst.addr() as *mut I).write(input) };
-                Ok(())
+                // SAFETY: an element of a live host buffer, in the device's order.
+                unsafe { at.write_unaligned(input) };
             }
-            (Staging::Pinned { inputs, .. }, Imp::Cuda(gpu)) => {
-                let at = inputs.ptr.cast::<I>().wrapping_add(slot);
-                // SAFETY: the slot is not in flight (checked), so no queued copy reads it;
-                // the copy queued below reads it before the slot's fence, which is waited
-                // for before the slot is written again.
-                unsafe {
-                    at.write_unaligned(input);
-                    gpu.upload_async(at.cast(), dst.addr(), size_of::<I>())
-                }
-            }
-            _ => Err(Error::Invalid("a ring of another backend".into())),
+            // SAFETY: the slot is not in flight (checked): the step that last read it has
+            // passed its fence, and the step that reads it next is launched after this write
+            // (a launch sees the host's writes made before it).
+            Imp::Cuda(_) => unsafe { at.write_volatile(input) },
         }
+        Ok(())
     }
 
-    /// After the step is queued: queues the copy of element 0 of `src` back to the host,
-    /// and the step's fence.
-    pub fn receive(&mut self, device: &Device, src: &Buffer<O>) -> Result<(), Error> {
-        self.check_room()?;
+    /// After the step is queued: notes it in flight, behind the GPU's fence for its slot
+    /// (under the emulation, where the step has run, its output is read now).
+    pub fn receive(&mut self, device: &Device) -> Result<(), Error> {
+        self.check(device)?;
         let slot = self.slot();
-        if src.is_empty() {
-            return Err(Error::Invalid("receiving from an empty buffer".into()));
-        }
-        match (&mut self.staging, &device.imp) {
-            (Staging::Host, Imp::Cpu(emu)) => {
+        match &device.imp {
+            Imp::Cpu(emu) => {
                 let _order = emu.in_order();
-                // SAFETY: element 0 of a live host buffer, in the device's order.
-                self.outputs[slot] = unsafe { (src.addr() as *const O).read() };
+                // SAFETY: an element of a live host buffer, in the device's order.
+                self.outputs_read[slot] = unsafe { host_ptr(&self.outputs, slot).read() };
             }
-            (
-                Staging::Pinned {
-                    outputs, fences, ..
-                },
-                Imp::Cuda(gpu),
-            ) => {
-                let at = outputs.ptr.cast::<O>().wrapping_add(slot);
-                // SAFETY: nothing reads the slot until its fence, recorded after the copy,
-                // has been waited for.
-                unsafe { gpu.download_async(src.addr(), at.cast(), size_of::<O>())? };
-                gpu.record(&mut fences[slot])?;
-            }
-            _ => return Err(Error::Invalid("a ring of another backend".into())),
+            Imp::Cuda(gpu) => gpu.record(&mut self.fences[slot])?,
         }
         self.in_flight.push_back(slot);
         self.queued += 1;
@@ -144,36 +142,27 @@ impl<I: Element, O: Element> Ring<I, O> {
         let Some(slot) = self.in_flight.pop_front() else {
             return Ok(None);
         };
-        if let Staging::Pinned {
-            outputs, fences, ..
-        } = &self.staging
-        {
-            fences[slot].wait()?;
-            // SAFETY: the copy into the slot is done (its fence has passed).
-            self.outputs[slot] = unsafe { outputs.ptr.cast::<O>().add(slot).read_unaligned() };
+        if let Some(fence) = self.fences.get(slot) {
+            fence.wait()?;
+            // SAFETY: the step that writes the slot is done (its fence has passed), and the
+            // next one to write it is not queued before the slot is sent again.
+            self.outputs_read[slot] = unsafe { host_ptr(&self.outputs, slot).read_volatile() };
         }
-        Ok(Some(self.outputs[slot]))
+        Ok(Some(self.outputs_read[slot]))
     }
 
-    fn check_room(&self) -> Result<(), Error> {
-        if self.in_flight.len() >= self.depth {
+    /// Checks that `device` is the ring's backend and that a step has room.
+    fn check(&self, device: &Device) -> Result<(), Error> {
+        if matches!(device.imp, Imp::Cuda(_)) == self.fences.is_empty() {
+            return Err(Error::Invalid("a ring of another backend".into()));
+        }
+        if self.in_flight.len() >= self.depth() {
             return Err(Error::Invalid(format!(
                 "{} steps in flight in a ring of depth {}: reserve first",
                 self.in_flight.len(),
-                self.depth
+                self.depth()
             )));
         }
         Ok(())
-    }
-}
-
-impl<I: Element, O: Element> Drop for Ring<I, O> {
-    fn drop(&mut self) {
-        // The pinned memory must outlive the copies still queued into it.
-        if let Staging::Pinned { fences, .. } = &self.staging {
-            for &slot in &self.in_flight {
-                let _ = fences[slot].wait();
-            }
-        }
     }
 }

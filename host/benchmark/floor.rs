@@ -3,15 +3,17 @@
 //! threads as the step has slots (the least a stage of the step does), replayed as one CUDA
 //! graph (as the step is), as the same graph with programmatic dependent launch (on sm_90
 //! and newer), launched one by one, and run as rounds of one block with a barrier between
-//! them (the floor of a step that would run in one block). What the step takes above it is
-//! its kernels' own work and latency.
+//! them (the floor of a step that would run in one block); and the graph with the game's
+//! ring around it, as `Game::submit` queues each step (its input written to shared memory
+//! before, its fence recorded after). What the step takes above it is its kernels' own work
+//! and latency.
 
 use serde::{Deserialize, Serialize};
 
 use gpuwars_kernels::primitives::touch::{TouchArgs, TouchRoundsArgs};
 use gpuwars_kernels::registry;
 
-use crate::backend::{Binder, Launch, MAX_BLOCK};
+use crate::backend::{Binder, Launch, MAX_BLOCK, Ring};
 use crate::primitives::threads;
 use crate::{BackendKind, Buffer, Device, Error, Op};
 
@@ -35,6 +37,9 @@ pub struct Floor {
     /// threads with a barrier between rounds: one launch a step. `None` above
     /// [`ONE_BLOCK_MAX_THREADS`] threads, where one block is no way to run a step.
     pub one_block_s: Option<f64>,
+    /// Seconds a step, the graph as the step launches it (with dependent launch where the
+    /// device can) in a ring of 4 steps in flight, as a game queues each step.
+    pub ring_s: f64,
 }
 
 /// The most threads whose one-block floor is measured: a block runs 64 of them a thread a
@@ -117,11 +122,14 @@ pub fn measure(device: &Device, launches: usize, threads: u32) -> Result<Floor, 
         } else {
             None
         };
-        Ok((graph_s, dependent_s, stream_s, one_block_s))
+        device.set_dependent_launch(dependent_s.is_some());
+        let ring_s = time_in_ring(device, &chain, (warm, reps))?;
+        Ok((graph_s, dependent_s, stream_s, one_block_s, ring_s))
     };
     let times = times();
     device.set_dependent_launch(was_dependent);
-    let (graph_s, dependent_s, stream_s, one_block_s) = times?;
+    let (graph_s, dependent_s, stream_s, one_block_s, ring_s) = times?;
+    let timed_runs = timed_runs + 1;
 
     let runs = timed_runs * (warm + reps) * rounds;
     if let Some(i) = device.download(&data)?.iter().position(|&v| v != runs) {
@@ -137,7 +145,32 @@ pub fn measure(device: &Device, launches: usize, threads: u32) -> Result<Floor, 
         dependent_s,
         stream_s,
         one_block_s,
+        ring_s,
     })
+}
+
+/// Seconds a step of `chain` as a graph queued through a ring of 4 steps in flight
+/// (`Game`'s default lag): `warm` steps, then `reps` timed.
+fn time_in_ring(device: &Device, chain: &[Op], (warm, reps): (u32, u32)) -> Result<f64, Error> {
+    let plan = device.plan(chain.to_vec(), true)?;
+    let (inputs, outputs) = (device.alloc_shared::<u32>(4)?, device.alloc_shared(4)?);
+    let mut ring = device.ring(&inputs, &outputs)?;
+    let step = |ring: &mut Ring<u32, u32>| -> Result<(), Error> {
+        ring.reserve()?;
+        ring.send(device, 1)?;
+        device.run(&plan)?;
+        ring.receive(device)
+    };
+    for _ in 0..warm {
+        step(&mut ring)?;
+    }
+    let start = device.mark()?;
+    for _ in 0..reps {
+        step(&mut ring)?;
+    }
+    let seconds = device.mark()?.seconds_since(&start)? / f64::from(reps);
+    while ring.oldest()?.is_some() {}
+    Ok(seconds)
 }
 
 impl Floor {
@@ -160,12 +193,13 @@ impl Floor {
         });
         format!(
             "launch floor (measured here): {} dependent launches of one read-modify-write over \
-             {} threads take {:.1} µs a step as a graph{dependent}, {:.1} one by one{one_block}; \
-             the step takes {:.1}",
+             {} threads take {:.1} µs a step as a graph{dependent}, {:.1} one by one{one_block}, \
+             {:.1} in a game's ring; the step takes {:.1}",
             self.launches,
             crate::files::thousands(self.threads),
             self.graph_s * 1e6,
             self.stream_s * 1e6,
+            self.ring_s * 1e6,
             step_s * 1e6
         )
     }

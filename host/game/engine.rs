@@ -43,8 +43,8 @@ impl Default for Options {
 
 /// A game in progress on a device.
 pub struct Game<'d> {
-    // The ring's pinned memory outlives the copies queued into it (it waits for them on
-    // drop), and those copies read the pipeline's buffers: dropped first.
+    /// The host's side of the mailbox the steps read their commands from and post their
+    /// statuses to.
     ring: Ring<Command, Status>,
     pipeline: Pipeline<'d>,
     scene: Scene,
@@ -211,6 +211,7 @@ impl<'d> Game<'d> {
                 .effects
                 .as_ref()
                 .map(|e| burst(e, scene.world.dt)),
+            in_flight: options.lag,
         };
         let pipeline = Pipeline::configured(
             device,
@@ -219,8 +220,9 @@ impl<'d> Game<'d> {
             Some(game),
             (options.graphs, options.lanes),
         )?;
+        let (commands, statuses) = pipeline.mailbox()?;
         Ok(Game {
-            ring: device.ring(options.lag)?,
+            ring: device.ring(commands, statuses)?,
             pipeline,
             scene: scene.clone(),
             arrived: VecDeque::new(),
@@ -281,12 +283,12 @@ impl<'d> Game<'d> {
             self.arrived.push_back(status);
         }
         let device = self.pipeline.device();
-        self.ring.send(device, command, self.pipeline.command()?)?;
+        self.ring.send(device, command)?;
         match profile {
             Some(profile) => self.pipeline.step_profiled(profile)?,
             None => self.pipeline.step()?,
         }
-        self.ring.receive(device, self.pipeline.status()?)
+        self.ring.receive(device)
     }
 
     /// The status of the oldest step not yet handed out, waiting for it if it is still in

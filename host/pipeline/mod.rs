@@ -68,6 +68,9 @@ pub struct GameConfig {
     /// How kills burst into particles, if the scene has explosions (the slots owning
     /// particles are filled in by the pipeline).
     pub effects: Option<Burst>,
+    /// Steps the host may have in flight: the depth of the mailbox through which commands
+    /// go up and statuses come back (at least 1).
+    pub in_flight: usize,
 }
 
 impl GameConfig {
@@ -289,14 +292,11 @@ impl ParticleSnapshot {
 
 /// The game's side of a pipeline: commands up, statuses back, spawn counts.
 impl Pipeline<'_> {
-    /// The buffer the step reads its command from.
-    pub(crate) fn command(&self) -> Result<&Buffer<Command>, Error> {
-        Ok(&self.world.game()?.data.command)
-    }
-
-    /// The buffer the step leaves its status in.
-    pub(crate) fn status(&self) -> Result<&Buffer<Status>, Error> {
-        Ok(&self.world.game()?.data.status)
+    /// The mailbox's shared buffers: the commands the steps read, the statuses they leave
+    /// (a ring over them is the host's side, see `Device::ring`).
+    pub(crate) fn mailbox(&self) -> Result<(&Buffer<Command>, &Buffer<Status>), Error> {
+        let game = self.world.game()?;
+        Ok((&game.commands, &game.statuses))
     }
 
     /// Enemies spawned so far, per kind.

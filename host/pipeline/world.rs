@@ -9,16 +9,19 @@
 use gpuwars_kernels::Kernel;
 use gpuwars_kernels::data::{Sizes, Unmade};
 use gpuwars_kernels::game::GameData;
+use gpuwars_kernels::game::control::{Command, Mailbox, Status};
 use gpuwars_kernels::game::effects::{Burst, Particles};
 use gpuwars_kernels::game::master::MasterArgs;
 use gpuwars_kernels::registry;
 use gpuwars_kernels::sim::Space;
 use gpuwars_kernels::sim::broad::CellIndex;
+use gpuwars_kernels::sim::free_list;
 use gpuwars_kernels::sim::narrow::CollideArgs;
 use gpuwars_kernels::sim::teams::Teams;
 
 use super::GameConfig;
 use super::teams::{self, Lanes};
+use crate::Buffer;
 use crate::backend::{Binder, Buffers};
 use crate::sim::layout::{self, Layout};
 use crate::sim::state::{self, Scratch, WorldState, made};
@@ -38,12 +41,26 @@ pub(crate) struct Config {
     pub think_teams: Option<Teams>,
     /// Every how many steps the bodies move to slots in the grid's order (0: never).
     pub renumber_every: u32,
+    /// Whether the free lists are rebuilt in one launch (`mark_and_gather_free`): where
+    /// every range is small enough, on the GPU, and on the CPU in tiny worlds only. Its
+    /// warps count their range's free slots before them redundantly, which costs the GPU's
+    /// idle lanes little but the CPU emulation, where each thread counts for all 32 lanes,
+    /// far more than the scan once a world has more than a few warps.
+    pub free_in_one_launch: bool,
 }
+
+/// The most slots of a world whose free lists the CPU emulation rebuilds in one launch (see
+/// `Config::free_in_one_launch`): a few warps, whose redundant counts cost less than two
+/// more launches.
+const CPU_ONE_LAUNCH_SLOTS: u32 = 1024;
 
 /// The game's buffers on the device.
 pub(crate) struct GameState {
     pub config: GameConfig,
     pub data: GameData<Buffers>,
+    /// The mailbox's commands and statuses, one per step in flight, in shared memory.
+    pub commands: Buffer<Command>,
+    pub statuses: Buffer<Status>,
     /// The explosions' particles and how kills burst, if the scene has explosions.
     pub effects: Option<(Particles<Buffers>, Burst)>,
 }
@@ -140,6 +157,8 @@ impl World {
                 .as_ref()
                 .and_then(|g| teams::think(lanes, resident, g, &layout, &space)),
             renumber_every: renumber_every(spec, &layout, game.is_some()),
+            free_in_one_launch: (resident.is_some() || layout.slots <= CPU_ONE_LAUNCH_SLOTS)
+                && (layout.ranges.iter()).all(|r| r.capacity <= free_list::ONE_LAUNCH_RANGE),
         };
         let state = WorldState::new(device, spec, &layout, seed)?;
         let renumbers = config.renumber_every != 0;
@@ -156,7 +175,14 @@ impl World {
                     )),
                     None => None,
                 };
+                if config.in_flight == 0 {
+                    return Err(Error::Invalid(
+                        "a game with no step in flight (allowed: 1 or more)".into(),
+                    ));
+                }
                 Some(GameState {
+                    commands: device.alloc_shared(config.in_flight)?,
+                    statuses: device.alloc_shared(config.in_flight)?,
                     config,
                     data,
                     effects,
@@ -191,6 +217,7 @@ impl World {
             free: self.state.free(b),
             contacts: self.scratch.contacts(b),
             status: b.view(&data.status),
+            mailbox: self.mailbox(b)?,
             input: b.view(&data.input),
             spawned: b.view(&data.spawned),
             births: b.view(&data.births),
@@ -199,6 +226,16 @@ impl World {
             space: self.space,
             rules: game.config.rules,
             reserved: 0,
+        })
+    }
+
+    /// The game's mailbox as kernels take it, made by `b`, if the world plays a game.
+    pub fn mailbox(&self, b: &mut Binder) -> Option<Mailbox> {
+        let game = self.game.as_ref()?;
+        Some(Mailbox {
+            commands: b.view(&game.commands),
+            statuses: b.view(&game.statuses),
+            tallied: b.view(&game.data.tallied),
         })
     }
 

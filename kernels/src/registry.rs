@@ -93,6 +93,9 @@ kernels! {
     MARK_FREE = mark_free(free_list::MarkArgs) => free_list::mark_free;
     /// Writes each kind's free slots in order, and their counts.
     GATHER_FREE = gather_free(free_list::GatherArgs) => free_list::gather_free;
+    /// Flags the free usable slots and writes each kind's free slots and counts, in one
+    /// launch (worlds of small ranges).
+    MARK_AND_GATHER_FREE = mark_and_gather_free(free_list::MarkGatherArgs) => free_list::mark_and_gather_free;
     /// Brings bodies to life at random places from their slots' generators.
     SCATTER = scatter(scatter::ScatterArgs) => scatter::scatter;
     /// The step's input (the autopilot's, or the player's), then the master before the

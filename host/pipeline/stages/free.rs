@@ -1,17 +1,42 @@
 //! `free`: the free lists: flags and each tile's count of them, the tiles' prefix sum, the
-//! lists and counts (each kind's last slot writes its count, so they need no clearing).
+//! lists and counts (each kind's last slot writes its count, so they need no clearing); on
+//! the GPU in worlds of small ranges, all of it in one launch.
 
 use gpuwars_kernels::registry;
-use gpuwars_kernels::sim::free_list::{FreeMarks, GatherArgs, MarkArgs};
+use gpuwars_kernels::sim::free_list::{FreeMarks, GatherArgs, MarkArgs, MarkGatherArgs};
 
 use crate::Op;
 use crate::backend::Binder;
 use crate::pipeline::world::World;
 use crate::primitives::threads;
 
-/// Mark and gather, a thread a slot each, with the scan of the tiles' counts between them.
+/// Mark and gather, a thread a slot each, with the scan of the tiles' counts between them;
+/// or both in one launch where the world's ranges allow (see `Config::free_in_one_launch`).
 pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     let (slots, state, marks) = (world.layout.slots, &world.state, &world.scratch.marks);
+    if world.config.free_in_one_launch {
+        // SAFETY: the views go into the op made with the binder.
+        let mut b = unsafe { Binder::new() };
+        let args = MarkGatherArgs {
+            bodies: state.bodies(&mut b),
+            ranges: b.view(&state.tables.ranges),
+            flags: b.view(&marks.flags),
+            list: b.view(&state.free.list),
+            count: b.view(&state.free.count),
+        };
+        // SAFETY: the world's buffers, sized as the kernel asks (see `World`); the config
+        // holds it only where every range is small enough.
+        let op = unsafe {
+            threads(
+                registry::MARK_AND_GATHER_FREE,
+                slots,
+                args,
+                b,
+                16 * u64::from(slots),
+            )
+        };
+        return vec![op];
+    }
     // SAFETY (both binders): the views go into the op made with each.
     let mut b = unsafe { Binder::new() };
     let mark = MarkArgs {

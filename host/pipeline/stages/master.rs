@@ -29,7 +29,7 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         kinds: b.view(&world.state.tables.info),
         space: world.space,
         grid: world.cells(&mut b),
-        command: b.view(&game.data.command),
+        mailbox: master.mailbox,
         input: b.view(&game.data.input),
         rules: game.config.rules,
         reserved: 0,

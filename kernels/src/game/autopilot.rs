@@ -1,7 +1,7 @@
 //! The autopilot: a deterministic bot that writes the ship's [`Input`] on the device, for the
 //! headless demo, the benchmarks and the tests. It runs first in the master's one-warp
 //! launch every step ([`super::master::pilot_then_master`]), and passes the player's input through when the host's
-//! [`Command`] says the player flies. It looks around the ship through the previous step's
+//! [`Command`](super::control::Command) says the player flies. It looks around the ship through the previous step's
 //! grid (buckets of slots; positions as they are now), so a bot-played step needs no
 //! read-back.
 //!
@@ -11,7 +11,7 @@
 
 use glam::Vec2;
 
-use super::control::{Command, Input};
+use super::control::{Input, Mailbox};
 use super::rules::Rules;
 use crate::sim::broad::{CellIndex, kind_bit};
 use crate::sim::{Bodies, KindInfo, Space};
@@ -28,8 +28,8 @@ kernel_args! {
         pub space: Space,
         /// The previous step's grid.
         pub grid: CellIndex,
-        /// The host's command for this step (one element).
-        pub command: DevSlice<Command>,
+        /// The host's command for this step, in the mailbox.
+        pub mailbox: Mailbox,
         /// Output: the input for this step (one element).
         pub input: DevSlice<Input>,
         /// The scene's rules.
@@ -106,7 +106,7 @@ pub fn autopilot(t: Thread, args: &AutopilotArgs) {
     if t.global() >= warp::WARP || warp::is_copy_of_lane0(lane) {
         return;
     }
-    let command = args.command.get(0);
+    let command = args.mailbox.command();
     if command.autopilot == 0 {
         if lane == 0 {
             args.input.set(0, command.input);

@@ -1,9 +1,12 @@
 //! What crosses between the CPU and the GPU each step (paper section 5): the player's
-//! [`Input`] going up, the [`Status`] coming back. Both are small `#[repr(C)]` structs.
+//! [`Input`] going up, the [`Status`] coming back. Both are small `#[repr(C)]` structs, and
+//! they cross through a [`Mailbox`].
 
 use core::f32::consts::TAU;
 
 use glam::Vec2;
+
+use crate::DevSlice;
 
 /// Steps of [`Input::move_x`] / [`Input::move_y`] per unit of stick deflection.
 pub const MOVE_SCALE: i32 = 1000;
@@ -172,5 +175,37 @@ impl Status {
     #[inline(always)]
     pub fn is_over(&self) -> bool {
         self.game_over != PLAYING
+    }
+}
+
+/// Where the host and the steps in flight meet: the commands the host writes and the
+/// statuses the steps leave, one of each per step in flight, in memory both reach without a
+/// copy (the host's ring), and the device's count of the steps tallied, which picks the
+/// slot: step `n` (counted modulo 2³²) uses element `n % depth` of both.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
+pub struct Mailbox {
+    /// The commands, one per step in flight (at least one).
+    pub commands: DevSlice<Command>,
+    /// The statuses, as many.
+    pub statuses: DevSlice<Status>,
+    /// Steps tallied so far, modulo 2³² (one element): the step under way is the next.
+    pub tallied: DevSlice<u32>,
+}
+
+impl Mailbox {
+    /// The command of the step under way.
+    #[inline(always)]
+    pub fn command(&self) -> Command {
+        self.commands.get(self.tallied.get(0) % self.commands.len())
+    }
+
+    /// Leaves `status` as the step's and counts the step: the step's last write (one
+    /// thread's).
+    #[inline(always)]
+    pub fn post(&self, status: Status) {
+        let step = self.tallied.get(0);
+        self.statuses.set(step % self.statuses.len(), status);
+        self.tallied.set(0, step.wrapping_add(1));
     }
 }

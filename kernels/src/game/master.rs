@@ -20,7 +20,7 @@
 use glam::Vec2;
 
 use super::autopilot::{AutopilotArgs, autopilot};
-use super::control::{DESTROYED, Events, Input, PLAYING, Status, TOO_SLOW};
+use super::control::{DESTROYED, Events, Input, Mailbox, PLAYING, Status, TOO_SLOW};
 use super::rules::{Rules, Wave};
 use crate::sim::free_list::FreeSlots;
 use crate::sim::scatter::{Place, birth, random_place};
@@ -42,6 +42,8 @@ kernel_args! {
         pub contacts: Contacts,
         /// The game's state: read, advanced, written back (one element).
         pub status: DevSlice<Status>,
+        /// Where [`tally`] posts the step's status for the host.
+        pub mailbox: Mailbox,
         /// This step's input (one element).
         pub input: DevSlice<Input>,
         /// Enemies spawned so far, per kind.
@@ -221,7 +223,9 @@ fn spawns(args: &MasterArgs, kind: u32, step: u32) -> Spawns {
 /// 2. the ship's hits this step, the shots that struck an enemy (those that took damage:
 ///    obstacles such as crates do none), and where the ship is;
 /// 3. the FPS meter from the ship's energy; game over below the minimum, or without a ship,
-///    and then the world is frozen (see [`Bodies::frozen`]).
+///    and then the world is frozen (see [`Bodies::frozen`]);
+/// 4. the status is posted to the host through the mailbox, every step (after game over,
+///    the last one again).
 #[inline(always)]
 pub fn tally(t: Thread, args: &MasterArgs) {
     let lane = t.lane();
@@ -232,6 +236,9 @@ pub fn tally(t: Thread, args: &MasterArgs) {
     let (b, rules) = (&args.bodies, &args.rules);
     let mut st = args.status.get(0);
     if st.is_over() {
+        if lane == 0 {
+            args.mailbox.post(st);
+        }
         return;
     }
     // A kind a lane; the sums saturate, which keeps them independent of their order.
@@ -301,6 +308,7 @@ pub fn tally(t: Thread, args: &MasterArgs) {
     };
     st.step = st.step.saturating_add(1);
     args.status.set(0, st);
+    args.mailbox.post(st);
     if st.is_over() {
         b.frozen.set(0, 1);
     }

@@ -23,7 +23,7 @@ pub mod fsm;
 pub mod master;
 pub mod rules;
 
-use control::{Command, Input, Status};
+use control::{Input, Status};
 use rules::{Brain, Wave};
 
 crate::device_data! {
@@ -34,10 +34,12 @@ crate::device_data! {
         brains: [Brain; kinds],
         /// The spawn schedule.
         waves: [Wave; waves],
-        /// What the step leaves for the host: score, events, game over.
+        /// The game's state as the last step left it: score, events, game over (what the
+        /// step posts to the host through the [`control::Mailbox`]).
         status: [Status; 1],
-        /// The host's command for the next step.
-        command: [Command; 1],
+        /// Steps tallied so far, modulo 2³²: which slot of the mailbox the step under way
+        /// uses.
+        tallied: [u32; 1],
         /// The ship's input the step uses: the player's, or the autopilot's.
         input: [Input; 1],
         /// Enemies spawned so far, per kind.

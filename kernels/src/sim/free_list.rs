@@ -10,6 +10,9 @@
 //!    of each range writes the range's count.
 //!
 //! Lists come out in increasing slot order; the master thread takes slots from the front.
+//!
+//! Where every range is small ([`ONE_LAUNCH_RANGE`]), [`mark_and_gather_free`] does all three
+//! in one launch: each warp counts the free slots of its range before it itself.
 
 use super::bodies::Bodies;
 use super::kinds::SlotRange;
@@ -125,6 +128,64 @@ pub fn gather_free(t: Thread, args: &GatherArgs) {
     // A range starts a tile: the free slots before it are its first tile's offset.
     let rank = offset + before - args.tiles.get(range.start / WARP);
     let flag = args.flags.get(slot);
+    if flag != 0 {
+        args.list.set(range.start + rank, slot);
+    }
+    if slot + 1 == range.end() {
+        args.count.set(kind, rank + flag);
+    }
+}
+
+/// The largest kind range whose free list [`mark_and_gather_free`] rebuilds: its last warp
+/// reads the liveness of every slot of the range before it, `ONE_LAUNCH_RANGE / 32 / 4`
+/// rounds of four loads a lane.
+pub const ONE_LAUNCH_RANGE: u32 = 4096;
+
+kernel_args! {
+    /// Arguments of [`mark_and_gather_free`].
+    pub struct MarkGatherArgs {
+        /// The bodies (kinds and liveness are read).
+        pub bodies: Bodies,
+        /// Slot range of each kind, none larger than [`ONE_LAUNCH_RANGE`] slots.
+        pub ranges: DevSlice<SlotRange>,
+        /// Output: 1 for a free usable slot, else 0; one per slot.
+        pub flags: DevSlice<u32>,
+        /// Output: as [`GatherArgs::list`].
+        pub list: DevSlice<u32>,
+        /// Output: as [`GatherArgs::count`].
+        pub count: DevSlice<u32>,
+    }
+}
+
+/// [`mark_free`], the scan and [`gather_free`] in one launch, with the same flags, lists and
+/// counts: thread `i` flags slot `i`, and its warp counts the free slots of its range before
+/// it (each lane every 32nd, then a warp sum) instead of reading a prefix sum of the tiles.
+/// A warp's slots are of one range (ranges start on warps, and padding belongs to the range
+/// before it), all usable from the range's start up to the warp. The work of the last warp
+/// of a range grows with the range: for ranges of at most [`ONE_LAUNCH_RANGE`] slots.
+#[inline(always)]
+pub fn mark_and_gather_free(t: Thread, args: &MarkGatherArgs) {
+    let slot = t.global();
+    // Whole warps: the slots are a multiple of 32.
+    if slot >= args.flags.len() {
+        return;
+    }
+    let (b, lane) = (&args.bodies, t.lane());
+    let first = slot - lane;
+    let kind = b.kind.get(slot);
+    let range = args.ranges.get(kind);
+    let free = |s: u32| usable(s, range) && !b.is_alive(s);
+    let flag = free(slot) as u32;
+    args.flags.set(slot, flag);
+    let before = warp::sum_u32(lane, |l| {
+        let dead = |n: u32, alive: u32| n + u32::from(alive == 0);
+        b.alive.fold_every((range.start + l, first, WARP), 0, dead)
+    });
+    let within = warp::exclusive_sum_u32(lane, |l| free(first + l) as u32);
+    if !usable(slot, range) {
+        return;
+    }
+    let rank = before + within;
     if flag != 0 {
         args.list.set(range.start + rank, slot);
     }
