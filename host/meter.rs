@@ -20,7 +20,7 @@ pub struct Second {
     pub enemies_alive: u32,
     /// The step's time, stage by stage, of one profiled step of this second (µs).
     pub step_us: f64,
-    /// The master thread's stages (the input and the master, the tally) of that step (µs).
+    /// The master thread's stages (the master, the autopilot, the tally) of that step (µs).
     pub master_us: f64,
     /// Its physics stages (births, broad, narrow, integrate, free) (µs).
     pub physics_us: f64,
@@ -84,7 +84,7 @@ impl Seconds {
             steps_per_s: rate,
             enemies_alive,
             step_us: profile.step_seconds() * 1e6,
-            master_us: stages_us(&profile, &["master", "tally"]),
+            master_us: stages_us(&profile, &["master", "pilot", "tally"]),
             physics_us: stages_us(
                 &profile,
                 &["births", "broad", "narrow", "integrate", "free"],

@@ -73,11 +73,14 @@ fn a_scene_launches_only_the_stages_it_uses() {
     // whether there is anything to do.
     for kernel in [
         registry::BIRTHS.name,
-        registry::PILOT_THEN_MASTER.name,
+        registry::MASTER.name,
         registry::TALLY.name,
     ] {
         assert_eq!(count(&k, kernel), 10, "{kernel}");
     }
+    // The autopilot leaves each step's input for the next: once more, at set-up, for the
+    // first.
+    assert_eq!(count(&k, registry::AUTOPILOT.name), 11);
     // Given input: the same launches.
     let still = launches(&scene("kamikaze"), 10, false);
     assert_eq!(still, k);

@@ -57,6 +57,10 @@ pub(super) struct Gpu {
     in_flight: Arc<InFlight>,
     /// The capture in progress, if any: the thread recording and its private stream.
     capture: Mutex<Option<(ThreadId, Arc<CudaStream>)>>,
+    /// The stream of the ops a plan runs beside its others (see [`Gpu::beside`]).
+    side: Arc<CudaStream>,
+    /// The thread issuing an op beside the others, if any: its launches go to `side`.
+    beside: Mutex<Option<ThreadId>>,
     functions: HashMap<&'static str, CudaFunction>,
     properties: GpuProperties,
     /// Whether launches carry programmatic stream serialization (start before the launch
@@ -231,9 +235,12 @@ impl Gpu {
         // From here on a GPU is present: a failure is an error to report, not an absence.
         let in_flight = Arc::new(InFlight::default());
         let ctx = CudaContext::new(0).map_err(in_flight.failed("opening CUDA device 0"))?;
-        // One stream orders every launch and copy; the per-buffer events cudarc keeps for
+        // One stream orders every copy and free; the per-buffer events cudarc keeps for
         // multi-stream use would only cost time.
-        // SAFETY: this backend never uses a second stream.
+        // SAFETY: cudarc's buffers are only copied and freed on the device's stream; the
+        // kernels a plan runs beside the others (on `side`) view buffers through their
+        // arguments, not through cudarc, and the plan joins them back into the device's
+        // stream before anything queued after it.
         unsafe { ctx.disable_event_tracking() };
         // Our own stream rather than the legacy default one, which synchronises with every
         // other stream of the context and cannot be captured into a graph.
@@ -266,11 +273,16 @@ impl Gpu {
             functions.insert(info.name, function);
         }
         let properties = properties(&ctx, arch).map_err(in_flight.failed("querying device 0"))?;
+        let side = ctx
+            .new_stream()
+            .map_err(in_flight.failed("creating a stream"))?;
         Ok(Gpu {
             ctx,
             stream,
             in_flight,
             capture: Mutex::new(None),
+            side,
+            beside: Mutex::new(None),
             functions,
             properties,
             dependent_launch: dependent.then(|| AtomicBool::new(true)),
@@ -387,7 +399,9 @@ impl Gpu {
         };
         let param = Param(args);
         let stream = self.launch_stream();
-        let launched = if self.dependent_launch() {
+        let aside = Arc::ptr_eq(&stream, &self.side);
+        // A launch beside the others follows an event, not a kernel: nothing to start early.
+        let launched = if self.dependent_launch() && !aside {
             // SAFETY: as below; the sm_90 module's entries wait for their predecessor.
             unsafe { launch_dependent(function, &stream, config, &param) }
         } else {
@@ -402,10 +416,38 @@ impl Gpu {
             self.in_flight.error(&during, e)
         })?;
         // A launch into a capture runs only when the graph is replayed.
-        if Arc::ptr_eq(&stream, &self.stream) {
+        if !self.capturing_here() {
             self.in_flight.queue([kernel.name]);
         }
         Ok(())
+    }
+
+    /// Whether the calling thread is recording a capture.
+    fn capturing_here(&self) -> bool {
+        let capture = self.capture.lock().unwrap_or_else(|e| e.into_inner());
+        capture
+            .as_ref()
+            .is_some_and(|(thread, _)| *thread == std::thread::current().id())
+    }
+
+    /// Issues what `issue` launches beside the work that follows it: on a stream of its own
+    /// that first waits for the work queued so far (on the device's stream, or in the
+    /// capture this thread records), until [`Gpu::rejoin`].
+    pub(super) fn beside(&self, issue: impl FnOnce() -> Result<(), Error>) -> Result<(), Error> {
+        self.side
+            .join(&self.launch_stream())
+            .map_err(self.failed("forking a stream"))?;
+        *self.beside.lock().unwrap_or_else(|e| e.into_inner()) = Some(std::thread::current().id());
+        let issued = issue();
+        *self.beside.lock().unwrap_or_else(|e| e.into_inner()) = None;
+        issued
+    }
+
+    /// Makes the work queued from now on wait for everything issued [`Gpu::beside`].
+    pub(super) fn rejoin(&self) -> Result<(), Error> {
+        self.launch_stream()
+            .join(&self.side)
+            .map_err(self.failed("joining a stream"))
     }
 
     /// Queues a clear of `bytes` bytes at device address `addr`.
@@ -419,9 +461,14 @@ impl Gpu {
             .map_err(self.failed("clearing device memory"))
     }
 
-    /// The stream this thread's launches and clears go to: the device's stream, or the
-    /// private stream of a capture this thread is recording.
+    /// The stream this thread's launches and clears go to: the side stream while it issues
+    /// beside the others, else the device's stream, or the private stream of a capture
+    /// this thread is recording.
     fn launch_stream(&self) -> Arc<CudaStream> {
+        let here = std::thread::current().id();
+        if *self.beside.lock().unwrap_or_else(|e| e.into_inner()) == Some(here) {
+            return self.side.clone();
+        }
         let capture = self.capture.lock().unwrap_or_else(|e| e.into_inner());
         match &*capture {
             Some((thread, stream)) if *thread == std::thread::current().id() => stream.clone(),

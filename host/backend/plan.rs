@@ -105,6 +105,8 @@ pub struct Op {
     grid: u32,
     bytes: u64,
     issue: Issue,
+    /// Whether it runs beside the plan's ops after it (see [`Op::beside`]).
+    beside: bool,
     /// The buffers the arguments view.
     _holds: Arc<[Hold]>,
 }
@@ -127,6 +129,7 @@ impl Op {
             kind: OpKind::Launch,
             grid: launch.grid,
             bytes,
+            beside: false,
             _holds: binder.holds.into(),
             // SAFETY: the caller's promise covers every run of the op, and the op holds the
             // buffers its views are of.
@@ -144,9 +147,24 @@ impl Op {
             kind: OpKind::Clear,
             grid: 0,
             bytes: u64::from(view.len()) * size_of::<T>() as u64,
+            beside: false,
             _holds: binder.holds.into(),
             // SAFETY: as in `launch`.
             issue: Arc::new(move |device| unsafe { device.clear(view) }),
+        }
+    }
+
+    /// The same op, run beside the ops after it in its plan: on the GPU on a stream of its
+    /// own, which the plan joins back at its end (a graph branch), so that it costs the
+    /// step nothing while they run longer; in order on the CPU.
+    ///
+    /// # Safety
+    /// It reads nothing that the ops after it in its plan write, and writes nothing that
+    /// they read or write: on the GPU they run at the same time.
+    pub unsafe fn beside(self) -> Op {
+        Op {
+            beside: true,
+            ..self
         }
     }
 
@@ -230,11 +248,30 @@ impl Device {
     pub fn plan(&self, ops: Vec<Op>, graph: bool) -> Result<Plan, Error> {
         let graph = match &self.imp {
             Imp::Cuda(gpu) if graph && !ops.is_empty() => {
-                Some(gpu.capture(|| ops.iter().try_for_each(|op| (op.issue)(self)))?)
+                Some(gpu.capture(|| self.issue_all(&ops))?)
             }
             _ => None,
         };
         Ok(Plan { graph, ops })
+    }
+
+    /// Issues `ops` in order, those marked [`Op::beside`] on the GPU's side stream, joined
+    /// back after the last.
+    fn issue_all(&self, ops: &[Op]) -> Result<(), Error> {
+        let mut apart = false;
+        for op in ops {
+            match &self.imp {
+                Imp::Cuda(gpu) if op.beside => {
+                    gpu.beside(|| (op.issue)(self))?;
+                    apart = true;
+                }
+                _ => (op.issue)(self)?,
+            }
+        }
+        match &self.imp {
+            Imp::Cuda(gpu) if apart => gpu.rejoin(),
+            _ => Ok(()),
+        }
     }
 
     /// Queues one run of `plan`.
@@ -242,7 +279,7 @@ impl Device {
         self.count(plan.launched());
         match (&self.imp, &plan.graph) {
             (Imp::Cuda(gpu), Some(graph)) => gpu.replay(graph, plan.launched()),
-            (Imp::Cuda(_), None) => plan.ops.iter().try_for_each(|op| (op.issue)(self)),
+            (Imp::Cuda(_), None) => self.issue_all(&plan.ops),
             // From inside the pool, each launch starts its blocks at once.
             (Imp::Cpu(emu), _) => {
                 let _order = emu.in_order();

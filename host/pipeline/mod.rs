@@ -6,7 +6,7 @@
 //!
 //! | stage | launches | in |
 //! |---|---|---|
-//! | `master` | the step's input (the autopilot's, or the player's passed through), then the master before the physics (one launch of one warp) | games |
+//! | `master` | the master before the physics: the step's input (the player's, or the one the autopilot left), ship, shots, spawns (one warp) | games |
 //! | `births` | the enemies the master thread ordered come alive | games |
 //! | `broad` | the grid: bucket counts, their prefix sum, placement, canonical order | games, and worlds where something collides |
 //! | `renumber` | every few steps, the bodies move to slots in the grid's order within their kinds' ranges (gather, settle) | worlds with a grid of 8,192 slots or more, or as the scene's physics says |
@@ -14,6 +14,7 @@
 //! | `think` | every enemy's machine, in one launch over the enemy kinds' slots | games with enemies |
 //! | `integrate` | Euler, the boundary rule, deaths | always |
 //! | `substeps` | broad, narrow and integrate again for each further substep | worlds with substeps |
+//! | `pilot` | the autopilot's input for the next step (one warp), beside the stages after it (on the GPU a branch of the step's graph) | games |
 //! | `effects` | kills burst into particles, the others move and fade (before `free` rebuilds the flags it reads) | games with explosions |
 //! | `free` | the free lists: flags, their prefix sum, gather | always |
 //! | `tally` | the master after the physics (one warp) | games |
@@ -155,7 +156,10 @@ impl<'d> Pipeline<'d> {
             device,
             steps: 0,
         };
+        // The free lists, and the autopilot's input for the first step (none: the ship is
+        // born in it), as a step would have left them.
         pipeline.run_stage(Stage::Free)?;
+        pipeline.run_stage(Stage::Pilot)?;
         device.synchronize()?;
         Ok(pipeline)
     }

@@ -11,8 +11,8 @@ use crate::{Op, Plan};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Stage {
-    /// The step's input (the autopilot's, or the player's passed through), then the master
-    /// before the physics, in one launch of one warp; games.
+    /// The master before the physics: the step's input (the player's, or the one the
+    /// autopilot left), ship, shots, spawns (one warp); games.
     Master,
     /// The enemies the master ordered come alive; games.
     Births,
@@ -30,6 +30,9 @@ pub enum Stage {
     Integrate,
     /// Broad, narrow and integrate again for each further substep; worlds with substeps.
     Substeps,
+    /// The autopilot's input for the next step (one warp), beside the stages after it;
+    /// games.
+    Pilot,
     /// Kills burst into particles, the others move and fade; games with explosions.
     Effects,
     /// The free lists: flags, their prefix sum, gather; always.
@@ -40,7 +43,7 @@ pub enum Stage {
 
 impl Stage {
     /// Every stage, in the order a step runs them.
-    pub const ALL: [Stage; 11] = [
+    pub const ALL: [Stage; 12] = [
         Stage::Master,
         Stage::Births,
         Stage::Broad,
@@ -49,6 +52,7 @@ impl Stage {
         Stage::Think,
         Stage::Integrate,
         Stage::Substeps,
+        Stage::Pilot,
         Stage::Effects,
         Stage::Free,
         Stage::Tally,
@@ -65,6 +69,7 @@ impl Stage {
             Stage::Think => "think",
             Stage::Integrate => "integrate",
             Stage::Substeps => "substeps",
+            Stage::Pilot => "pilot",
             Stage::Effects => "effects",
             Stage::Free => "free",
             Stage::Tally => "tally",
@@ -82,6 +87,7 @@ impl Stage {
             Stage::Think => stages::think::ops(world),
             Stage::Integrate => stages::integrate::ops(world, 0),
             Stage::Substeps => stages::substeps::ops(world),
+            Stage::Pilot => stages::pilot::ops(world),
             Stage::Effects => stages::effects::ops(world),
             Stage::Free => stages::free::ops(world),
             Stage::Tally => stages::tally::ops(world),

@@ -219,6 +219,7 @@ impl World {
             status: b.view(&data.status),
             mailbox: self.mailbox(b)?,
             input: b.view(&data.input),
+            steered: b.view(&data.steered),
             spawned: b.view(&data.spawned),
             births: b.view(&data.births),
             birth_speed: b.view(&data.birth_speed),

@@ -4,7 +4,7 @@
 //! [`ALL`], and, on nvptx, the `extern "ptx-kernel"` entry point that calls the body. Because
 //! the entry's name and the constant's `name` come from the same identifier, they cannot drift.
 
-use crate::game::{ai, effects, master};
+use crate::game::{ai, autopilot, effects, master};
 use crate::primitives::{histogram, scan, sort, touch};
 use crate::render::{self, camera, particles, radar};
 use crate::rng::streams;
@@ -98,9 +98,12 @@ kernels! {
     MARK_AND_GATHER_FREE = mark_and_gather_free(free_list::MarkGatherArgs) => free_list::mark_and_gather_free;
     /// Brings bodies to life at random places from their slots' generators.
     SCATTER = scatter(scatter::ScatterArgs) => scatter::scatter;
-    /// The step's input (the autopilot's, or the player's), then the master before the
-    /// physics: ship, shots, spawn counts (one warp).
-    PILOT_THEN_MASTER = pilot_then_master(master::PilotMasterArgs) => master::pilot_then_master;
+    /// The master before the physics: the step's input (the player's or the autopilot's),
+    /// ship, shots, spawn counts (one warp).
+    MASTER = master(master::MasterArgs) => master::master;
+    /// The autopilot: the ship's input for the next step, from the grid and the bodies as
+    /// the step leaves them (one warp).
+    AUTOPILOT = autopilot(autopilot::AutopilotArgs) => autopilot::autopilot;
     /// Explosions: kills burst into particles, the others move and fade.
     BURST_AND_FADE = burst_and_fade(effects::EffectsArgs) => effects::burst_and_fade;
     /// The master after the physics: score, counts, FPS meter, game over (one warp).

@@ -8,6 +8,7 @@ pub(super) mod free;
 pub(super) mod integrate;
 pub(super) mod master;
 pub(super) mod narrow;
+pub(super) mod pilot;
 pub(super) mod renumber;
 pub(super) mod substeps;
 pub(super) mod tally;

@@ -1,9 +1,10 @@
 //! The autopilot: a deterministic bot that writes the ship's [`Input`] on the device, for the
-//! headless demo, the benchmarks and the tests. It runs first in the master's one-warp
-//! launch every step ([`super::master::pilot_then_master`]), and passes the player's input through when the host's
-//! [`Command`](super::control::Command) says the player flies. It looks around the ship through the previous step's
-//! grid (buckets of slots; positions as they are now), so a bot-played step needs no
-//! read-back.
+//! headless demo, the benchmarks and the tests. Each step, once the bodies have moved, it
+//! looks around the ship through the step's grid (buckets of slots; positions as they are
+//! now) and leaves its input for the next step, whose master takes it unless the host's
+//! [`Command`](super::control::Command) says the player flies; so a bot-played step needs
+//! no read-back, and the search runs beside the end of the step (effects, free lists,
+//! tally), off the chain of launches that a step waits for.
 //!
 //! It flies away from the enemies near it (each weighted by closeness, those heading for it
 //! more), keeps off the world's edges when they clamp, drifts back to the middle when nothing
@@ -11,7 +12,7 @@
 
 use glam::Vec2;
 
-use super::control::{Input, Mailbox};
+use super::control::Input;
 use super::rules::Rules;
 use crate::sim::broad::{CellIndex, kind_bit};
 use crate::sim::{Bodies, KindInfo, Space};
@@ -26,12 +27,10 @@ kernel_args! {
         pub kinds: DevSlice<KindInfo>,
         /// The world.
         pub space: Space,
-        /// The previous step's grid.
+        /// The step's grid.
         pub grid: CellIndex,
-        /// The host's command for this step, in the mailbox.
-        pub mailbox: Mailbox,
-        /// Output: the input for this step (one element).
-        pub input: DevSlice<Input>,
+        /// Output: the autopilot's input for the next step (one element).
+        pub steered: DevSlice<Input>,
         /// The scene's rules.
         pub rules: Rules,
         /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
@@ -95,8 +94,8 @@ impl warp::Lanes for Sighting {
     }
 }
 
-/// The first warp writes the input for this step: the command's, or the autopilot's if it
-/// flies. The warp looks around the ship together: each lane takes one run of the grid's
+/// The first warp writes the autopilot's input for the next step (no input without a live
+/// ship). The warp looks around the ship together: each lane takes one run of the grid's
 /// entries at a time (a kind's cells in one row of the 3×3 block), and the lanes' findings
 /// are reduced in a fixed tree, so the result is the same on every backend and schedule.
 #[inline(always)]
@@ -106,18 +105,11 @@ pub fn autopilot(t: Thread, args: &AutopilotArgs) {
     if t.global() >= warp::WARP || warp::is_copy_of_lane0(lane) {
         return;
     }
-    let command = args.mailbox.command();
-    if command.autopilot == 0 {
-        if lane == 0 {
-            args.input.set(0, command.input);
-        }
-        return;
-    }
     let (b, rules, space) = (&args.bodies, &args.rules, &args.space);
     let ship = rules.ship.start;
     if !b.is_alive(ship) {
         if lane == 0 {
-            args.input.set(0, Input::default());
+            args.steered.set(0, Input::default());
         }
         return;
     }
@@ -140,7 +132,7 @@ pub fn autopilot(t: Thread, args: &AutopilotArgs) {
         },
         |a, c| a | c,
     );
-    // The grid is the previous step's; the enemies have moved since: their places now.
+    // The grid is the step's; the enemies have moved since: their places now.
     let grid = &args.grid;
     let near = grid.near_runs(space, pos, enemies);
     let cap = if grid.cap == 0 { u32::MAX } else { grid.cap };
@@ -214,7 +206,7 @@ pub fn autopilot(t: Thread, args: &AutopilotArgs) {
     } else {
         (0, 0)
     };
-    args.input.set(
+    args.steered.set(
         0,
         Input {
             move_x,

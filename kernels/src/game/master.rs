@@ -19,7 +19,6 @@
 
 use glam::Vec2;
 
-use super::autopilot::{AutopilotArgs, autopilot};
 use super::control::{DESTROYED, Events, Input, Mailbox, PLAYING, Status, TOO_SLOW};
 use super::rules::{Rules, Wave};
 use crate::sim::free_list::FreeSlots;
@@ -44,8 +43,12 @@ kernel_args! {
         pub status: DevSlice<Status>,
         /// Where [`tally`] posts the step's status for the host.
         pub mailbox: Mailbox,
-        /// This step's input (one element).
+        /// Output of [`master`]: this step's input, the player's or the autopilot's (one
+        /// element).
         pub input: DevSlice<Input>,
+        /// The autopilot's input for this step, left by the step before (one element; see
+        /// [`super::autopilot`]).
+        pub steered: DevSlice<Input>,
         /// Enemies spawned so far, per kind.
         pub spawned: DevSlice<u32>,
         /// Output: enemies to spawn this step, per kind (for [`births`]).
@@ -63,26 +66,6 @@ kernel_args! {
     }
 }
 
-kernel_args! {
-    /// Arguments of [`pilot_then_master`].
-    pub struct PilotMasterArgs {
-        /// The autopilot's (its output `input` is the master's `input`).
-        pub pilot: AutopilotArgs,
-        /// The master's.
-        pub master: MasterArgs,
-    }
-}
-
-/// The step's input ([`autopilot`]: the autopilot's, or the player's passed through) and
-/// then [`master`], in one launch of one warp instead of two: the master's lane 0 reads the
-/// input that the same thread wrote, and the other lanes touch neither the input nor the
-/// bodies the autopilot reads.
-#[inline(always)]
-pub fn pilot_then_master(t: Thread, args: &PilotMasterArgs) {
-    autopilot(t, &args.pilot);
-    master(t, &args.master);
-}
-
 /// The master warp before the physics:
 /// 1. at step 0, the ship is born in the middle of the world;
 /// 2. the ship takes the input's movement as its velocity, and recovers energy;
@@ -97,6 +80,17 @@ pub fn master(t: Thread, args: &MasterArgs) {
         return;
     }
     let lane = t.lane();
+    // The step's input, whatever the game's state: the command's, or the autopilot's if it
+    // flies.
+    let command = args.mailbox.command();
+    let input = if command.autopilot == 0 {
+        command.input
+    } else {
+        args.steered.get(0)
+    };
+    if lane == 0 {
+        args.input.set(0, input);
+    }
     let rules = &args.rules;
     let mut st = args.status.get(0);
     let kinds = args.births.len();
@@ -152,7 +146,6 @@ pub fn master(t: Thread, args: &MasterArgs) {
         return;
     }
     let b = &args.bodies;
-    let input = args.input.get(0);
     st.events = Events::default();
     st.input = input;
     let ship = rules.ship.start;
@@ -203,17 +196,17 @@ impl Spawns {
 #[inline(always)]
 fn spawns(args: &MasterArgs, kind: u32, step: u32) -> Spawns {
     let free = args.free.count.get(kind);
-    let mut out = Spawns::default();
-    for w in 0..args.waves.len() {
-        let wave = args.waves.get(w);
-        if wave.kind == kind && wave.due(step) {
-            let taken = wave.count.min(free - out.births);
-            out.births += taken;
-            out.waves += u32::from(taken > 0);
-            out.speed = Some(wave.speed);
-        }
-    }
-    out
+    let every_wave = (0, args.waves.len(), 1);
+    args.waves
+        .fold_every(every_wave, Spawns::default(), |mut out, wave| {
+            if wave.kind == kind && wave.due(step) {
+                let taken = wave.count.min(free - out.births);
+                out.births += taken;
+                out.waves += u32::from(taken > 0);
+                out.speed = Some(wave.speed);
+            }
+            out
+        })
 }
 
 /// The master warp after the physics, from the rebuilt free lists:
@@ -269,13 +262,9 @@ pub fn tally(t: Thread, args: &MasterArgs) {
     let shots = args.ranges.get(rules.shot_kind);
     // The shots that struck, a slot a lane at a time.
     let shot_hits = warp::sum_u32(lane, |l| {
-        let mut hits = 0u32;
-        let mut i = l;
-        while i < shots.capacity {
-            hits += u32::from(args.contacts.damage.get(shots.start + i) > 0);
-            i += warp::WARP;
-        }
-        hits
+        let every_32nd = (shots.start + l, shots.end(), warp::WARP);
+        let hit = |hits: u32, damage: i32| hits + u32::from(damage > 0);
+        args.contacts.damage.fold_every(every_32nd, 0, hit)
     });
     if lane != 0 {
         return;

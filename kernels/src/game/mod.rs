@@ -1,16 +1,16 @@
 //! The game on top of the simulation core (paper sections 4, 5 and 7). A game step runs, in
 //! order:
 //!
-//! 1. [`autopilot::autopilot`] (when the bot plays): the ship's input, from the previous
-//!    step's grid;
-//! 2. [`master::master`]: the master thread: ship, shots, score, FPS meter, game over, and
-//!    how many enemies to spawn; then [`master::births`] brings them to life;
-//! 3. the broad phase (`crate::sim::broad`);
-//! 4. the narrow phase (`crate::sim::narrow`): contacts, damage;
-//! 5. [`ai::think`], once per enemy kind: perception through the grid, the finite-state
+//! 1. [`master::master`]: the master thread: the step's input (the player's, or the one the
+//!    autopilot left), ship, shots, and how many enemies to spawn; then [`master::births`]
+//!    brings them to life;
+//! 2. the broad phase (`crate::sim::broad`);
+//! 3. the narrow phase (`crate::sim::narrow`): contacts, damage;
+//! 4. [`ai::think`], once per enemy kind: perception through the grid, the finite-state
 //!    machine ([`fsm`]), the steering force;
-//! 6. integration, [`effects::burst_and_fade`] (a scene's explosions), and the free lists
-//!    (`crate::sim`).
+//! 5. integration; then [`autopilot::autopilot`] (the next step's input, from this step's
+//!    grid) beside [`effects::burst_and_fade`] (a scene's explosions), the free lists
+//!    (`crate::sim`) and [`master::tally`]: score, FPS meter, game over.
 //!
 //! [`control`] holds the two structs that cross between CPU and GPU; [`rules`] the scene's
 //! constants.
@@ -42,6 +42,8 @@ crate::device_data! {
         tallied: [u32; 1],
         /// The ship's input the step uses: the player's, or the autopilot's.
         input: [Input; 1],
+        /// The autopilot's input for the next step, which the step leaves.
+        steered: [Input; 1],
         /// Enemies spawned so far, per kind.
         spawned: [u32; kinds],
         /// Enemies the master ordered born this step, per kind.
