@@ -227,13 +227,16 @@ pub fn tally(t: Thread, args: &MasterArgs) {
         return;
     }
     let (b, rules) = (&args.bodies, &args.rules);
-    let mut st = args.status.get(0);
-    if st.is_over() {
-        if lane == 0 {
-            args.mailbox.post(st);
-        }
-        return;
-    }
+    // Everything the tally reads is asked for before anything waits on it: no branch stands
+    // between the loads and the status they make, so the compiler keeps them together and
+    // the warp waits for memory a few times, not once a branch. A finished game's tally
+    // counts too, and posts its status unchanged.
+    let before = args.status.get(0);
+    let ship = rules.ship.start;
+    let (ship_alive, ship_at) = (b.is_alive(ship), b.pos.get(ship));
+    let (energy, ship_hits) = (b.energy.get(ship), args.contacts.count.get(ship));
+    let shots = args.ranges.get(rules.shot_kind);
+    let shots_free = args.free.count.get(rules.shot_kind);
     // A kind a lane; the sums saturate, which keeps them independent of their order.
     let counts = warp::reduce(
         lane,
@@ -241,25 +244,26 @@ pub fn tally(t: Thread, args: &MasterArgs) {
             let mut counts = Counts::default();
             let mut k = l;
             while k < args.kinds.len() {
-                let info = args.kinds.get(k);
-                if !info.dies_at_zero_energy() {
-                    let now = args.ranges.get(k).capacity - args.free.count.get(k);
-                    let dead = args.spawned.get(k).saturating_sub(now);
-                    // Birth energies are at least 1.
-                    let worth = dead.saturating_mul(info.energy as u32);
-                    counts = counts.merge(Counts {
+                let (info, range) = (args.kinds.get(k), args.ranges.get(k));
+                let now = range.capacity - args.free.count.get(k);
+                let dead = args.spawned.get(k).saturating_sub(now);
+                // Birth energies are at least 1.
+                let worth = dead.saturating_mul(info.energy as u32);
+                let enemies = match info.dies_at_zero_energy() {
+                    true => Counts::default(),
+                    false => Counts {
                         alive: now,
                         killed: dead,
                         score: worth,
-                    });
-                }
+                    },
+                };
+                counts = counts.merge(enemies);
                 k += warp::WARP;
             }
             counts
         },
         Counts::merge,
     );
-    let shots = args.ranges.get(rules.shot_kind);
     // The shots that struck, a slot a lane at a time.
     let shot_hits = warp::sum_u32(lane, |l| {
         let every_32nd = (shots.start + l, shots.end(), warp::WARP);
@@ -269,25 +273,19 @@ pub fn tally(t: Thread, args: &MasterArgs) {
     if lane != 0 {
         return;
     }
+    let mut st = before;
     let killed = counts.killed.max(st.enemies_killed);
     st.events.kills = killed - st.enemies_killed;
     st.enemies_alive = counts.alive;
     st.enemies_killed = killed;
     st.score = counts.score.max(st.score);
-    st.shots_alive = shots.capacity - args.free.count.get(rules.shot_kind);
+    st.shots_alive = shots.capacity - shots_free;
     st.events.shot_hits = shot_hits;
-    let ship = rules.ship.start;
-    let ship_alive = b.is_alive(ship);
-    st.events.ship_hits = if ship_alive {
-        args.contacts.count.get(ship)
-    } else {
-        0
-    };
+    st.events.ship_hits = if ship_alive { ship_hits } else { 0 };
     if ship_alive {
-        st.ship = b.pos.get(ship);
+        st.ship = ship_at;
     }
-    let energy = if ship_alive { b.energy.get(ship) } else { 0 };
-    st.fps_meter = rules.fps_meter(energy);
+    st.fps_meter = rules.fps_meter(if ship_alive { energy } else { 0 });
     st.game_over = if !ship_alive {
         DESTROYED
     } else if st.fps_meter < rules.fps_min {
@@ -296,6 +294,8 @@ pub fn tally(t: Thread, args: &MasterArgs) {
         PLAYING
     };
     st.step = st.step.saturating_add(1);
+    // After game over the status stays as the last step left it.
+    let st = if before.is_over() { before } else { st };
     args.status.set(0, st);
     args.mailbox.post(st);
     if st.is_over() {

@@ -142,21 +142,43 @@ pub fn limit_speed(vel: Vec2, max_speed: f32) -> Vec2 {
 pub fn integrate(t: Thread, args: &IntegrateArgs) {
     let bodies = &args.bodies;
     let slot = t.global();
-    if slot >= bodies.slots() || bodies.is_frozen() || !bodies.is_alive(slot) {
+    if slot >= bodies.slots() {
         return;
     }
-    let info = args.kinds.get(bodies.kind.get(slot));
-    if args.substep == 0 {
-        let age = bodies.age.get(slot).saturating_add(1);
-        if (bodies.energy.get(slot) <= 0 && info.dies_at_zero_energy()) || info.expired(age) {
-            bodies.alive.set(slot, 0);
-            return;
-        }
-        bodies.age.set(slot, age);
+    // Every load of the slot, then its kind's entry, before anything waits on them, and
+    // the new place and velocity stored whether the body moves or not (a body that does not
+    // move gets its own back): with no branch between the loads and the stores, the
+    // compiler keeps the loads together, and a live body waits for memory twice, not once
+    // a branch.
+    let (frozen, alive, kind) = (
+        bodies.is_frozen(),
+        bodies.is_alive(slot),
+        bodies.kind.get(slot),
+    );
+    let (age, energy) = (bodies.age.get(slot), bodies.energy.get(slot));
+    let (pos, vel, kick) = (
+        bodies.pos.get(slot),
+        bodies.vel.get(slot),
+        args.contacts.kick.get(slot),
+    );
+    let (force, mass) = (bodies.force.get(slot), bodies.mass.get(slot));
+    let push = args.contacts.push.get(slot);
+    let info = args.kinds.get(kind);
+    let live = alive && !frozen;
+    // Bodies age and die in substep 0 only.
+    let aging = args.substep == 0;
+    let aged = age.saturating_add(1);
+    let dies = aging && ((energy <= 0 && info.dies_at_zero_energy()) || info.expired(aged));
+    if live && dies {
+        bodies.alive.set(slot, 0);
     }
-    let pos = bodies.pos.get(slot);
-    let vel = bodies.vel.get(slot) + args.contacts.kick.get(slot);
-    let pushed = bodies.force.get(slot) * inverse_mass(bodies.mass.get(slot));
+    let moves = live && !dies;
+    if moves && aging {
+        bodies.age.set(slot, aged);
+    }
+    let (old_pos, old_vel) = (pos, vel);
+    let vel = vel + kick;
+    let pushed = force * inverse_mass(mass);
     let field = &args.field;
     // The game's worlds have no field: no field term at all then, so that no bit (not even a
     // zero's sign) differs from the paper's.
@@ -175,10 +197,10 @@ pub fn integrate(t: Thread, args: &IntegrateArgs) {
         VELOCITY_VERLET => velocity_verlet(pos, vel, accel, accel_at, dt, max_speed),
         _ => euler(pos, vel, accel, dt, max_speed),
     };
-    let (pos, vel) = args.space.confine(pos + args.contacts.push.get(slot), vel);
-    bodies.pos.set(slot, pos);
-    bodies.vel.set(slot, vel);
-    if let Some(dir) = vel.try_normalize() {
+    let (pos, vel) = args.space.confine(pos + push, vel);
+    bodies.pos.set(slot, if moves { pos } else { old_pos });
+    bodies.vel.set(slot, if moves { vel } else { old_vel });
+    if let Some(dir) = vel.try_normalize().filter(|_| moves) {
         bodies.dir.set(slot, dir);
     }
 }
