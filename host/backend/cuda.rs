@@ -576,7 +576,11 @@ impl Gpu {
         unsafe { cudarc::driver::sys::cuMemHostGetDevicePointer_v2(&mut addr, ptr, 0) }
             .result()
             .map_err(self.failed("mapping host memory"))?;
-        Ok(Mapped { memory, addr })
+        Ok(Mapped {
+            memory,
+            addr,
+            stream: self.stream.clone(),
+        })
     }
 
     /// Makes the context current on the calling thread, as raw driver calls need.
@@ -660,13 +664,16 @@ pub(super) struct Mapped {
     pub(super) memory: Pinned,
     /// Where kernels find it.
     pub(super) addr: u64,
+    /// The device's stream, which every launch that may reach it is on or joins.
+    stream: Arc<CudaStream>,
 }
 
 impl Drop for Mapped {
     fn drop(&mut self) {
         // Kernels still queued may reach it (the last op holding it can go while they run):
-        // wait for the whole context before the memory goes.
-        let _ = self.memory.ctx.synchronize();
+        // wait for the device's stream before the memory goes. Not the whole context,
+        // whose wait would break a graph another thread is capturing meanwhile.
+        let _ = self.stream.synchronize();
     }
 }
 
