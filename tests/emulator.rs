@@ -98,8 +98,45 @@ fn shared_memory_is_reached_by_kernels_and_the_host(device: &Device) {
     }
 }
 
+/// An op run beside the others ([`gpuwars::Op::beside`]: a branch of the graph, or a side
+/// stream) runs once a run and is joined at the plan's end: a histogram of 2 million keys
+/// in blocks of one warp beside one of a thousand, run as a graph and one by one, is done
+/// by the time the host reads it (the read waits for the device's stream only).
+fn an_op_beside_the_others_is_joined_at_the_plans_end(device: &Device) {
+    let mut rng = rng_for("beside", 0);
+    let (slow_n, fast_n) = (1 << 21, 1000);
+    let slow_keys = random_below(&mut rng, slow_n, 8);
+    let fast_keys = random_below(&mut rng, fast_n, 8);
+    let count = |keys: &[u32], times: u32| -> Vec<u32> {
+        (0..8)
+            .map(|k| times * keys.iter().filter(|&&v| v == k).count() as u32)
+            .collect()
+    };
+    for graph in [true, false] {
+        let slow = device.upload(&slow_keys).unwrap();
+        let fast = device.upload(&fast_keys).unwrap();
+        let slow_counts = device.alloc_zeroed::<u32>(8).unwrap();
+        let fast_counts = device.alloc_zeroed::<u32>(8).unwrap();
+        // Far longer than the fast launch after it.
+        let beside = histogram(&slow, &slow_counts, slow_n as u32, slow_n as u32 / 32, 32);
+        // SAFETY: the ops after it touch other buffers.
+        let ops = vec![
+            unsafe { beside.beside() },
+            histogram(&fast, &fast_counts, fast_n as u32, 8, 128),
+        ];
+        let plan = device.plan(ops, graph).unwrap();
+        assert_eq!(plan.launches(), 2);
+        for _ in 0..3 {
+            device.run(&plan).unwrap();
+        }
+        assert_eq!(device.download(&slow_counts).unwrap(), count(&slow_keys, 3));
+        assert_eq!(device.download(&fast_counts).unwrap(), count(&fast_keys, 3));
+    }
+}
+
 on_both_backends!(
     launches_outside_the_block_limits_are_refused,
+    an_op_beside_the_others_is_joined_at_the_plans_end,
     every_thread_of_the_grid_runs_once,
     a_plan_keeps_its_buffers_alive,
     shared_memory_is_reached_by_kernels_and_the_host,
