@@ -85,6 +85,13 @@ fn shared_memory_is_reached_by_kernels_and_the_host(device: &Device) {
     assert_eq!(device.download(&keys).unwrap(), data);
     device.zero(&mut counts).unwrap();
     assert_eq!(device.download(&counts).unwrap(), [0; 16]);
+    // A device copy involves no shared memory on the GPU (a clear error), any on the CPU.
+    let mut plain = device.alloc_zeroed::<u32>(n).unwrap();
+    match (device.kind(), device.copy(&keys, &mut plain)) {
+        (gpuwars::BackendKind::Cuda, Err(e)) => assert!(e.to_string().contains("shared"), "{e}"),
+        (gpuwars::BackendKind::Cpu, Ok(())) => assert_eq!(device.download(&plain).unwrap(), data),
+        (kind, result) => panic!("{kind:?}: {result:?}"),
+    }
     // A ring's two buffers hold one slot per step in flight each.
     let outputs = device.alloc_shared::<u32>(3).unwrap();
     let err = device.ring(&keys, &outputs).err().expect("lengths differ");

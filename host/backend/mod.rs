@@ -532,6 +532,10 @@ impl Device {
                 BufferImp::Cuda { bytes: s, .. },
                 BufferImp::Cuda { bytes: d, .. },
             ) => gpu.copy(&locked(s), &mut locked(d)),
+            (Imp::Cuda(_), BufferImp::Mapped { .. }, _)
+            | (Imp::Cuda(_), _, BufferImp::Mapped { .. }) => Err(Error::Invalid(
+                "a device copy to or from shared memory (download or write it instead)".into(),
+            )),
             _ => Err(foreign_buffer()),
         }
     }
