@@ -562,25 +562,22 @@ impl Gpu {
     pub(super) fn mapped(&self, bytes: usize) -> Result<Mapped, Error> {
         self.bind()?;
         let flags = cudarc::driver::sys::CU_MEMHOSTALLOC_DEVICEMAP;
-        // SAFETY: a plain allocation; freed in `Pinned::drop`.
+        // SAFETY: a plain allocation; freed in `Mapped::drop`.
         let ptr = unsafe { result::malloc_host(bytes.max(1), flags) }
             .map_err(self.failed("allocating mapped host memory"))?;
         // SAFETY: `bytes` bytes were just allocated.
         unsafe { std::ptr::write_bytes(ptr.cast::<u8>(), 0, bytes) };
-        let memory = Pinned {
+        let mut mapped = Mapped {
             ptr: ptr.cast(),
+            addr: 0,
             ctx: self.ctx.clone(),
+            stream: self.stream.clone(),
         };
-        let mut addr = 0;
         // SAFETY: `ptr` was allocated with the device-map flag, in this context (bound above).
-        unsafe { cudarc::driver::sys::cuMemHostGetDevicePointer_v2(&mut addr, ptr, 0) }
+        unsafe { cudarc::driver::sys::cuMemHostGetDevicePointer_v2(&mut mapped.addr, ptr, 0) }
             .result()
             .map_err(self.failed("mapping host memory"))?;
-        Ok(Mapped {
-            memory,
-            addr,
-            stream: self.stream.clone(),
-        })
+        Ok(mapped)
     }
 
     /// Makes the context current on the calling thread, as raw driver calls need.
@@ -639,34 +636,23 @@ impl Fence {
     }
 }
 
-/// Page-locked host memory, freed on drop.
-pub(super) struct Pinned {
-    pub(super) ptr: *mut u8,
-    ctx: Arc<CudaContext>,
-}
-
-// SAFETY: plain memory owned by this handle.
-unsafe impl Send for Pinned {}
-// SAFETY: as above; access is through the owner's `&mut` or after a fence.
-unsafe impl Sync for Pinned {}
-
-impl Drop for Pinned {
-    fn drop(&mut self) {
-        // Nothing may still reach it: `Mapped` waits for the context first.
-        let _ = self.ctx.bind_to_thread();
-        // SAFETY: allocated by `malloc_host`.
-        let _ = unsafe { result::free_host(self.ptr.cast()) };
-    }
-}
-
-/// Page-locked host memory that kernels reach at a device address of their own.
+/// Page-locked host memory that kernels reach at a device address of their own, freed on
+/// drop.
 pub(super) struct Mapped {
-    pub(super) memory: Pinned,
+    /// Where the host finds it.
+    pub(super) ptr: *mut u8,
     /// Where kernels find it.
     pub(super) addr: u64,
+    ctx: Arc<CudaContext>,
     /// The device's stream, which every launch that may reach it is on or joins.
     stream: Arc<CudaStream>,
 }
+
+// SAFETY: plain memory owned by this handle.
+unsafe impl Send for Mapped {}
+// SAFETY: as above; the host reaches it through the owner's `&mut`, after a wait for the
+// device, or through a ring's slot after its fence.
+unsafe impl Sync for Mapped {}
 
 impl Drop for Mapped {
     fn drop(&mut self) {
@@ -674,6 +660,9 @@ impl Drop for Mapped {
         // wait for the device's stream before the memory goes. Not the whole context,
         // whose wait would break a graph another thread is capturing meanwhile.
         let _ = self.stream.synchronize();
+        let _ = self.ctx.bind_to_thread();
+        // SAFETY: allocated by `malloc_host`; nothing reaches it any more (waited above).
+        let _ = unsafe { result::free_host(self.ptr.cast()) };
     }
 }
 

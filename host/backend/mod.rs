@@ -461,7 +461,7 @@ impl Device {
                 // SAFETY: no kernel runs (waited for above), `&mut buffer` excludes the other
                 // host borrows, and the buffer holds at least `data.len()` elements.
                 unsafe {
-                    let dst = memory.memory.ptr.cast::<T>();
+                    let dst = memory.ptr.cast::<T>();
                     std::ptr::copy_nonoverlapping(data.as_ptr(), dst, data.len());
                 }
                 Ok(())
@@ -482,10 +482,7 @@ impl Device {
             (Imp::Cuda(gpu), BufferImp::Mapped { memory, len, .. }) => {
                 gpu.synchronize()?;
                 // SAFETY: no kernel runs (waited for above); `len` elements of plain bytes.
-                Ok(
-                    unsafe { std::slice::from_raw_parts(memory.memory.ptr.cast::<T>(), *len) }
-                        .to_vec(),
-                )
+                Ok(unsafe { std::slice::from_raw_parts(memory.ptr.cast::<T>(), *len) }.to_vec())
             }
             _ => Err(foreign_buffer()),
         }
@@ -504,7 +501,7 @@ impl Device {
             (Imp::Cuda(gpu), BufferImp::Mapped { memory, len, .. }) => {
                 gpu.synchronize()?;
                 // SAFETY: as in `write`.
-                unsafe { std::ptr::write_bytes(memory.memory.ptr.cast::<T>(), 0, *len) };
+                unsafe { std::ptr::write_bytes(memory.ptr.cast::<T>(), 0, *len) };
                 Ok(())
             }
             _ => Err(foreign_buffer()),

@@ -73,7 +73,7 @@ impl Device {
 fn host_ptr<T: Element>(buffer: &BufferImp<T>, slot: usize) -> *mut T {
     let base = match buffer {
         BufferImp::Cpu(b) => b.addr() as *mut T,
-        BufferImp::Mapped { memory, .. } => memory.memory.ptr.cast::<T>(),
+        BufferImp::Mapped { memory, .. } => memory.ptr.cast::<T>(),
         // `Device::ring` takes no other kind.
         BufferImp::Cuda { .. } => unreachable!("a ring over device memory"),
     };

@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 use gpuwars_kernels::primitives::touch::{TouchArgs, TouchRoundsArgs};
 use gpuwars_kernels::registry;
 
-use crate::backend::{Binder, Launch, MAX_BLOCK, Ring};
+use crate::backend::{Binder, Launch, MAX_BLOCK};
 use crate::primitives::threads;
 use crate::{BackendKind, Buffer, Device, Error, Op};
 
@@ -96,15 +96,8 @@ pub fn measure(device: &Device, launches: usize, threads: u32) -> Result<Floor, 
     let mut timed_runs = 0;
     let mut time = |ops: &[Op], graph: bool| -> Result<f64, Error> {
         let plan = device.plan(ops.to_vec(), graph)?;
-        for _ in 0..warm {
-            device.run(&plan)?;
-        }
-        let start = device.mark()?;
-        for _ in 0..reps {
-            device.run(&plan)?;
-        }
         timed_runs += 1;
-        Ok(device.mark()?.seconds_since(&start)? / f64::from(reps))
+        seconds_a_run(device, (warm, reps), || device.run(&plan))
     };
     let was_dependent = device.dependent_launch();
     let mut times = || -> Result<_, Error> {
@@ -153,24 +146,36 @@ pub fn measure(device: &Device, launches: usize, threads: u32) -> Result<Floor, 
 /// (`Game`'s default lag): `warm` steps, then `reps` timed.
 fn time_in_ring(device: &Device, chain: &[Op], (warm, reps): (u32, u32)) -> Result<f64, Error> {
     let plan = device.plan(chain.to_vec(), true)?;
-    let (inputs, outputs) = (device.alloc_shared::<u32>(4)?, device.alloc_shared(4)?);
+    let (inputs, outputs) = (
+        device.alloc_shared::<u32>(4)?,
+        device.alloc_shared::<u32>(4)?,
+    );
     let mut ring = device.ring(&inputs, &outputs)?;
-    let step = |ring: &mut Ring<u32, u32>| -> Result<(), Error> {
+    let seconds = seconds_a_run(device, (warm, reps), || {
         ring.reserve()?;
         ring.send(device, 1)?;
         device.run(&plan)?;
         ring.receive(device)
-    };
+    })?;
+    while ring.oldest()?.is_some() {}
+    Ok(seconds)
+}
+
+/// Seconds `run` takes on the device, the mean of `reps` runs timed by device marks after
+/// `warm` untimed ones.
+fn seconds_a_run(
+    device: &Device,
+    (warm, reps): (u32, u32),
+    mut run: impl FnMut() -> Result<(), Error>,
+) -> Result<f64, Error> {
     for _ in 0..warm {
-        step(&mut ring)?;
+        run()?;
     }
     let start = device.mark()?;
     for _ in 0..reps {
-        step(&mut ring)?;
+        run()?;
     }
-    let seconds = device.mark()?.seconds_since(&start)? / f64::from(reps);
-    while ring.oldest()?.is_some() {}
-    Ok(seconds)
+    Ok(device.mark()?.seconds_since(&start)? / f64::from(reps))
 }
 
 impl Floor {

@@ -128,11 +128,24 @@ pub fn gather_free(t: Thread, args: &GatherArgs) {
     // A range starts a tile: the free slots before it are its first tile's offset.
     let rank = offset + before - args.tiles.get(range.start / WARP);
     let flag = args.flags.get(slot);
+    place_in_list((&args.list, &args.count), (slot, kind, range), rank, flag);
+}
+
+/// Usable slot `slot` of kind `kind`'s `range`, with `rank` free slots of the range before
+/// it: written at its rank into the kind's list if it is free (`flag` 1), and, as the
+/// range's last, the kind's count of free slots.
+#[inline(always)]
+fn place_in_list(
+    (list, count): (&DevSlice<u32>, &DevSlice<u32>),
+    (slot, kind, range): (u32, u32, SlotRange),
+    rank: u32,
+    flag: u32,
+) {
     if flag != 0 {
-        args.list.set(range.start + rank, slot);
+        list.set(range.start + rank, slot);
     }
     if slot + 1 == range.end() {
-        args.count.set(kind, rank + flag);
+        count.set(kind, rank + flag);
     }
 }
 
@@ -185,11 +198,10 @@ pub fn mark_and_gather_free(t: Thread, args: &MarkGatherArgs) {
     if !usable(slot, range) {
         return;
     }
-    let rank = before + within;
-    if flag != 0 {
-        args.list.set(range.start + rank, slot);
-    }
-    if slot + 1 == range.end() {
-        args.count.set(kind, rank + flag);
-    }
+    place_in_list(
+        (&args.list, &args.count),
+        (slot, kind, range),
+        before + within,
+        flag,
+    );
 }
