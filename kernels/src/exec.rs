@@ -81,6 +81,28 @@ pub fn follow_previous_launch() {
     }
 }
 
+/// `value`, whose loads the compiler must issue before this point: it may not move them
+/// towards their first use (behind a branch, or after a wait for another load), so that a
+/// thread asks for everything it needs at once and waits for memory once. Nothing waits
+/// here: the GPU stalls only where a value is first used. On the CPU it does nothing.
+#[inline(always)]
+pub fn asked<T: bytemuck::Pod>(value: T) -> T {
+    #[cfg(target_arch = "nvptx64")]
+    {
+        // Each whole 32-bit word of the value is an input of an empty instruction with
+        // effects, which the compiler can neither drop nor move below a branch.
+        let words = core::mem::size_of::<T>() / 4;
+        let at = core::ptr::from_ref(&value).cast::<u32>();
+        for i in 0..words {
+            // SAFETY: word `i` lies inside `value` (a `Pod`: every byte initialised).
+            let word = unsafe { at.add(i).read_unaligned() };
+            // SAFETY: a comment, no instruction: it names a register and changes nothing.
+            unsafe { core::arch::asm!("/* {0} */", in(reg32) word, options(nomem, nostack)) };
+        }
+    }
+    value
+}
+
 /// A kernel argument struct: plain data passed by value as the kernel's single parameter.
 ///
 /// `NoUninit` is checked at compile time by its derive: the struct is `#[repr(C)]` and has
@@ -302,14 +324,19 @@ impl<T: Copy> DevSlice<T> {
 
     /// Folds `f` over the elements `first, first + stride, …` below `end`, in that order,
     /// with a single bounds check: four loads at a time, which the GPU keeps in flight
-    /// together. `stride` must not be zero.
+    /// together, the last one to three too: in place of those past the end the last
+    /// element is read and folded again, and the result dropped, so `f` must be a function
+    /// of its arguments alone. `stride` must not be zero.
     #[inline(always)]
-    pub fn fold_every<A>(
+    pub fn fold_every<A: Copy>(
         &self,
         (first, end, stride): (u32, u32, u32),
         init: A,
-        mut f: impl FnMut(A, T) -> A,
-    ) -> A {
+        f: impl Fn(A, T) -> A,
+    ) -> A
+    where
+        T: bytemuck::Pod,
+    {
         if first >= end {
             return init;
         }
@@ -333,9 +360,19 @@ impl<T: Copy> DevSlice<T> {
             }
             i += 4 * stride;
         }
-        while i < end {
-            acc = f(acc, read(i));
-            i += stride;
+        if i < end {
+            // Every load before the first use, so that the thread waits once, not once an
+            // element (a branch around `f` would let the compiler sink each load into it).
+            let last = end - 1;
+            let values = asked([
+                read(i),
+                read((i + stride).min(last)),
+                read((i + 2 * stride).min(last)),
+            ]);
+            for (j, value) in (0..).zip(values) {
+                let folded = f(acc, value);
+                acc = if i + j * stride < end { folded } else { acc };
+            }
         }
         acc
     }

@@ -26,7 +26,7 @@ pub mod rng;
 pub mod sim;
 pub mod warp;
 
-pub use exec::{DevSlice, Kernel, KernelArgs, KernelInfo, Thread};
+pub use exec::{DevSlice, Kernel, KernelArgs, KernelInfo, Thread, asked};
 
 /// On the GPU a panic (only reachable through a failed bounds check) traps the kernel; the host
 /// sees the launch fail.

@@ -22,7 +22,7 @@ use crate::sim::broad::{CellIndex, kind_bit};
 use crate::sim::teams::Teams;
 use crate::sim::{Bodies, Contacts, KindInfo, SlotRange, Space};
 use crate::warp::{Handed, Team};
-use crate::{DevSlice, Thread, kernel_args};
+use crate::{DevSlice, Thread, asked, kernel_args};
 
 /// Seconds a steering force takes to bring the velocity to the wanted one.
 pub const STEER_TIME: f32 = 0.25;
@@ -146,15 +146,40 @@ pub fn sight_mask(brain: &Brain, machine: Machine, ship_kind: u32, shot_kind: u3
     mask
 }
 
-/// What slot `slot`, a `machine` body driven by `brain`, sees: only bodies within its vision, found
-/// through the grid's 3×3 neighbourhood by the slot's `team` (every lane gets the same). A
+/// A body about to look around: what [`think`] reads of it before it does.
+#[derive(Clone, Copy, Debug)]
+pub struct Looker {
+    /// Its slot.
+    pub slot: u32,
+    /// Where it is.
+    pub pos: Vec2,
+    /// Its velocity.
+    pub vel: Vec2,
+    /// Its kind's radius.
+    pub radius: f32,
+    /// The ship's kind.
+    pub ship_kind: u32,
+}
+
+/// What `looker`, a `machine` body driven by `brain`, sees: only bodies within its vision,
+/// found through the grid's 3×3 neighbourhood by its `team` (every lane gets the same). A
 /// kamikaze looks only for the ship.
 #[inline(always)]
-pub fn look(args: &ThinkArgs, brain: &Brain, machine: Machine, slot: u32, team: Team) -> Sight {
+pub fn look(
+    args: &ThinkArgs,
+    brain: &Brain,
+    machine: Machine,
+    looker: &Looker,
+    team: Team,
+) -> Sight {
     let b = &args.bodies;
-    let pos = b.pos.get(slot);
-    let vel = b.vel.get(slot);
-    let radius = args.kinds.get(brain.kind).radius;
+    let Looker {
+        slot,
+        pos,
+        vel,
+        radius,
+        ship_kind,
+    } = *looker;
     let vision2 = brain.vision * brain.vision;
     let personal = PERSONAL_SPACE_RADII * radius;
     let social = machine != Machine::Kamikaze;
@@ -162,7 +187,7 @@ pub fn look(args: &ThinkArgs, brain: &Brain, machine: Machine, slot: u32, team: 
     let mut sight = Sight::default();
     let (mut sum, mut similar) = (Vec2::ZERO, 0u32);
     let mut soonest = f32::INFINITY;
-    let mask = sight_mask(brain, machine, b.kind.get(args.ship), args.shot_kind);
+    let mask = sight_mask(brain, machine, ship_kind, args.shot_kind);
     args.grid.for_each_near_in(
         team,
         &args.space,
@@ -279,32 +304,63 @@ fn think_with<const TEAMS: bool>(t: Thread, args: &ThinkArgs) {
     };
     // Without teams the width is known to be 1, and the teams' code compiles out.
     let team = if TEAMS { team } else { Team::ALONE };
-    if !args.bodies.is_alive(slot) {
+    let b = &args.bodies;
+    // Asked for at once, before the branches they decide: the thread waits for memory
+    // once, not once a branch (and once more for its kind's tables).
+    let [alive, kind, frozen, ship_kind] = asked([
+        b.alive.get(slot),
+        b.kind.get(slot),
+        b.frozen.get(0),
+        b.kind.get(args.ship),
+    ]);
+    let [pos, vel] = asked([b.pos.get(slot), b.vel.get(slot)]);
+    if alive == 0 || frozen != 0 {
         return;
     }
-    let brain = args.brains.get(args.bodies.kind.get(slot));
+    // A kind's brain is the kind's (`brain.kind == kind`).
+    let info = args.kinds.get(kind);
+    let (brain, radius, full) = (
+        asked(args.brains.get(kind)),
+        asked(info.radius),
+        asked(info.energy),
+    );
+    let looker = Looker {
+        slot,
+        pos,
+        vel,
+        radius,
+        ship_kind,
+    };
     match Machine::from_u32(brain.machine) {
-        Machine::Kamikaze => think_as::<{ Machine::Kamikaze as u32 }>(args, &brain, slot, team),
-        Machine::Group => think_as::<{ Machine::Group as u32 }>(args, &brain, slot, team),
-        Machine::Tricky => think_as::<{ Machine::Tricky as u32 }>(args, &brain, slot, team),
+        Machine::Kamikaze => {
+            think_as::<{ Machine::Kamikaze as u32 }>(args, &brain, &looker, full, team)
+        }
+        Machine::Group => think_as::<{ Machine::Group as u32 }>(args, &brain, &looker, full, team),
+        Machine::Tricky => {
+            think_as::<{ Machine::Tricky as u32 }>(args, &brain, &looker, full, team)
+        }
         Machine::None => {}
     }
 }
 
-/// One body of a `MACHINE` kind driven by `brain`: perceive, transition, act.
+/// One body, `looker`, of a `MACHINE` kind driven by `brain`, whose bodies are born with
+/// `full` energy: perceive, transition, act.
 #[inline(always)]
-fn think_as<const MACHINE: u32>(args: &ThinkArgs, brain: &Brain, slot: u32, team: Team) {
+fn think_as<const MACHINE: u32>(
+    args: &ThinkArgs,
+    brain: &Brain,
+    looker: &Looker,
+    full: i32,
+    team: Team,
+) {
     let b = &args.bodies;
-    if b.is_frozen() {
-        return;
-    }
     let machine = Machine::from_u32(MACHINE);
-    let sight = look(args, brain, machine, slot, team);
+    let sight = look(args, brain, machine, looker, team);
     if !team.leads() {
         return;
     }
+    let slot = looker.slot;
     let energy = b.energy.get(slot);
-    let full = args.kinds.get(brain.kind).energy;
     let percept = Percept {
         hit: args.contacts.damage.get(slot) > 0,
         out_of_energy: energy <= 0,
@@ -328,6 +384,6 @@ fn think_as<const MACHINE: u32>(args: &ThinkArgs, brain: &Brain, slot: u32, team
         b.energy.set(slot, energy.saturating_add(1).min(full));
     }
     let want = wanted_velocity(args, brain, slot, state, &sight);
-    let force = (want - b.vel.get(slot)) * (b.mass.get(slot) / STEER_TIME);
+    let force = (want - looker.vel) * (b.mass.get(slot) / STEER_TIME);
     b.force.set(slot, force);
 }

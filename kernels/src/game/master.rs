@@ -80,50 +80,42 @@ pub fn master(t: Thread, args: &MasterArgs) {
         return;
     }
     let lane = t.lane();
-    // The step's input, whatever the game's state: the command's, or the autopilot's if it
-    // flies.
-    let command = args.mailbox.command();
-    let input = if command.autopilot == 0 {
-        command.input
-    } else {
-        args.steered.get(0)
-    };
-    if lane == 0 {
-        args.input.set(0, input);
-    }
     let rules = &args.rules;
-    let mut st = args.status.get(0);
-    let kinds = args.births.len();
-    if st.is_over() {
-        // The status stays as the last step left it, however many steps follow.
-        let mut k = lane;
-        while k < kinds {
-            args.births.set(k, 0);
-            k += warp::WARP;
-        }
-        return;
-    }
-    let step = st.step;
+    // Everything the master reads is asked for before anything waits on it: the command
+    // first (it crosses the bus from host memory, the longest wait), then the rest while
+    // it travels. The stores that follow keep the compiler from sinking a load towards its
+    // use behind a branch, so the warp waits for memory a few times, not once a branch.
+    let command = args.mailbox.command();
+    let steered = args.steered.get(0);
+    let before = args.status.get(0);
+    let aboard = Aboard::read(args);
+    let (step, over) = (before.step, before.is_over());
     // Spawns, a kind a lane: each due wave takes what its kind has left, in wave order.
+    // After game over nothing spawns.
+    let kinds = args.births.len();
     let mut mine = Spawns::default();
     let mut k = lane;
     while k < kinds {
         let kind = spawns(args, k, step);
-        args.births.set(k, kind.births);
-        if let Some(speed) = kind.speed {
+        let spawned = args.spawned.get(k);
+        let births = if over { 0 } else { kind.births };
+        args.births.set(k, births);
+        if let (Some(speed), false) = (kind.speed, over) {
             args.birth_speed.set(k, speed);
         }
         // Saturates rather than wraps (after 4,294,967,295 spawns of one kind), so that the
         // dead counted from it never drop to 0.
-        args.spawned
-            .set(k, args.spawned.get(k).saturating_add(kind.births));
+        args.spawned.set(k, spawned.saturating_add(births));
         // At most the world's slots (2^24): no overflow.
         mine.births += kind.births;
         mine.waves += kind.waves;
         k += warp::WARP;
     }
-    // The warp's totals; lane `l`'s share recomputed where a thread cannot ask it (the
-    // CPU emulation; see `warp`), without writing.
+    // Asked for only now: its bounds check waits for the range's start, and the loads
+    // above need not.
+    let shot_slot = aboard.shot_slot(args);
+    // The warp's totals (used only while playing); lane `l`'s share recomputed where a
+    // thread cannot ask it (the CPU emulation; see `warp`), without writing.
     let totals = warp::reduce(
         lane,
         |l| {
@@ -142,26 +134,46 @@ pub fn master(t: Thread, args: &MasterArgs) {
         },
         u64::wrapping_add,
     );
-    if lane != 0 {
+    // The step's input, whatever the game's state: the command's, or the autopilot's if it
+    // flies.
+    let input = if command.autopilot == 0 {
+        command.input
+    } else {
+        steered
+    };
+    if lane == 0 {
+        args.input.set(0, input);
+    }
+    // After game over nothing moves or fires, and the status is left as it is.
+    if lane != 0 || over {
         return;
     }
-    let b = &args.bodies;
+    let mut st = before;
     st.events = Events::default();
     st.input = input;
-    let ship = rules.ship.start;
-    if step == 0 {
+    let (aboard, shot_slot) = if step == 0 {
         let place = Place {
             pos: args.space.size * 0.5,
             vel: Vec2::ZERO,
             facing: Vec2::X,
         };
-        birth(b, &args.space, ship, place, rules.ship_energy);
-    }
-    if b.is_alive(ship) {
-        fly_ship(args, &input, step);
+        birth(
+            &args.bodies,
+            &args.space,
+            rules.ship.start,
+            place,
+            rules.ship_energy,
+        );
+        let aboard = Aboard::read(args);
+        (aboard, aboard.shot_slot(args))
+    } else {
+        (aboard, shot_slot)
+    };
+    if aboard.ship_alive {
+        fly_ship(args, &input, step, aboard.ship_energy);
         st.cooldown = st.cooldown.saturating_sub(1);
-        if input.firing() && st.cooldown == 0 && args.free.count.get(rules.shot_kind) > 0 {
-            fire(args, &input);
+        if input.firing() && st.cooldown == 0 && aboard.shots_free > 0 {
+            fire(args, &input, &aboard, shot_slot);
             st.cooldown = rules.fire_period;
             st.events.shots_fired = 1;
         }
@@ -169,6 +181,50 @@ pub fn master(t: Thread, args: &MasterArgs) {
     st.events.spawned = totals as u32;
     st.events.waves = (totals >> 32) as u32;
     args.status.set(0, st);
+}
+
+/// What the master reads of the ship and its gun.
+#[derive(Clone, Copy)]
+struct Aboard {
+    /// Whether the ship lives.
+    ship_alive: bool,
+    /// The ship's energy.
+    ship_energy: i32,
+    /// Where the ship is.
+    ship_pos: Vec2,
+    /// The shots' kind (radius and birth energy).
+    shot: KindInfo,
+    /// The ship's radius.
+    ship_radius: f32,
+    /// The shot kind's free slots.
+    shots_free: u32,
+    /// The first entry of the shot kind's free list (every kind has at least one slot).
+    shots_start: u32,
+}
+
+impl Aboard {
+    /// Reads them, in loads that do not wait for one another.
+    #[inline(always)]
+    fn read(args: &MasterArgs) -> Aboard {
+        let (b, rules) = (&args.bodies, &args.rules);
+        let ship = rules.ship.start;
+        Aboard {
+            ship_alive: b.is_alive(ship),
+            ship_energy: b.energy.get(ship),
+            ship_pos: b.pos.get(ship),
+            shot: args.kinds.get(rules.shot_kind),
+            ship_radius: args.kinds.get(rules.ship_kind).radius,
+            shots_free: args.free.count.get(rules.shot_kind),
+            shots_start: args.ranges.get(rules.shot_kind).start,
+        }
+    }
+
+    /// The shot kind's first free slot (meaningful only if it has one), a load that waits
+    /// for [`Aboard::read`]'s.
+    #[inline(always)]
+    fn shot_slot(&self, args: &MasterArgs) -> u32 {
+        args.free.list.get(self.shots_start)
+    }
 }
 
 /// One kind's spawns this step, or a lane's total of them.
@@ -199,12 +255,16 @@ fn spawns(args: &MasterArgs, kind: u32, step: u32) -> Spawns {
     let every_wave = (0, args.waves.len(), 1);
     args.waves
         .fold_every(every_wave, Spawns::default(), |mut out, wave| {
-            if wave.kind == kind && wave.due(step) {
-                let taken = wave.count.min(free - out.births);
-                out.births += taken;
-                out.waves += u32::from(taken > 0);
-                out.speed = Some(wave.speed);
-            }
+            // Without a branch, so that each wave is read whole, in one wait for all.
+            let ours = (wave.kind == kind) & wave.due(step);
+            let taken = if ours {
+                wave.count.min(free - out.births)
+            } else {
+                0
+            };
+            out.births += taken;
+            out.waves += u32::from(taken > 0);
+            out.speed = if ours { Some(wave.speed) } else { out.speed };
             out
         })
 }
@@ -336,9 +396,10 @@ impl warp::Lanes for Counts {
     }
 }
 
-/// The ship goes where the stick points, at the scene's speed, and recovers energy.
+/// The ship, of energy `energy`, goes where the stick points, at the scene's speed, and
+/// recovers energy.
 #[inline(always)]
-fn fly_ship(args: &MasterArgs, input: &Input, step: u32) {
+fn fly_ship(args: &MasterArgs, input: &Input, step: u32, energy: i32) {
     let (b, rules) = (&args.bodies, &args.rules);
     let ship = rules.ship.start;
     b.vel.set(ship, input.movement() * rules.ship_speed);
@@ -346,28 +407,23 @@ fn fly_ship(args: &MasterArgs, input: &Input, step: u32) {
     if rules.recover_every != 0 && step.is_multiple_of(rules.recover_every) {
         // A ship at the largest energy allowed (i32::MAX) stays there, rather than wrapping
         // to the most negative and dying.
-        let energy = b.energy.get(ship);
         b.energy
             .set(ship, energy.saturating_add(1).min(rules.ship_energy));
     }
 }
 
-/// A shot in the first free slot of the shot kind, just outside the ship along the aim.
+/// A shot in `slot`, the first free slot of the shot kind, just outside the ship along the
+/// aim.
 #[inline(always)]
-fn fire(args: &MasterArgs, input: &Input) {
-    let (b, rules) = (&args.bodies, &args.rules);
-    let ship = rules.ship.start;
-    let shot = args.kinds.get(rules.shot_kind);
-    let slot = args.free.list.get(args.ranges.get(rules.shot_kind).start);
+fn fire(args: &MasterArgs, input: &Input, aboard: &Aboard, slot: u32) {
     let aim = input.aim_dir();
-    let gap = args.kinds.get(rules.ship_kind).radius + shot.radius;
-    let pos = b.pos.get(ship) + aim * (gap * 1.01);
+    let gap = aboard.ship_radius + aboard.shot.radius;
     let place = Place {
-        pos,
-        vel: aim * rules.shot_speed,
+        pos: aboard.ship_pos + aim * (gap * 1.01),
+        vel: aim * args.rules.shot_speed,
         facing: aim,
     };
-    birth(b, &args.space, slot, place, shot.energy);
+    birth(&args.bodies, &args.space, slot, place, aboard.shot.energy);
 }
 
 kernel_args! {

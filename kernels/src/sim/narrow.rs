@@ -16,7 +16,7 @@ use super::kinds::{Bound, KindInfo, SlotRange};
 use super::space::Space;
 use super::teams::Teams;
 use crate::warp::Handed;
-use crate::{DevSlice, Thread, kernel_args};
+use crate::{DevSlice, Thread, asked, kernel_args};
 
 kernel_args! {
     /// Arguments of [`collide`].
@@ -172,19 +172,28 @@ fn collide_bounds<const RECTS: bool>(t: Thread, args: &CollideArgs) {
     let Some((slot, team)) = args.teams.member(t, &args.ranges) else {
         return;
     };
-    if slot >= bodies.slots() || bodies.is_frozen() {
+    if slot >= bodies.slots() {
+        return;
+    }
+    // Asked for at once, before the branches they decide: the thread waits for memory
+    // once, not once a branch (and once more for its kind's entry).
+    let [frozen, alive, kind] = asked([
+        bodies.frozen.get(0),
+        bodies.alive.get(slot),
+        bodies.kind.get(slot),
+    ]);
+    let [pos, vel] = asked([bodies.pos.get(slot), bodies.vel.get(slot)]);
+    let mass = asked(bodies.mass.get(slot));
+    if frozen != 0 {
         return;
     }
     let mut push = Vec2::ZERO;
     let mut kick = Vec2::ZERO;
     let mut count = 0u32;
     let mut damage = 0i32;
-    if bodies.is_alive(slot) {
-        let kind = bodies.kind.get(slot);
+    if alive != 0 {
         let info = args.kinds.get(kind);
-        let pos = bodies.pos.get(slot);
-        let vel = bodies.vel.get(slot);
-        let inv = inverse_mass(bodies.mass.get(slot));
+        let inv = inverse_mass(mass);
         // Only the kinds it collides with: the grid's buckets skip the others unread.
         args.grid.for_each_near_in(
             team,

@@ -70,12 +70,14 @@ impl Teams {
     /// Lanes a body of kind `kind` gets.
     #[inline(always)]
     pub fn width(&self, kind: u32) -> u32 {
-        let log2 = match kind {
-            0..16 => self.low >> (4 * kind),
-            16..MAX_KINDS => self.high >> (4 * (kind - 16)),
-            _ => 0,
+        // Selects, not branches: [`Teams::member`] reads every kind's range before it asks.
+        let word = if kind < 16 { self.low } else { self.high };
+        let log2 = if kind < MAX_KINDS {
+            (word >> (4 * (kind % 16))) & 0xf
+        } else {
+            0
         };
-        1 << (log2 & 0xf)
+        1 << log2
     }
 
     /// Whether every body gets one thread.
@@ -103,18 +105,25 @@ impl Teams {
             let slot = self.first_slot.checked_add(global)?;
             return (slot < self.end_slot).then_some((slot, Team::new(t.lane(), 1)));
         }
-        // Threads before kind `k`'s first.
-        let mut before = 0u32;
-        for k in self.first_kind..self.end_kind {
-            let span = ranges.get(k).span();
+        // Every kind's range read at once (the thread waits for memory once, not once a
+        // kind), and the thread's kind found without a branch: its slot and team width.
+        let every_kind = (self.first_kind, self.end_kind, 1);
+        let first = (self.first_kind, 0u32, None);
+        let (_, _, found) = ranges.fold_every(every_kind, first, |(k, before, found), range| {
             let log2 = self.width(k).trailing_zeros();
-            let i = global - before;
-            if i < span << log2 {
-                let team = Team::new(t.lane(), 1 << log2);
-                return (!team.is_copy()).then_some((ranges.get(k).start + (i >> log2), team));
-            }
-            before += span << log2;
-        }
-        None
+            let threads = range.span() << log2;
+            // Below `before` only once found.
+            let i = global.wrapping_sub(before);
+            let here = found.is_none() & (i < threads);
+            let found = if here {
+                Some((range.start + (i >> log2), log2))
+            } else {
+                found
+            };
+            (k + 1, before + threads, found)
+        });
+        let (slot, log2) = found?;
+        let team = Team::new(t.lane(), 1 << log2);
+        (!team.is_copy()).then_some((slot, team))
     }
 }
