@@ -23,8 +23,8 @@
 
 use glam::Vec2;
 
-use super::Space;
 use super::bodies::Bodies;
+use super::space::{Space, Span};
 use crate::warp::{Handed, Team};
 use crate::{DevSlice, Thread, device_data, kernel_args};
 
@@ -318,29 +318,17 @@ impl CellIndex {
         mask: u32,
         mut visit: impl FnMut(u32, u32, Vec2),
     ) {
-        let ((rows, row_count), (cols, col_count)) = space.neighbourhood(pos);
-        // The block's columns as runs of consecutive columns, in visiting order. Written out
-        // here rather than shared with `column_runs`: through a helper, the runs went to
-        // local memory and the enemies' `think` took 40% longer at 16M bodies (H200).
-        let mut runs = [(0u32, 0u32); 3];
-        let mut run_count = 0;
-        for &c in &cols[..col_count] {
-            if run_count > 0 && runs[run_count - 1].1 + 1 == c {
-                runs[run_count - 1].1 = c;
-            } else {
-                runs[run_count] = (c, c);
-                run_count += 1;
-            }
-        }
+        let block = NearBlock::new(space, pos);
         let mut rest = mask & kinds_mask(self.kinds);
         // Entries the cap still allows.
         let mut left = if self.cap == 0 { u32::MAX } else { self.cap };
         while rest != 0 {
             let kind = rest.trailing_zeros();
             rest &= rest - 1;
-            for &r in &rows[..row_count] {
-                let row = kind * self.cells + r * space.cols;
-                for &(first, last) in &runs[..run_count] {
+            for k in 0..block.rows.count {
+                let row = kind * self.cells + block.rows.at(k) * space.cols;
+                for run in 0..block.cols.runs() {
+                    let (first, last) = block.cols.run(run);
                     let start = self.start.get(row + first);
                     let end = self
                         .start
@@ -430,45 +418,21 @@ impl CellIndex {
     }
 }
 
-/// The rows of a query's 3×3 block, and its columns as runs of consecutive columns, in
-/// visiting order.
+/// The rows of a query's 3×3 block, and its columns (taken as runs of consecutive
+/// columns), in visiting order.
 #[derive(Clone, Copy, Debug)]
 pub struct NearBlock {
-    rows: [u32; 3],
-    row_count: u32,
-    runs: [(u32, u32); 3],
-    run_count: u32,
+    rows: Span,
+    cols: Span,
 }
 
 impl NearBlock {
     /// The block around `pos`.
     #[inline(always)]
     fn new(space: &Space, pos: Vec2) -> Self {
-        let ((rows, row_count), (cols, col_count)) = space.neighbourhood(pos);
-        let (runs, run_count) = column_runs(&cols[..col_count]);
-        NearBlock {
-            rows,
-            row_count: row_count as u32,
-            runs,
-            run_count: run_count as u32,
-        }
+        let (rows, cols) = space.neighbourhood(pos);
+        NearBlock { rows, cols }
     }
-}
-
-/// A block's columns (at most three, in visiting order) as runs of consecutive columns.
-#[inline(always)]
-fn column_runs(cols: &[u32]) -> ([(u32, u32); 3], usize) {
-    let mut runs = [(0u32, 0u32); 3];
-    let mut run_count = 0;
-    for &c in cols {
-        if run_count > 0 && runs[run_count - 1].1 + 1 == c {
-            runs[run_count - 1].1 = c;
-        } else {
-            runs[run_count] = (c, c);
-            run_count += 1;
-        }
-    }
-    (runs, run_count)
 }
 
 /// The runs of one query of the grid in visiting order: kind by kind, row by row, run by
@@ -484,7 +448,7 @@ impl NearRuns {
     /// Number of runs.
     #[inline(always)]
     pub fn count(&self) -> u32 {
-        self.kinds * self.block.row_count * self.block.run_count
+        self.kinds * self.block.rows.count * self.block.cols.runs()
     }
 
     /// Run `r`'s kind and entries `start .. end` of `grid`; `(0, 0, 0)` past the last run.
@@ -493,7 +457,8 @@ impl NearRuns {
         if r >= self.count() {
             return (0, 0, 0);
         }
-        let per_kind = self.block.row_count * self.block.run_count;
+        let runs = self.block.cols.runs();
+        let per_kind = self.block.rows.count * runs;
         // The kind: the (r / per_kind)-th kind of the mask.
         let mut rest = self.mask;
         for _ in 0..r / per_kind {
@@ -501,9 +466,8 @@ impl NearRuns {
         }
         let kind = rest.trailing_zeros();
         let within = r % per_kind;
-        let row_index = (within / self.block.run_count) as usize;
-        let (first, last) = self.block.runs[(within % self.block.run_count) as usize];
-        let row = kind * grid.cells + self.block.rows[row_index] * space.cols;
+        let (first, last) = self.block.cols.run(within % runs);
+        let row = kind * grid.cells + self.block.rows.at(within / runs) * space.cols;
         (
             kind,
             grid.start.get(row + first),

@@ -84,58 +84,84 @@ impl Space {
     }
 
     /// The rows and the columns of the 3×3 block around the cell of `pos`, each as its
-    /// distinct indices in order of offset (-1, 0, +1) and their count: on a wrapping world
-    /// the block wraps around (and a grid narrower than three cells lists each index once),
+    /// distinct indices in order of offset (-1, 0, +1): on a wrapping world the block wraps
+    /// around (and a grid narrower than three cells lists each index once, from 0),
     /// otherwise it stops at the edges.
     #[inline(always)]
-    pub fn neighbourhood(&self, pos: Vec2) -> (([u32; 3], usize), ([u32; 3], usize)) {
+    pub fn neighbourhood(&self, pos: Vec2) -> (Span, Span) {
         let (col, row) = self.cell_coords(pos);
         (
-            around(row, self.rows, self.wraps()),
-            around(col, self.cols, self.wraps()),
+            Span::around(row, self.rows, self.wraps()),
+            Span::around(col, self.cols, self.wraps()),
         )
-    }
-
-    /// Calls `visit(cell)` once for each distinct cell of the 3×3 block around the cell of
-    /// `pos` (see [`Space::neighbourhood`]), row by row.
-    #[inline(always)]
-    pub fn for_each_neighbour_cell(&self, pos: Vec2, mut visit: impl FnMut(u32)) {
-        let ((rows, row_count), (cols, col_count)) = self.neighbourhood(pos);
-        for &r in &rows[..row_count] {
-            for &c in &cols[..col_count] {
-                visit(r * self.cols + c);
-            }
-        }
     }
 }
 
-/// The distinct indices among `i - 1, i, i + 1` in `0..n`, wrapped or cut at the ends, in
-/// increasing order of offset.
-#[inline(always)]
-fn around(i: u32, n: u32, wraps: bool) -> ([u32; 3], usize) {
-    if wraps && n < 3 {
-        // Every index is a neighbour; list each once.
-        return ([0, 1, 2], n as usize);
+/// At most three distinct grid indices below `n`, consecutive but for a wrap from `n - 1`
+/// to 0: the rows or the columns of a query's block. Plain numbers rather than a list, so
+/// that a kernel keeps them in registers (a list indexed at run time goes to local memory).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Span {
+    /// The first index.
+    pub first: u32,
+    /// How many (1 to 3).
+    pub count: u32,
+    /// The indices' range, `0..n`.
+    pub n: u32,
+}
+
+impl Span {
+    /// The distinct indices among `i - 1, i, i + 1` in `0..n` (`i < n`), wrapped or cut at
+    /// the ends, in increasing order of offset.
+    #[inline(always)]
+    fn around(i: u32, n: u32, wraps: bool) -> Span {
+        match (wraps, n < 3) {
+            // Every index is a neighbour; each once.
+            (true, true) => Span {
+                first: 0,
+                count: n,
+                n,
+            },
+            (true, false) => Span {
+                first: if i == 0 { n - 1 } else { i - 1 },
+                count: 3,
+                n,
+            },
+            (false, _) => {
+                let first = i.saturating_sub(1);
+                Span {
+                    first,
+                    count: (i + 1).min(n - 1) - first + 1,
+                    n,
+                }
+            }
+        }
     }
-    let mut out = [0; 3];
-    let mut len = 0;
-    if i > 0 {
-        out[len] = i - 1;
-        len += 1;
-    } else if wraps {
-        out[len] = n - 1;
-        len += 1;
+
+    /// The `k`-th index (`k < count`).
+    #[inline(always)]
+    pub fn at(&self, k: u32) -> u32 {
+        let i = self.first + k;
+        if i >= self.n { i - self.n } else { i }
     }
-    out[len] = i;
-    len += 1;
-    if i + 1 < n {
-        out[len] = i + 1;
-        len += 1;
-    } else if wraps {
-        out[len] = 0;
-        len += 1;
+
+    /// Runs of consecutive indices: 1, or 2 where the span wraps.
+    #[inline(always)]
+    pub fn runs(&self) -> u32 {
+        1 + u32::from(self.first + self.count > self.n)
     }
-    (out, len)
+
+    /// Run `r`'s first and last index (`r < runs()`): the span up to `n - 1`, then the
+    /// wrapped part from 0.
+    #[inline(always)]
+    pub fn run(&self, r: u32) -> (u32, u32) {
+        let end = self.first + self.count;
+        if r == 0 {
+            (self.first, end.min(self.n) - 1)
+        } else {
+            (0, end - self.n - 1)
+        }
+    }
 }
 
 /// `d` moved by a whole period towards zero when that makes it shorter.
