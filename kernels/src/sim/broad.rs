@@ -26,7 +26,7 @@ use glam::Vec2;
 use super::bodies::Bodies;
 use super::space::{Space, Span};
 use crate::warp::{Handed, Team};
-use crate::{DevSlice, Thread, device_data, kernel_args};
+use crate::{DevSlice, Thread, asked, device_data, kernel_args};
 
 device_data! {
     /// The grid's arrays: what the broad phase builds each step and [`CellIndex`] queries.
@@ -334,8 +334,14 @@ impl CellIndex {
                         .start
                         .get(row + last + 1)
                         .min(start.saturating_add(left));
-                    for entry in start..end {
-                        visit(self.slots.get(entry), kind, self.pos.get(entry));
+                    if start < end {
+                        // Each entry is asked for while the one before is visited.
+                        let mut ahead = self.entry(start, end);
+                        for entry in start..end {
+                            let (slot, at) = ahead;
+                            ahead = self.entry(entry + 1, end);
+                            visit(slot, kind, at);
+                        }
                     }
                     left -= end.saturating_sub(start);
                     if left == 0 {
@@ -344,6 +350,19 @@ impl CellIndex {
                 }
             }
         }
+    }
+
+    /// Entry `entry`'s slot and position, or the last entry's at and past `end` (entries
+    /// `.. end` lie in the grid), asked for now (see [`asked`]): the queries read one entry
+    /// ahead of the one they visit, so that the thread waits for the entries' memory once,
+    /// not once an entry. Nothing is read where `end` is 0.
+    #[inline(always)]
+    fn entry(&self, entry: u32, end: u32) -> (u32, Vec2) {
+        let at = entry.min(end.saturating_sub(1));
+        if end == 0 {
+            return (0, Vec2::ZERO);
+        }
+        (asked(self.slots.get(at)), asked(self.pos.get(at)))
     }
 
     /// [`CellIndex::for_each_near`] shared by a `team` of lanes: the lanes load the bounds of
@@ -385,10 +404,14 @@ impl CellIndex {
                 let start = team.share(start, j);
                 let end = team.share(end, j).min(start.saturating_add(left));
                 let mut first = start;
+                // Each lane's entry is asked for while the team visits the ones before.
+                let mut ahead = self.entry(first + lane, end);
                 while first < end {
                     let entry = first + lane;
+                    let (slot, at) = ahead;
+                    ahead = self.entry(entry + width, end);
                     let found = if entry < end {
-                        test(self.slots.get(entry), kind, self.pos.get(entry))
+                        test(slot, kind, at)
                     } else {
                         None
                     };
