@@ -77,9 +77,15 @@ pub fn mark_free(t: Thread, args: &MarkArgs) {
     }
     let b = &args.bodies;
     let free = |s: u32| usable(s, args.ranges.get(b.kind.get(s))) && !b.is_alive(s);
-    args.flags.set(slot, free(slot) as u32);
+    let mine = free(slot);
+    args.flags.set(slot, mine as u32);
+    // The warp's count; lane `l`'s flag recomputed where a thread cannot ask it (the CPU
+    // emulation; see `warp`).
     let (lane, first) = (t.lane(), slot - t.lane());
-    let count = warp::sum_u32_in_lane0(lane, |l| free(first + l) as u32);
+    let count = warp::sum_u32_in_lane0(lane, |l| match l == lane {
+        true => mine as u32,
+        false => free(first + l) as u32,
+    });
     if lane == 0 {
         args.tiles.set(slot / WARP, count);
     }
