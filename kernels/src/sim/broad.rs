@@ -318,31 +318,36 @@ impl CellIndex {
         mask: u32,
         mut visit: impl FnMut(u32, u32, Vec2),
     ) {
-        let runs = self.near_runs(space, pos, mask);
+        let block = NearBlock::new(space, pos);
+        let mut rest = mask & kinds_mask(self.kinds);
         // Entries the cap still allows.
         let mut left = if self.cap == 0 { u32::MAX } else { self.cap };
-        // Each run's bounds are asked for while the run before is walked, and each entry
-        // while the one before is visited.
-        let bounds = |r: u32| {
-            let (kind, start, end) = runs.get(self, space, r);
-            (kind, asked(start), asked(end))
-        };
-        let mut next = bounds(0);
-        for r in 0..runs.count() {
-            let (kind, start, end) = next;
-            next = bounds(r + 1);
-            let end = end.min(start.saturating_add(left));
-            if start < end {
-                let mut ahead = self.entry(start, end);
-                for entry in start..end {
-                    let (slot, at) = ahead;
-                    ahead = self.entry(entry + 1, end);
-                    visit(slot, kind, at);
+        while rest != 0 {
+            let kind = rest.trailing_zeros();
+            rest &= rest - 1;
+            for k in 0..block.rows.count {
+                let row = kind * self.cells + block.rows.at(k) * space.cols;
+                for run in 0..block.cols.runs() {
+                    let (first, last) = block.cols.run(run);
+                    let start = self.start.get(row + first);
+                    let end = self
+                        .start
+                        .get(row + last + 1)
+                        .min(start.saturating_add(left));
+                    if start < end {
+                        // Each entry is asked for while the one before is visited.
+                        let mut ahead = self.entry(start, end);
+                        for entry in start..end {
+                            let (slot, at) = ahead;
+                            ahead = self.entry(entry + 1, end);
+                            visit(slot, kind, at);
+                        }
+                    }
+                    left -= end.saturating_sub(start);
+                    if left == 0 {
+                        return;
+                    }
                 }
-            }
-            left -= end.saturating_sub(start);
-            if left == 0 {
-                return;
             }
         }
     }
