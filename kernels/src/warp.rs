@@ -191,6 +191,14 @@ pub fn reduce<T: Lanes>(lane: u32, value: impl Fn(u32) -> T, combine: impl Fn(T,
     }
 }
 
+/// A collective's `value` for a lane that already holds its own share, `mine`: on the GPU,
+/// where each lane evaluates only its own, nothing is computed twice; where a thread cannot
+/// ask another lane (the CPU emulation), the other lanes' shares are `theirs(l)`.
+#[inline(always)]
+pub fn own_or<T: Copy>(lane: u32, mine: T, theirs: impl Fn(u32) -> T) -> impl Fn(u32) -> T {
+    move |l| if l == lane { mine } else { theirs(l) }
+}
+
 /// The wrapping sum of `value(lane)` over the warp's 32 lanes, in every lane.
 #[inline(always)]
 pub fn sum_u32(lane: u32, value: impl Fn(u32) -> u32) -> u32 {

@@ -114,24 +114,22 @@ pub fn master(t: Thread, args: &MasterArgs) {
     // Asked for only now: its bounds check waits for the range's start, and the loads
     // above need not.
     let shot_slot = aboard.shot_slot(args);
-    // The warp's totals (used only while playing); lane `l`'s share recomputed where a
-    // thread cannot ask it (the CPU emulation; see `warp`), without writing.
+    // The warp's totals (used only while playing); another lane's share is recomputed
+    // without writing.
+    let theirs = |l: u32| {
+        let mut theirs = Spawns::default();
+        let mut k = l;
+        while k < kinds {
+            let kind = spawns(args, k, step);
+            theirs.births += kind.births;
+            theirs.waves += kind.waves;
+            k += warp::WARP;
+        }
+        theirs.packed()
+    };
     let totals = warp::reduce(
         lane,
-        |l| {
-            if l == lane {
-                return mine.packed();
-            }
-            let mut theirs = Spawns::default();
-            let mut k = l;
-            while k < kinds {
-                let kind = spawns(args, k, step);
-                theirs.births += kind.births;
-                theirs.waves += kind.waves;
-                k += warp::WARP;
-            }
-            theirs.packed()
-        },
+        warp::own_or(lane, mine.packed(), theirs),
         u64::wrapping_add,
     );
     // The step's input, whatever the game's state: the command's, or the autopilot's if it

@@ -79,13 +79,9 @@ pub fn mark_free(t: Thread, args: &MarkArgs) {
     let free = |s: u32| usable(s, args.ranges.get(b.kind.get(s))) && !b.is_alive(s);
     let mine = free(slot);
     args.flags.set(slot, mine as u32);
-    // The warp's count; lane `l`'s flag recomputed where a thread cannot ask it (the CPU
-    // emulation; see `warp`).
     let (lane, first) = (t.lane(), slot - t.lane());
-    let count = warp::sum_u32_in_lane0(lane, |l| match l == lane {
-        true => mine as u32,
-        false => free(first + l) as u32,
-    });
+    let flag = |l: u32| free(first + l) as u32;
+    let count = warp::sum_u32_in_lane0(lane, warp::own_or(lane, mine as u32, flag));
     if lane == 0 {
         args.tiles.set(slot / WARP, count);
     }
@@ -200,7 +196,8 @@ pub fn mark_and_gather_free(t: Thread, args: &MarkGatherArgs) {
         let dead = |n: u32, alive: u32| n + u32::from(alive == 0);
         b.alive.fold_every((range.start + l, first, WARP), 0, dead)
     });
-    let within = warp::exclusive_sum_u32(lane, |l| free(first + l) as u32);
+    let within =
+        warp::exclusive_sum_u32(lane, warp::own_or(lane, flag, |l| free(first + l) as u32));
     if !usable(slot, range) {
         return;
     }
