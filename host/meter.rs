@@ -36,6 +36,8 @@ pub struct Second {
 /// Frames counted second by second, with one profiled frame per second.
 pub struct Seconds {
     rows: Vec<Second>,
+    /// Each closed second's profiled step, stage by stage (µs), in step order.
+    stages: Vec<Vec<(&'static str, f64)>>,
     frames: u64,
     second_start: Instant,
     in_second: u64,
@@ -48,6 +50,7 @@ impl Seconds {
     pub fn new(now: Instant) -> Self {
         Seconds {
             rows: Vec::new(),
+            stages: Vec::new(),
             frames: 0,
             second_start: now,
             in_second: 0,
@@ -93,6 +96,13 @@ impl Seconds {
             render_us: render * 1e6,
             gl_us: gl * 1e6,
         });
+        let mut stages: Vec<(&'static str, f64)> = Vec::new();
+        for s in &profile.stages {
+            if !stages.iter().any(|(name, _)| *name == s.stage) {
+                stages.push((s.stage, stages_us(&profile, &[s.stage])));
+            }
+        }
+        self.stages.push(stages);
         self.second_start = now;
         self.in_second = 0;
     }
@@ -100,6 +110,11 @@ impl Seconds {
     /// The seconds closed so far.
     pub fn rows(&self) -> &[Second] {
         &self.rows
+    }
+
+    /// Each closed second's profiled step, stage by stage (µs), in step order.
+    pub fn stages(&self) -> &[Vec<(&'static str, f64)>] {
+        &self.stages
     }
 
     /// Frames counted in all.

@@ -15,6 +15,15 @@ use crate::{Buffer, Device, Error, Op};
 /// within 1.4% at 8K.
 pub const BLOCK: u32 = 128;
 
+/// Threads per block of the launches whose threads each make a few loads and a store or two
+/// (marking and gathering the free lists, placing the bodies in their cells): their blocks
+/// end so soon that starting blocks bounds them, and blocks of 256 halve the blocks
+/// (at 16.76M slots on the H200: `mark_free` 160 -> 94 µs, `gather_free` 159 -> 100,
+/// `place_in_cells` 159 -> 100; blocks of 512 were slower again). The heavier kernels keep
+/// [`BLOCK`]: with 256 they lose occupancy (`think` 1,753 -> 1,922 µs, `collide_circles`
+/// 574 -> 667).
+pub const LIGHT_BLOCK: u32 = 256;
+
 /// Threads per block of the prefix sum's launches: a thread a tile of 32 elements, so few
 /// threads (259 for 8,288 elements), spread over more of the GPU's multiprocessors in blocks
 /// of one warp (the free lists 22 -> 11 µs, the broad phase 24 -> 15 µs at 8K).
@@ -34,6 +43,21 @@ pub(crate) unsafe fn threads<A: KernelArgs>(
 ) -> Op {
     // SAFETY: forwarded.
     unsafe { threads_in(kernel, threads, BLOCK, args, binder, bytes) }
+}
+
+/// [`threads`] in blocks of [`LIGHT_BLOCK`], for kernels whose threads do little.
+///
+/// # Safety
+/// As for [`Op::launch`].
+pub(crate) unsafe fn light_threads<A: KernelArgs>(
+    kernel: Kernel<A>,
+    threads: u32,
+    args: A,
+    binder: Binder,
+    bytes: u64,
+) -> Op {
+    // SAFETY: forwarded.
+    unsafe { threads_in(kernel, threads, LIGHT_BLOCK, args, binder, bytes) }
 }
 
 /// [`threads`] in blocks of `block` threads.

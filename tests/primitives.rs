@@ -193,8 +193,8 @@ fn primitives_reject_sizes_beyond_their_buffers(device: &Device) {
     assert!(err.contains("indices_out buffer holds only 2"), "{err}");
 }
 
-/// The launch floor runs every launch of every variant (it checks each element's count
-/// itself), over more threads than one block has, and leaves the device's launch mode as
+/// The launch floor runs every launch of every variant and block size (it checks each
+/// element's count itself), in one of its block sizes, over more threads than one block has, and leaves the device's launch mode as
 /// it found it.
 fn launch_floor_runs_every_variant(device: &Device) {
     let was = device.dependent_launch();
@@ -202,6 +202,7 @@ fn launch_floor_runs_every_variant(device: &Device) {
     for (launches, threads) in [(1, 1), (5, 3_000), (2, past_one_block)] {
         let floor = floor::measure(device, launches, threads).expect("the floor runs");
         assert_eq!((floor.launches, floor.threads), (launches, threads));
+        assert!(floor::BLOCKS.contains(&floor.block), "{floor:?}");
         for s in [floor.graph_s, floor.stream_s, floor.ring_s]
             .into_iter()
             .chain(floor.one_block_s)

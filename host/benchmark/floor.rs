@@ -1,6 +1,8 @@
 //! The launch floor, measured on the device and in the run it is compared with: a chain of
 //! as many launches as a step makes, each doing one read-modify-write a thread over as many
-//! threads as the step has slots (the least a stage of the step does), replayed as one CUDA
+//! threads as the step has slots (the least a stage of the step does), in the block size
+//! that runs it fastest (blocks of 128 threads took 3 times as long as blocks of 512 at
+//! 16.76M threads on an H200: starting blocks, not memory, bound them), replayed as one CUDA
 //! graph (as the step is), as the same graph with programmatic dependent launch (on sm_90
 //! and newer), launched one by one, and run as rounds of one block with a barrier between
 //! them (the floor of a step that would run in one block); and the graph with the game's
@@ -14,7 +16,6 @@ use gpuwars_kernels::primitives::touch::{TouchArgs, TouchRoundsArgs};
 use gpuwars_kernels::registry;
 
 use crate::backend::{Binder, Launch, MAX_BLOCK};
-use crate::primitives::threads;
 use crate::{BackendKind, Buffer, Device, Error, Op};
 
 /// What a chain of `launches` one-touch launches over `threads` threads costs a step.
@@ -24,6 +25,10 @@ pub struct Floor {
     pub launches: usize,
     /// Threads a launch.
     pub threads: u32,
+    /// Threads per block of the fastest chain as a graph, which every figure below uses:
+    /// the floor is the least over [`BLOCKS`].
+    #[serde(default)]
+    pub block: u32,
     /// Seconds a step, the chain replayed as one CUDA graph, each launch waiting for the
     /// end of the one before (issued one by one on the CPU).
     pub graph_s: f64,
@@ -47,13 +52,23 @@ pub struct Floor {
 /// 3.3 ms against 0.2 on an H100), so larger worlds would only spend the run's time on it.
 pub const ONE_BLOCK_MAX_THREADS: u32 = 65_536;
 
-/// One launch of the chain: a touch of every element of `data`.
-fn touch(data: &Buffer<u32>) -> Op {
+/// The block sizes whose chains are timed; the fastest is the floor's.
+pub const BLOCKS: [u32; 4] = [128, 256, 512, MAX_BLOCK];
+
+/// One launch of the chain: a touch of every element of `data`, in blocks of `block`.
+fn touch(data: &Buffer<u32>, block: u32) -> Op {
     // SAFETY: the view goes into this op only.
     let mut b = unsafe { Binder::new() };
     let args = TouchArgs { data: b.view(data) };
-    // SAFETY: one buffer, one element a thread.
-    unsafe { threads(registry::TOUCH, data.len() as u32, args, b, 8) }
+    let threads = data.len() as u32;
+    let launch = Launch {
+        kernel: registry::TOUCH,
+        grid: threads.div_ceil(block),
+        block,
+        args,
+    };
+    // SAFETY: one buffer, one element a thread (the kernel skips the threads past it).
+    unsafe { Op::launch(launch, b, 8 * u64::from(threads)) }
 }
 
 /// The whole chain in one launch: `rounds` touches of every element of `data` by one block.
@@ -88,7 +103,7 @@ pub fn measure(device: &Device, launches: usize, threads: u32) -> Result<Floor, 
         )));
     };
     let data = device.alloc_zeroed::<u32>(threads as usize)?;
-    let chain: Vec<Op> = (0..launches).map(|_| touch(&data)).collect();
+    let chain = |block: u32| -> Vec<Op> { (0..launches).map(|_| touch(&data, block)).collect() };
     let (warm, reps) = match device.kind() {
         BackendKind::Cuda => (200, 2_000),
         BackendKind::Cpu => (5, 50),
@@ -102,7 +117,15 @@ pub fn measure(device: &Device, launches: usize, threads: u32) -> Result<Floor, 
     let was_dependent = device.dependent_launch();
     let mut times = || -> Result<_, Error> {
         device.set_dependent_launch(false);
-        let graph_s = time(&chain, true)?;
+        let mut fastest = (f64::INFINITY, BLOCKS[0]);
+        for block in BLOCKS {
+            let s = time(&chain(block), true)?;
+            if s < fastest.0 {
+                fastest = (s, block);
+            }
+        }
+        let (graph_s, block) = fastest;
+        let chain = chain(block);
         let dependent_s = if device.set_dependent_launch(true) {
             Some(time(&chain, true)?)
         } else {
@@ -117,11 +140,11 @@ pub fn measure(device: &Device, launches: usize, threads: u32) -> Result<Floor, 
         };
         device.set_dependent_launch(dependent_s.is_some());
         let ring_s = time_in_ring(device, &chain, (warm, reps))?;
-        Ok((graph_s, dependent_s, stream_s, one_block_s, ring_s))
+        Ok((block, graph_s, dependent_s, stream_s, one_block_s, ring_s))
     };
     let times = times();
     device.set_dependent_launch(was_dependent);
-    let (graph_s, dependent_s, stream_s, one_block_s, ring_s) = times?;
+    let (block, graph_s, dependent_s, stream_s, one_block_s, ring_s) = times?;
     let timed_runs = timed_runs + 1;
 
     let runs = timed_runs * (warm + reps) * rounds;
@@ -134,6 +157,7 @@ pub fn measure(device: &Device, launches: usize, threads: u32) -> Result<Floor, 
     Ok(Floor {
         launches,
         threads,
+        block,
         graph_s,
         dependent_s,
         stream_s,
@@ -198,10 +222,11 @@ impl Floor {
         });
         format!(
             "launch floor (measured here): {} dependent launches of one read-modify-write over \
-             {} threads take {:.1} µs a step as a graph{dependent}, {:.1} one by one{one_block}, \
-             {:.1} in a game's ring; the step takes {:.1}",
+             {} threads in blocks of {} take {:.1} µs a step as a graph{dependent}, {:.1} one by \
+             one{one_block}, {:.1} in a game's ring; the step takes {:.1}",
             self.launches,
             crate::files::thousands(self.threads),
+            self.block,
             self.graph_s * 1e6,
             self.stream_s * 1e6,
             self.ring_s * 1e6,

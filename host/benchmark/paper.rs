@@ -2,6 +2,7 @@
 //! playing, each loop one simulation step and one frame rendered offscreen, for some minutes
 //! of wall time; frames per second, second by second, against the paper's two cards.
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -73,6 +74,9 @@ pub struct PaperSummary {
     pub enemies_alive: Spread,
     /// The profiled steps' time (µs).
     pub step_us: Spread,
+    /// The profiled steps' stages, each over the seconds (µs; absent from older summaries).
+    #[serde(default)]
+    pub stages_us: BTreeMap<String, Spread>,
     /// The renderer's device work per frame (µs).
     pub render_us: Spread,
     /// GL's part of a frame (µs).
@@ -232,6 +236,7 @@ fn finish(
         frames_per_s: Spread::of(rows.iter().map(|r| r.frames_per_s)),
         enemies_alive: Spread::of(rows.iter().map(|r| f64::from(r.enemies_alive))),
         step_us: Spread::of(rows.iter().map(|r| r.step_us)),
+        stages_us: stage_spreads(counter.stages()),
         render_us: Spread::of(rows.iter().map(|r| r.render_us)),
         gl_us: Spread::of(rows.iter().map(|r| r.gl_us)),
         sim_only_steps_per_s: sim_only,
@@ -242,6 +247,19 @@ fn finish(
     plot::frames_over_time(&outputs.png, &summary, rows)
         .with_context(|| format!("plotting {}", outputs.png.display()))?;
     Ok(summary)
+}
+
+/// Each stage's spread over `seconds` (each second's stages in step order; a stage missing
+/// from some seconds is spread over those that have it).
+fn stage_spreads(seconds: &[Vec<(&'static str, f64)>]) -> BTreeMap<String, Spread> {
+    let mut series: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    for (stage, us) in seconds.iter().flatten() {
+        series.entry((*stage).to_string()).or_default().push(*us);
+    }
+    series
+        .into_iter()
+        .map(|(stage, us)| (stage, Spread::of(us)))
+        .collect()
 }
 
 /// Steps per second of the simulation alone (no frames) over about `time` (at least a
@@ -281,6 +299,14 @@ impl PaperSummary {
                 format!("min {:.1}  median {:.1}  max {:.1}", f.min, f.median, f.max),
             ),
             ("step_us:", format!("median {:.1}", self.step_us.median)),
+            (
+                "stages_us:",
+                self.stages_us
+                    .iter()
+                    .map(|(stage, us)| format!("{stage} {:.1}", us.median))
+                    .collect::<Vec<_>>()
+                    .join("  "),
+            ),
             ("render_us:", format!("median {:.1}", self.render_us.median)),
             ("gl_us:", format!("median {:.1}", self.gl_us.median)),
             (

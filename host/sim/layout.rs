@@ -59,13 +59,19 @@ pub fn kind_table(spec: &WorldSpec) -> Vec<KindInfo> {
         .iter()
         .zip(spec.collision_masks())
         .map(|(kind, collides_with)| {
+            // Rectangles lie inside their circles, so the circles' sum bounds every pair.
+            let reach = kind.shape.reach();
+            let partner = (0..spec.kinds.len())
+                .filter(|&k| collides_with & (1 << k) != 0)
+                .map(|k| spec.kinds[k].shape.reach())
+                .reduce(f32::max);
             let (shape, half) = match kind.shape {
                 Shape::Circle { radius } => (kinds::SHAPE_CIRCLE, glam::Vec2::splat(radius)),
                 Shape::Rect { half } => (kinds::SHAPE_RECT, half),
             };
             KindInfo {
                 half,
-                radius: kind.shape.reach(),
+                radius: reach,
                 shape,
                 collides_with,
                 damage: kind.damage,
@@ -76,7 +82,7 @@ pub fn kind_table(spec: &WorldSpec) -> Vec<KindInfo> {
                 // The kernels only ask whether a controller decides deaths: the game hands
                 // its machines to its own kernels.
                 controlled: u32::from(kind.controlled),
-                reserved: 0,
+                contact_reach: partner.map_or(0.0, |partner| reach + partner),
             }
         })
         .collect()

@@ -7,7 +7,7 @@ use gpuwars_kernels::sim::broad::{self, CountArgs, MergeArgs, OrderArgs, PlaceAr
 use crate::Op;
 use crate::backend::Binder;
 use crate::pipeline::world::World;
-use crate::primitives::threads;
+use crate::primitives::{light_threads, threads};
 
 /// The broad phase's launches, a thread a slot each, if the world has a grid.
 pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
@@ -54,7 +54,7 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     };
     let buckets = g.counts.len() as u64;
     ops.push(unsafe {
-        threads(
+        light_threads(
             registry::PLACE_IN_CELLS,
             slots,
             place,

@@ -8,7 +8,7 @@ use gpuwars_kernels::sim::free_list::{FreeMarks, GatherArgs, MarkArgs, MarkGathe
 use crate::Op;
 use crate::backend::Binder;
 use crate::pipeline::world::World;
-use crate::primitives::threads;
+use crate::primitives::{light_threads, threads};
 
 /// Mark and gather, a thread a slot each, with the scan of the tiles' counts between them;
 /// or both in one launch where the world's ranges allow (see `Config::free_in_one_launch`).
@@ -47,7 +47,7 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     };
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
     let mut ops =
-        vec![unsafe { threads(registry::MARK_FREE, slots, mark, b, 12 * u64::from(slots)) }];
+        vec![unsafe { light_threads(registry::MARK_FREE, slots, mark, b, 12 * u64::from(slots)) }];
     // In place, over one more element than the tiles: the last becomes the total.
     ops.extend(
         world
@@ -67,7 +67,7 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     };
     // SAFETY: as above.
     ops.push(unsafe {
-        threads(
+        light_threads(
             registry::GATHER_FREE,
             slots,
             gather,

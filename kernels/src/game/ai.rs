@@ -18,7 +18,7 @@ use glam::Vec2;
 
 use super::fsm::{Machine, Percept, State, next_state};
 use super::rules::Brain;
-use crate::sim::broad::{CellIndex, kind_bit};
+use crate::sim::broad::{CellIndex, Near, kind_bit};
 use crate::sim::teams::Teams;
 use crate::sim::{Bodies, Contacts, KindInfo, SlotRange, Space};
 use crate::warp::{Handed, Team};
@@ -162,8 +162,7 @@ pub struct Looker {
 }
 
 /// What `looker`, a `machine` body driven by `brain`, sees: only bodies within its vision,
-/// found through the grid's 3×3 neighbourhood by its `team` (every lane gets the same). A
-/// kamikaze looks only for the ship.
+/// found through the grid's 3×3 neighbourhood by its `team` (every lane gets the same). A kamikaze looks only for the ship.
 #[inline(always)]
 pub fn look(
     args: &ThinkArgs,
@@ -188,11 +187,17 @@ pub fn look(
     let (mut sum, mut similar) = (Vec2::ZERO, 0u32);
     let mut soonest = f32::INFINITY;
     let mask = sight_mask(brain, machine, ship_kind, args.shot_kind);
+    // The whole block: reading only the cells within its vision made `think` slower
+    // (paper 14.8 -> 17.2 µs on an H200), though fewer entries.
+    let near = Near {
+        pos,
+        reach: None,
+        mask,
+    };
     args.grid.for_each_near_in(
         team,
         &args.space,
-        pos,
-        mask,
+        near,
         |other, kind, at| {
             if other == slot {
                 return None;

@@ -14,7 +14,7 @@ use glam::Vec2;
 
 use super::control::Input;
 use super::rules::Rules;
-use crate::sim::broad::{CellIndex, kind_bit};
+use crate::sim::broad::{CellIndex, Near, kind_bit};
 use crate::sim::{Bodies, KindInfo, Space};
 use crate::{DevSlice, Thread, kernel_args, warp};
 
@@ -132,9 +132,17 @@ pub fn autopilot(t: Thread, args: &AutopilotArgs) {
         },
         |a, c| a | c,
     );
-    // The grid is the step's; the enemies have moved since: their places now.
+    // The grid is the step's; the enemies have moved since: their places now, so the whole
+    // block (a body may have left a cell that its old place put out of reach).
     let grid = &args.grid;
-    let near = grid.near_runs(space, pos, enemies);
+    let near = grid.near_runs(
+        space,
+        Near {
+            pos,
+            reach: None,
+            mask: enemies,
+        },
+    );
     let cap = if grid.cap == 0 { u32::MAX } else { grid.cap };
     let mut found = Sighting::NONE;
     // Runs in chunks of one a lane; `seen` entries came before the chunk.

@@ -302,24 +302,32 @@ pub struct CellIndex {
     pub reserved: u32,
 }
 
+/// What a neighbour query looks for: the bodies of the kinds in `mask` (bit `k`: kind `k`)
+/// in the 3×3 cells around `pos`, or only in those that can hold a body within `reach` of
+/// it along each axis if given (see [`Space::neighbourhood_within`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Near {
+    /// Where the query looks from.
+    pub pos: Vec2,
+    /// How far along either axis a body it wants can be; `None` for the whole block.
+    pub reach: Option<f32>,
+    /// The kinds it wants.
+    pub mask: u32,
+}
+
 impl CellIndex {
-    /// Calls `visit(slot, kind, position)` for every body of a kind in `mask` (bit `k`: kind
-    /// `k`) in the 3×3 cells around `pos`, with its position when the grid was built. Each
+    /// Calls `visit(slot, kind, position)` for every body `near` asks for, with its position
+    /// when the grid was built. Each
     /// body once, in a fixed order: kind by kind in increasing order, then row by row of the
     /// block, each row's cells from left to right (as the block wraps), by increasing slot
     /// inside a cell. Since buckets are kind-major, the cells of a row that are neighbours
     /// in the grid too are one run of entries: three runs per kind, not nine. With a
-    /// [`CellIndex::cap`], the query stops after that many entries.
+    /// [`CellIndex::cap`], the query stops after that many entries, and reads the whole
+    /// block whatever the reach, so that a cap counts the same entries at every reach.
     #[inline(always)]
-    pub fn for_each_near(
-        &self,
-        space: &Space,
-        pos: Vec2,
-        mask: u32,
-        mut visit: impl FnMut(u32, u32, Vec2),
-    ) {
-        let block = NearBlock::new(space, pos);
-        let mut rest = mask & kinds_mask(self.kinds);
+    pub fn for_each_near(&self, space: &Space, near: Near, mut visit: impl FnMut(u32, u32, Vec2)) {
+        let block = self.block(space, near);
+        let mut rest = near.mask & kinds_mask(self.kinds);
         // Entries the cap still allows.
         let mut left = if self.cap == 0 { u32::MAX } else { self.cap };
         while rest != 0 {
@@ -352,6 +360,16 @@ impl CellIndex {
         }
     }
 
+    /// The block a query reads: the whole 3×3 block without a reach or under a cap.
+    #[inline(always)]
+    fn block(&self, space: &Space, near: Near) -> NearBlock {
+        let (rows, cols) = match near.reach {
+            Some(reach) if self.cap == 0 => space.neighbourhood_within(near.pos, reach),
+            _ => space.neighbourhood(near.pos),
+        };
+        NearBlock { rows, cols }
+    }
+
     /// Entry `entry`'s slot and position, or the last entry's past `end` (`0 < end`, and
     /// entries `.. end` lie in the grid), asked for now (see [`asked`]): the one-thread query
     /// reads one entry ahead of the one it visits, so that it waits for the entries' memory
@@ -368,28 +386,27 @@ impl CellIndex {
     /// (`Some` for the bodies that count), and every lane `fold`s the results in the order
     /// of the plain query, so the fold ends the same bit for bit as
     /// `for_each_near` with `test` and `fold` in one closure would. Every lane of the team
-    /// must call it with the same `pos` and `mask`.
+    /// must call it with the same `near`.
     #[inline(always)]
     pub fn for_each_near_in<R: Handed + Default>(
         &self,
         team: Team,
         space: &Space,
-        pos: Vec2,
-        mask: u32,
+        near: Near,
         test: impl Fn(u32, u32, Vec2) -> Option<R>,
         mut fold: impl FnMut(R),
     ) {
         let (lane, width) = team.stride();
         if width == 1 {
             // One thread walks every entry: the plain query.
-            self.for_each_near(space, pos, mask, |slot, kind, at| {
+            self.for_each_near(space, near, |slot, kind, at| {
                 if let Some(found) = test(slot, kind, at) {
                     fold(found);
                 }
             });
             return;
         }
-        let runs = self.near_runs(space, pos, mask);
+        let runs = self.near_runs(space, near);
         let count = runs.count();
         let mut left = if self.cap == 0 { u32::MAX } else { self.cap };
         let mut base = 0;
@@ -421,35 +438,26 @@ impl CellIndex {
         }
     }
 
-    /// The runs of entries that [`CellIndex::for_each_near`] visits around `pos` for the kinds
-    /// in `mask`, to be taken by index (a warp's lanes take one each). The cap is not
-    /// applied: the caller counts entries against [`CellIndex::cap`] in visiting order.
+    /// The runs of entries that [`CellIndex::for_each_near`] visits for `near`, to be taken
+    /// by index (a warp's lanes take one each). The cap is not applied: the caller counts
+    /// entries against [`CellIndex::cap`] in visiting order.
     #[inline(always)]
-    pub fn near_runs(&self, space: &Space, pos: Vec2, mask: u32) -> NearRuns {
-        let mask = mask & kinds_mask(self.kinds);
+    pub fn near_runs(&self, space: &Space, near: Near) -> NearRuns {
+        let mask = near.mask & kinds_mask(self.kinds);
         NearRuns {
-            block: NearBlock::new(space, pos),
+            block: self.block(space, near),
             mask,
             kinds: mask.count_ones(),
         }
     }
 }
 
-/// The rows of a query's 3×3 block, and its columns (taken as runs of consecutive
-/// columns), in visiting order.
+/// The rows of a query's block, and its columns (taken as runs of consecutive columns),
+/// in visiting order.
 #[derive(Clone, Copy, Debug)]
 pub struct NearBlock {
     rows: Span,
     cols: Span,
-}
-
-impl NearBlock {
-    /// The block around `pos`.
-    #[inline(always)]
-    fn new(space: &Space, pos: Vec2) -> Self {
-        let (rows, cols) = space.neighbourhood(pos);
-        NearBlock { rows, cols }
-    }
 }
 
 /// The runs of one query of the grid in visiting order: kind by kind, row by row, run by

@@ -45,8 +45,10 @@ pub struct KindInfo {
     /// bodies die when the controller says so, not when their energy runs out, so that the
     /// machine's "checking energy" and "dead" states see it happen.
     pub controlled: u32,
-    /// Keeps the struct free of implicit padding.
-    pub reserved: u32,
+    /// The farthest apart, along either axis, that a body of this kind and one of a kind it
+    /// collides with can be and still touch: its [`KindInfo::radius`] plus the largest of
+    /// theirs (0 if it collides with nothing). The narrow phase's query reaches no farther.
+    pub contact_reach: f32,
 }
 
 impl KindInfo {

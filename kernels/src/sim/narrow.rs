@@ -10,7 +10,7 @@
 use glam::Vec2;
 
 use super::bodies::{Bodies, Contacts};
-use super::broad::CellIndex;
+use super::broad::{CellIndex, Near};
 use super::contact::{contact, tie_break};
 use super::kinds::{Bound, KindInfo, SlotRange};
 use super::space::Space;
@@ -195,11 +195,15 @@ fn collide_bounds<const RECTS: bool>(t: Thread, args: &CollideArgs) {
         let info = args.kinds.get(kind);
         let inv = inverse_mass(mass);
         // Only the kinds it collides with: the grid's buckets skip the others unread.
+        let near = Near {
+            pos,
+            reach: Some(info.contact_reach),
+            mask: info.collides_with,
+        };
         args.grid.for_each_near_in(
             team,
             &args.space,
-            pos,
-            info.collides_with,
+            near,
             |other, other_kind, at| {
                 if other == slot {
                     return None;

@@ -95,7 +95,28 @@ impl Space {
             Span::around(col, self.cols, self.wraps()),
         )
     }
+
+    /// [`Space::neighbourhood`] less the neighbouring rows and columns that lie wholly
+    /// farther than `reach` from `pos` (at most a cell's side): what a query that finds
+    /// nothing farther than `reach` along either axis needs to read.
+    #[inline(always)]
+    pub fn neighbourhood_within(&self, pos: Vec2, reach: f32) -> (Span, Span) {
+        let (col, row) = self.cell_coords(pos);
+        // The same products `cell_coords` rounds down, so the grid's cells and the spans'
+        // bounds agree.
+        let at = pos * self.inv_cell;
+        let reach = Vec2::splat(reach) * self.inv_cell;
+        (
+            Span::within(row, self.rows, self.wraps(), at.y, reach.y),
+            Span::within(col, self.cols, self.wraps(), at.x, reach.x),
+        )
+    }
 }
+
+/// The relative margin by which a neighbouring row or column must lie beyond a query's reach
+/// to be left out: many times the rounding of the grid coordinates and of the distances the
+/// queries test, so that leaving it out never loses a body the full block would have found.
+const SLACK: f32 = 1.0 / 524_288.0;
 
 /// At most three distinct grid indices below `n`, consecutive but for a wrap from `n - 1`
 /// to 0: the rows or the columns of a query's block. Plain numbers rather than a list, so
@@ -135,6 +156,29 @@ impl Span {
                     n,
                 }
             }
+        }
+    }
+
+    /// [`Span::around`] without the neighbour below `i` when nothing within `reach` of `t`
+    /// lies in it, and likewise above (`t`: the position in cells, whose cell is `i`;
+    /// `reach` in cells). NaN keeps both.
+    #[inline(always)]
+    fn within(i: u32, n: u32, wraps: bool, t: f32, reach: f32) -> Span {
+        let full = Span::around(i, n, wraps);
+        if wraps && n < 3 {
+            // The same index lies both below and above.
+            return full;
+        }
+        let slack = (t.abs() + reach + 2.0) * SLACK;
+        let below = full.first != i;
+        let above = full.count > 1 + u32::from(below);
+        // Cell `i - 1` ends at `i`, cell `i + 1` starts at `i + 1`.
+        let skip_below = below && t - reach - slack >= i as f32;
+        let skip_above = above && t + reach + slack < (i + 1) as f32;
+        Span {
+            first: if skip_below { i } else { full.first },
+            count: full.count - u32::from(skip_below) - u32::from(skip_above),
+            n,
         }
     }
 
