@@ -3,7 +3,8 @@
 //! A body that expects many neighbours walks them with a team of lanes, so that a crowded
 //! query no longer holds its warp (and at a small world's size, the whole launch) for
 //! hundreds of steps. The results are the same bit for bit whatever the widths (the kernels
-//! fold what the lanes find in the order of one thread), so the choice is speed only.
+//! fold what the lanes find in the order of one thread, or merge exact sums), so the choice
+//! is speed only.
 
 use gpuwars_kernels::game::ai::sight_mask;
 use gpuwars_kernels::game::fsm::Machine;

@@ -102,6 +102,24 @@ impl Handed for i32 {
     }
 }
 
+impl Handed for u64 {
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_from(self, source: u32, members: u32) -> Self {
+        let low = (self as u32).shuffle_from(source, members);
+        let high = ((self >> 32) as u32).shuffle_from(source, members);
+        u64::from(high) << 32 | u64::from(low)
+    }
+}
+
+impl Handed for i64 {
+    #[cfg(target_arch = "nvptx64")]
+    #[inline(always)]
+    fn shuffle_from(self, source: u32, members: u32) -> Self {
+        (self as u64).shuffle_from(source, members) as i64
+    }
+}
+
 impl Handed for f32 {
     #[cfg(target_arch = "nvptx64")]
     #[inline(always)]
@@ -353,6 +371,31 @@ impl Team {
         }
         if let Some(value) = found {
             fold(value);
+        }
+    }
+
+    /// Every lane's `value` merged into one, in every lane (a butterfly over the team's
+    /// lanes). The lanes merge in different orders, so `merge` must be associative and
+    /// commutative (integer sums, a least key) for them to agree, and then the result is
+    /// what one thread merging the values in any order would get. On the CPU, where lane 0
+    /// holds the whole team's value, `value` itself.
+    #[inline(always)]
+    pub fn merge<R: Handed>(&self, value: R, merge: impl Fn(R, R) -> R) -> R {
+        #[cfg(target_arch = "nvptx64")]
+        {
+            let mut value = value;
+            let mut distance = 1;
+            while distance < self.width {
+                let other = value.shuffle_from(self.first + (self.lane ^ distance), self.members());
+                value = merge(value, other);
+                distance *= 2;
+            }
+            value
+        }
+        #[cfg(not(target_arch = "nvptx64"))]
+        {
+            let _ = merge;
+            value
         }
     }
 

@@ -100,36 +100,102 @@ pub fn threat(d: Vec2, rel: Vec2, radius: f32) -> Option<(f32, Vec2)> {
     Some((time, away))
 }
 
-/// What one body a query found means to the looking body, as the lane that found it hands
-/// it on (four words: the fewer, the fewer registers the one-thread kernel needs).
-#[derive(Clone, Copy, Default)]
+/// What a lane has seen of a body's surroundings, as sums that come out the same in any
+/// order (so that a team's lanes can each look at a share of the bodies and merge): the
+/// offsets in fixed point, whose integer sums are exact, and the soonest threat as the
+/// least key. The ship's offset and the threat's way out are worked out again once the
+/// look is over, from the same positions, so that the walk keeps fewer registers (the
+/// one-thread `think` spills at its 56).
+#[derive(Clone, Copy)]
 struct Seen {
-    /// [`SEEN_SHIP`], [`SEEN_SIMILAR`] or [`SEEN_THREAT`].
-    what: u32,
-    /// The ship or a similar body: the offset to it; a threat: the way out of its path.
-    toward: Vec2,
-    /// A threat: seconds to its closest approach.
-    time: f32,
+    /// Non-zero once the ship is seen.
+    ship_seen: u32,
+    /// Bodies of its own kind seen.
+    similar: u32,
+    /// The sum of the offsets to them, in units of `1 / scale` (see [`fixed_scale`]).
+    sum: [i64; 2],
+    /// The sum of the unit offsets to those inside its personal space, in units of
+    /// [`UNIT_SCALE`]`⁻¹`.
+    crowd: [i64; 2],
+    /// The soonest threat's seconds to its closest approach (as bits) above its slot;
+    /// `u64::MAX` for none. Ties go to the lower slot.
+    threat: u64,
+}
+
+impl Seen {
+    /// Nothing seen.
+    const NONE: Seen = Seen {
+        ship_seen: 0,
+        similar: 0,
+        sum: [0; 2],
+        crowd: [0; 2],
+        threat: u64::MAX,
+    };
+
+    /// What `self` and `other` saw together: the same whichever is which.
+    #[inline(always)]
+    fn merge(self, other: Seen) -> Seen {
+        let add = |a: [i64; 2], b: [i64; 2]| [a[0].wrapping_add(b[0]), a[1].wrapping_add(b[1])];
+        Seen {
+            ship_seen: self.ship_seen | other.ship_seen,
+            similar: self.similar.wrapping_add(other.similar),
+            sum: add(self.sum, other.sum),
+            crowd: add(self.crowd, other.crowd),
+            threat: self.threat.min(other.threat),
+        }
+    }
 }
 
 impl Handed for Seen {
     #[cfg(target_arch = "nvptx64")]
     #[inline(always)]
     fn shuffle_from(self, source: u32, members: u32) -> Self {
+        let pair = |v: [i64; 2]| {
+            [
+                v[0].shuffle_from(source, members),
+                v[1].shuffle_from(source, members),
+            ]
+        };
         Seen {
-            what: self.what.shuffle_from(source, members),
-            toward: self.toward.shuffle_from(source, members),
-            time: self.time.shuffle_from(source, members),
+            ship_seen: self.ship_seen.shuffle_from(source, members),
+            similar: self.similar.shuffle_from(source, members),
+            sum: pair(self.sum),
+            crowd: pair(self.crowd),
+            threat: self.threat.shuffle_from(source, members),
         }
     }
 }
 
-/// [`Seen::what`] of the ship.
-const SEEN_SHIP: u32 = 0;
-/// [`Seen::what`] of a body of the looker's own kind.
-const SEEN_SIMILAR: u32 = 1;
-/// [`Seen::what`] of a shot coming its way.
-const SEEN_THREAT: u32 = 2;
+/// The fixed-point scale of unit vectors' components: 2³⁰.
+const UNIT_SCALE: f32 = (1u32 << 30) as f32;
+
+/// The power of two that scales a component of at most `bound` in magnitude to below
+/// 2³⁰, so that 2³² of them sum exactly in an `i64` (the finest such scale: `bound`'s
+/// resolution is kept down to 2⁻²⁹ of it).
+#[inline(always)]
+pub fn fixed_scale(bound: f32) -> f32 {
+    // `bound` lies in [2^(e - 1), 2^e) for a normal number.
+    let e = ((bound.to_bits() >> 23) & 0xff) as i32 - 126;
+    let exponent = (30 - e).clamp(-126, 127);
+    f32::from_bits(((exponent + 127) as u32) << 23)
+}
+
+/// `v` in fixed point at `scale` (truncated; `as` saturates, and NaN becomes 0, on both
+/// targets). A component below 2³⁰ at `scale` fits an `i32`, whose conversion the GPU
+/// does at full rate (to an `i64` it costs several times more).
+#[inline(always)]
+fn fixed(v: Vec2, scale: f32) -> [i64; 2] {
+    [
+        i64::from((v.x * scale) as i32),
+        i64::from((v.y * scale) as i32),
+    ]
+}
+
+/// `v` back from fixed point at `scale`.
+#[inline(always)]
+fn unfixed(v: [i64; 2], scale: f32) -> Vec2 {
+    Vec2::new(v[0] as f32, v[1] as f32) * (1.0 / scale)
+}
 
 /// The kinds a `machine` body driven by `brain` looks for (bit `k`: kind `k`): the ship's,
 /// and unless it is a kamikaze its own kind and, if it avoids bullets, the shots'.
@@ -183,9 +249,7 @@ pub fn look(
     let personal = PERSONAL_SPACE_RADII * radius;
     let social = machine != Machine::Kamikaze;
     let dodges = social && brain.avoid_bullets != 0;
-    let mut sight = Sight::default();
-    let (mut sum, mut similar) = (Vec2::ZERO, 0u32);
-    let mut soonest = f32::INFINITY;
+    let scale = fixed_scale(brain.vision);
     let mask = sight_mask(brain, machine, ship_kind, args.shot_kind);
     // The whole block: reading only the cells within its vision made `think` slower
     // (paper 14.8 -> 17.2 µs on an H200), though fewer entries.
@@ -194,63 +258,56 @@ pub fn look(
         reach: None,
         mask,
     };
-    args.grid.for_each_near_in(
+    let seen = args.grid.merge_near_in(
         team,
         &args.space,
         near,
-        |other, kind, at| {
+        Seen::NONE,
+        |mut seen, other, kind, at| {
             if other == slot {
-                return None;
+                return seen;
             }
             let offset = args.space.offset(pos, at);
             let dist2 = offset.length_squared();
             if dist2 > vision2 {
-                return None;
+                return seen;
             }
             if other == args.ship {
-                Some(Seen {
-                    what: SEEN_SHIP,
-                    toward: offset,
-                    time: 0.0,
-                })
+                seen.ship_seen = 1;
             } else if social && kind == brain.kind {
-                Some(Seen {
-                    what: SEEN_SIMILAR,
-                    toward: offset,
-                    time: 0.0,
-                })
-            } else if dodges && kind == args.shot_kind {
-                let (time, away) = threat(offset, b.vel.get(other) - vel, radius)?;
-                Some(Seen {
-                    what: SEEN_THREAT,
-                    toward: away,
-                    time,
-                })
-            } else {
-                None
-            }
-        },
-        |seen| match seen.what {
-            SEEN_SHIP => sight.ship = Some(seen.toward),
-            SEEN_SIMILAR => {
-                sum += seen.toward;
-                similar += 1;
-                if seen.toward.length_squared() < personal * personal {
-                    sight.crowd -= seen.toward.normalize_or_zero();
+                seen.similar = seen.similar.wrapping_add(1);
+                let [x, y] = fixed(offset, scale);
+                seen.sum = [seen.sum[0].wrapping_add(x), seen.sum[1].wrapping_add(y)];
+                if dist2 < personal * personal {
+                    let [x, y] = fixed(offset.normalize_or_zero(), UNIT_SCALE);
+                    seen.crowd = [seen.crowd[0].wrapping_add(x), seen.crowd[1].wrapping_add(y)];
                 }
+            } else if dodges
+                && kind == args.shot_kind
+                && let Some((time, _)) = threat(offset, b.vel.get(other) - vel, radius)
+                && time >= 0.0
+            {
+                // Seconds ahead are positive, so their bits order as they do (NaN, never).
+                let key = u64::from(time.to_bits()) << 32 | u64::from(other);
+                seen.threat = seen.threat.min(key);
             }
-            _ => {
-                if seen.time < soonest {
-                    soonest = seen.time;
-                    sight.dodge = Some(seen.toward);
-                }
-            }
+            seen
         },
+        Seen::merge,
     );
-    if similar > 0 {
-        sight.group = Some(sum / similar as f32);
+    // The bodies have not moved since the grid was built, so their positions now are the
+    // ones the look measured from.
+    let dodge = (seen.threat != u64::MAX).then(|| {
+        let other = seen.threat as u32;
+        let offset = args.space.offset(pos, b.pos.get(other));
+        threat(offset, b.vel.get(other) - vel, radius).map_or(Vec2::ZERO, |(_, away)| away)
+    });
+    Sight {
+        ship: (seen.ship_seen != 0).then(|| args.space.offset(pos, b.pos.get(args.ship))),
+        group: (seen.similar > 0).then(|| unfixed(seen.sum, scale) / seen.similar as f32),
+        crowd: -unfixed(seen.crowd, UNIT_SCALE),
+        dodge,
     }
-    sight
 }
 
 /// The velocity a body in `state` wants, and the wandering heading it keeps.

@@ -406,29 +406,80 @@ impl CellIndex {
             });
             return;
         }
+        self.walk_runs_in(team, space, near, |kind, start, end| {
+            let mut first = start;
+            while first < end {
+                let entry = first + lane;
+                let found = if entry < end {
+                    test(self.slots.get(entry), kind, self.pos.get(entry))
+                } else {
+                    None
+                };
+                team.fold_found(found, &mut fold);
+                first += width;
+            }
+        });
+    }
+
+    /// [`CellIndex::for_each_near`] shared by a `team` of lanes for a result that does not
+    /// depend on the order in which the bodies come: each lane `add`s every team-width-th
+    /// entry of each run to its own value (from `init`), and the lanes' values are merged
+    /// across the team (see [`Team::merge`]). Where `add` and `merge` are free of order
+    /// (exact integer sums, least keys), every lane gets what one thread adding every entry
+    /// gets, bit for bit, without handing each body found to every lane. Every lane of the
+    /// team must call it with the same `near`.
+    #[inline(always)]
+    pub fn merge_near_in<A: Handed>(
+        &self,
+        team: Team,
+        space: &Space,
+        near: Near,
+        init: A,
+        add: impl Fn(A, u32, u32, Vec2) -> A,
+        merge: impl Fn(A, A) -> A,
+    ) -> A {
+        let (lane, width) = team.stride();
+        let mut value = init;
+        if width == 1 {
+            self.for_each_near(space, near, |slot, kind, at| {
+                value = add(value, slot, kind, at);
+            });
+            return value;
+        }
+        self.walk_runs_in(team, space, near, |kind, start, end| {
+            let mut entry = start + lane;
+            while entry < end {
+                value = add(value, self.slots.get(entry), kind, self.pos.get(entry));
+                entry += width;
+            }
+        });
+        team.merge(value, merge)
+    }
+
+    /// Hands `run(kind, start, end)` every run of entries of `near` in visiting order, cut
+    /// at the cap, in every lane of `team` (wider than one lane): the lanes load the runs'
+    /// bounds side by side, so the team waits for memory once for up to a team width of
+    /// runs, not once a run.
+    #[inline(always)]
+    fn walk_runs_in(
+        &self,
+        team: Team,
+        space: &Space,
+        near: Near,
+        mut run: impl FnMut(u32, u32, u32),
+    ) {
+        let (lane, width) = team.stride();
         let runs = self.near_runs(space, near);
         let count = runs.count();
         let mut left = if self.cap == 0 { u32::MAX } else { self.cap };
         let mut base = 0;
         while base < count {
-            // Each lane loads one run's bounds, so the team waits for memory once for up to
-            // `width` runs, not once a run; then the runs are walked in order.
             let (kind, start, end) = runs.get(self, space, base + lane);
             for j in 0..width.min(count - base) {
                 let kind = team.share(kind, j);
                 let start = team.share(start, j);
                 let end = team.share(end, j).min(start.saturating_add(left));
-                let mut first = start;
-                while first < end {
-                    let entry = first + lane;
-                    let found = if entry < end {
-                        test(self.slots.get(entry), kind, self.pos.get(entry))
-                    } else {
-                        None
-                    };
-                    team.fold_found(found, &mut fold);
-                    first += width;
-                }
+                run(kind, start, end);
                 left -= end.saturating_sub(start);
                 if left == 0 {
                     return;
