@@ -45,26 +45,12 @@ pub(crate) unsafe fn threads<A: KernelArgs>(
     unsafe { threads_in(kernel, threads, BLOCK, args, binder, bytes) }
 }
 
-/// [`threads`] in blocks of [`LIGHT_BLOCK`], for kernels whose threads do little.
+/// [`threads`] in blocks of `block` threads ([`LIGHT_BLOCK`] for kernels whose threads do
+/// little).
 ///
 /// # Safety
 /// As for [`Op::launch`].
-pub(crate) unsafe fn light_threads<A: KernelArgs>(
-    kernel: Kernel<A>,
-    threads: u32,
-    args: A,
-    binder: Binder,
-    bytes: u64,
-) -> Op {
-    // SAFETY: forwarded.
-    unsafe { threads_in(kernel, threads, LIGHT_BLOCK, args, binder, bytes) }
-}
-
-/// [`threads`] in blocks of `block` threads.
-///
-/// # Safety
-/// As for [`Op::launch`].
-unsafe fn threads_in<A: KernelArgs>(
+pub(crate) unsafe fn threads_in<A: KernelArgs>(
     kernel: Kernel<A>,
     threads: u32,
     block: u32,

@@ -7,7 +7,7 @@ use gpuwars_kernels::sim::broad::{self, CountArgs, MergeArgs, OrderArgs, PlaceAr
 use crate::Op;
 use crate::backend::Binder;
 use crate::pipeline::world::World;
-use crate::primitives::{light_threads, threads};
+use crate::primitives::{LIGHT_BLOCK, threads, threads_in};
 
 /// The broad phase's launches, a thread a slot each, if the world has a grid.
 pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
@@ -54,9 +54,10 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     };
     let buckets = g.counts.len() as u64;
     ops.push(unsafe {
-        light_threads(
+        threads_in(
             registry::PLACE_IN_CELLS,
             slots,
+            LIGHT_BLOCK,
             place,
             b,
             16 * u64::from(slots) + 4 * buckets,

@@ -8,7 +8,7 @@ use gpuwars_kernels::sim::free_list::{FreeMarks, GatherArgs, MarkArgs, MarkGathe
 use crate::Op;
 use crate::backend::Binder;
 use crate::pipeline::world::World;
-use crate::primitives::{light_threads, threads};
+use crate::primitives::{LIGHT_BLOCK, threads, threads_in};
 
 /// Mark and gather, a thread a slot each, with the scan of the tiles' counts between them;
 /// or both in one launch where the world's ranges allow (see `Config::free_in_one_launch`).
@@ -46,8 +46,16 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         tiles: b.view(&marks.tiles),
     };
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
-    let mut ops =
-        vec![unsafe { light_threads(registry::MARK_FREE, slots, mark, b, 12 * u64::from(slots)) }];
+    let mut ops = vec![unsafe {
+        threads_in(
+            registry::MARK_FREE,
+            slots,
+            LIGHT_BLOCK,
+            mark,
+            b,
+            12 * u64::from(slots),
+        )
+    }];
     // In place, over one more element than the tiles: the last becomes the total.
     ops.extend(
         world
@@ -67,9 +75,10 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     };
     // SAFETY: as above.
     ops.push(unsafe {
-        light_threads(
+        threads_in(
             registry::GATHER_FREE,
             slots,
+            LIGHT_BLOCK,
             gather,
             b,
             12 * u64::from(slots),
