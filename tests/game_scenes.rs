@@ -244,8 +244,9 @@ fn the_autopilot_survives_a_minute_of_the_paper_scene(device: &Device) {
     );
 }
 
-/// A team of lanes a body folds what its lanes find in the order of one thread: whatever the
-/// width, every scene plays the game of one thread a body on the CPU, bit for bit.
+/// A team of lanes a body folds what its lanes find in the order of one thread (contacts) or
+/// merges exact sums (sight): whatever the width, every scene plays the game of one thread a
+/// body on the CPU, bit for bit.
 fn teams_of_any_width_play_the_game_of_one_thread_a_body(device: &Device) {
     let hash = |device: &Device, scene: &Scene, lanes: Lanes| {
         let options = Options {
