@@ -135,12 +135,11 @@ impl Seen {
     /// What `self` and `other` saw together: the same whichever is which.
     #[inline(always)]
     fn merge(self, other: Seen) -> Seen {
-        let add = |a: [i64; 2], b: [i64; 2]| [a[0].wrapping_add(b[0]), a[1].wrapping_add(b[1])];
         Seen {
             ship_seen: self.ship_seen | other.ship_seen,
             similar: self.similar.wrapping_add(other.similar),
-            sum: add(self.sum, other.sum),
-            crowd: add(self.crowd, other.crowd),
+            sum: add_fixed(self.sum, other.sum),
+            crowd: add_fixed(self.crowd, other.crowd),
             threat: self.threat.min(other.threat),
         }
     }
@@ -191,6 +190,12 @@ fn fixed(v: Vec2, scale: f32) -> [i64; 2] {
     ]
 }
 
+/// The sum of two fixed-point vectors (wrapping, so exact in any order).
+#[inline(always)]
+fn add_fixed(a: [i64; 2], b: [i64; 2]) -> [i64; 2] {
+    [a[0].wrapping_add(b[0]), a[1].wrapping_add(b[1])]
+}
+
 /// `v` back from fixed point at `scale`.
 #[inline(always)]
 fn unfixed(v: [i64; 2], scale: f32) -> Vec2 {
@@ -228,7 +233,8 @@ pub struct Looker {
 }
 
 /// What `looker`, a `machine` body driven by `brain`, sees: only bodies within its vision,
-/// found through the grid's 3×3 neighbourhood by its `team` (every lane gets the same). A kamikaze looks only for the ship.
+/// found through the grid's 3×3 neighbourhood by its `team` (every lane gets the same). A
+/// kamikaze looks only for the ship.
 #[inline(always)]
 pub fn look(
     args: &ThinkArgs,
@@ -276,11 +282,10 @@ pub fn look(
                 seen.ship_seen = 1;
             } else if social && kind == brain.kind {
                 seen.similar = seen.similar.wrapping_add(1);
-                let [x, y] = fixed(offset, scale);
-                seen.sum = [seen.sum[0].wrapping_add(x), seen.sum[1].wrapping_add(y)];
+                seen.sum = add_fixed(seen.sum, fixed(offset, scale));
                 if dist2 < personal * personal {
-                    let [x, y] = fixed(offset.normalize_or_zero(), UNIT_SCALE);
-                    seen.crowd = [seen.crowd[0].wrapping_add(x), seen.crowd[1].wrapping_add(y)];
+                    let away = fixed(offset.normalize_or_zero(), UNIT_SCALE);
+                    seen.crowd = add_fixed(seen.crowd, away);
                 }
             } else if dodges
                 && kind == args.shot_kind

@@ -6,8 +6,8 @@
 //! neighbours gets `width` threads a body (a [`Team`]), which split the walk
 //! ([`crate::sim::broad::CellIndex::for_each_near_in`]) and fold what they find in the
 //! order one thread would, or merge exact sums
-//! ([`crate::sim::broad::CellIndex::merge_near_in`]). Each kind keeps its own range of threads, so a warp still runs
-//! one kind's code (the paper's grouped warps).
+//! ([`crate::sim::broad::CellIndex::merge_near_in`]). Each kind keeps its own range of
+//! threads, so a warp still runs one kind's code (the paper's grouped warps).
 
 use crate::warp::{Team, WARP};
 use crate::{DevSlice, Thread};
