@@ -57,10 +57,12 @@ pub(super) struct Gpu {
     in_flight: Arc<InFlight>,
     /// The capture in progress, if any: the thread recording and its private stream.
     capture: Mutex<Option<(ThreadId, Arc<CudaStream>)>>,
-    /// The stream of the ops a plan runs beside its others (see [`Gpu::beside`]).
-    side: Arc<CudaStream>,
-    /// The thread issuing an op beside the others, if any: its launches go to `side`.
-    beside: Mutex<Option<ThreadId>>,
+    /// The streams of the ops a plan runs beside its others, one a branch (see
+    /// [`Gpu::beside`]).
+    sides: Vec<Arc<CudaStream>>,
+    /// The thread issuing an op beside the others, if any, and its branch: its launches go
+    /// to that branch's stream.
+    beside: Mutex<Option<(ThreadId, usize)>>,
     functions: HashMap<&'static str, CudaFunction>,
     properties: GpuProperties,
     /// Whether launches carry programmatic stream serialization (start before the launch
@@ -238,7 +240,7 @@ impl Gpu {
         // One stream orders every copy and free; the per-buffer events cudarc keeps for
         // multi-stream use would only cost time.
         // SAFETY: cudarc's buffers are only copied and freed on the device's stream; the
-        // kernels a plan runs beside the others (on `side`) view buffers through their
+        // kernels a plan runs beside the others (on `sides`) view buffers through their
         // arguments, not through cudarc, and the plan joins them back into the device's
         // stream before anything queued after it.
         unsafe { ctx.disable_event_tracking() };
@@ -273,15 +275,18 @@ impl Gpu {
             functions.insert(info.name, function);
         }
         let properties = properties(&ctx, arch).map_err(in_flight.failed("querying device 0"))?;
-        let side = ctx
-            .new_stream()
-            .map_err(in_flight.failed("creating a stream"))?;
+        let sides = (0..BRANCHES)
+            .map(|_| {
+                ctx.new_stream()
+                    .map_err(in_flight.failed("creating a stream"))
+            })
+            .collect::<Result<_, _>>()?;
         Ok(Gpu {
             ctx,
             stream,
             in_flight,
             capture: Mutex::new(None),
-            side,
+            sides,
             beside: Mutex::new(None),
             functions,
             properties,
@@ -399,7 +404,7 @@ impl Gpu {
         };
         let param = Param(args);
         let stream = self.launch_stream();
-        let aside = Arc::ptr_eq(&stream, &self.side);
+        let aside = self.sides.iter().any(|side| Arc::ptr_eq(&stream, side));
         // A launch beside the others follows an event, not a kernel: nothing to start early.
         let launched = if self.dependent_launch() && !aside {
             // SAFETY: as below; the sm_90 module's entries wait for their predecessor.
@@ -430,24 +435,34 @@ impl Gpu {
             .is_some_and(|(thread, _)| *thread == std::thread::current().id())
     }
 
-    /// Issues what `issue` launches beside the work that follows it: on a stream of its own
-    /// that first waits for the work queued so far (on the device's stream, or in the
-    /// capture this thread records), until [`Gpu::rejoin`].
-    pub(super) fn beside(&self, issue: impl FnOnce() -> Result<(), Error>) -> Result<(), Error> {
-        self.side
+    /// Issues what `issue` launches beside the work that follows it, as branch `branch`:
+    /// on a stream of its own that first waits for the work queued so far (on the device's
+    /// stream, or in the capture this thread records), until [`Gpu::rejoin`]. Branches
+    /// past the [`BRANCHES`] streams share them, each after the one before on its stream.
+    pub(super) fn beside(
+        &self,
+        branch: usize,
+        issue: impl FnOnce() -> Result<(), Error>,
+    ) -> Result<(), Error> {
+        let branch = branch % BRANCHES;
+        self.sides[branch]
             .join(&self.launch_stream())
             .map_err(self.failed("forking a stream"))?;
-        *self.beside.lock().unwrap_or_else(|e| e.into_inner()) = Some(std::thread::current().id());
+        let here = std::thread::current().id();
+        *self.beside.lock().unwrap_or_else(|e| e.into_inner()) = Some((here, branch));
         let issued = issue();
         *self.beside.lock().unwrap_or_else(|e| e.into_inner()) = None;
         issued
     }
 
-    /// Makes the work queued from now on wait for everything issued [`Gpu::beside`].
-    pub(super) fn rejoin(&self) -> Result<(), Error> {
-        self.launch_stream()
-            .join(&self.side)
-            .map_err(self.failed("joining a stream"))
+    /// Makes the work queued from now on wait for everything issued [`Gpu::beside`] in
+    /// the first `branches` branches.
+    pub(super) fn rejoin(&self, branches: usize) -> Result<(), Error> {
+        let main = self.launch_stream();
+        for side in self.sides.iter().take(branches) {
+            main.join(side).map_err(self.failed("joining a stream"))?;
+        }
+        Ok(())
     }
 
     /// Queues a clear of `bytes` bytes at device address `addr`.
@@ -461,13 +476,15 @@ impl Gpu {
             .map_err(self.failed("clearing device memory"))
     }
 
-    /// The stream this thread's launches and clears go to: the side stream while it issues
-    /// beside the others, else the device's stream, or the private stream of a capture
+    /// The stream this thread's launches and clears go to: its branch's stream while it
+    /// issues beside the others, else the device's stream, or the private stream of a capture
     /// this thread is recording.
     fn launch_stream(&self) -> Arc<CudaStream> {
         let here = std::thread::current().id();
-        if *self.beside.lock().unwrap_or_else(|e| e.into_inner()) == Some(here) {
-            return self.side.clone();
+        if let Some((thread, branch)) = *self.beside.lock().unwrap_or_else(|e| e.into_inner())
+            && thread == here
+        {
+            return self.sides[branch].clone();
         }
         let capture = self.capture.lock().unwrap_or_else(|e| e.into_inner());
         match &*capture {
@@ -672,6 +689,10 @@ pub(super) fn address<T>(slice: &CudaSlice<T>) -> u64 {
     let (addr, _guard) = slice.device_ptr(slice.stream());
     addr
 }
+
+/// Streams for the branches of a plan (see [`Gpu::beside`]): the autopilot's and the
+/// explosions'.
+const BRANCHES: usize = 2;
 
 /// Launches `function` on `stream` with programmatic stream serialization: its blocks may
 /// start once every block of the launch before it has signalled its dependents or ended

@@ -138,7 +138,8 @@ pub struct Device {
 
 enum Imp {
     Cpu(cpu::Emulator),
-    Cuda(cuda::Gpu),
+    // Boxed: the GPU's handles are several times the emulator's.
+    Cuda(Box<cuda::Gpu>),
 }
 
 /// A buffer of `T` in the device's memory (host memory under the emulator).
@@ -330,7 +331,7 @@ impl Device {
     /// The first CUDA device, with the kernels' PTX loaded.
     pub fn cuda(reason: &str) -> Result<Device, Error> {
         Ok(Device {
-            imp: Imp::Cuda(cuda::Gpu::open()?),
+            imp: Imp::Cuda(Box::new(cuda::Gpu::open()?)),
             reason: reason.to_string(),
             launches: None,
             allocated: AtomicU64::new(0),

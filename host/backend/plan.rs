@@ -155,7 +155,8 @@ impl Op {
     }
 
     /// The same op, run beside the ops after it in its plan: on the GPU on a stream of its
-    /// own, which the plan joins back at its end (a graph branch), so that it costs the
+    /// own (another op beside the others gets another), which the plan joins back at its
+    /// end (a graph branch), so that it costs the
     /// step nothing while they run longer; in order on the CPU.
     ///
     /// # Safety
@@ -255,21 +256,21 @@ impl Device {
         Ok(Plan { graph, ops })
     }
 
-    /// Issues `ops` in order, those marked [`Op::beside`] on the GPU's side stream, joined
-    /// back after the last.
+    /// Issues `ops` in order, each marked [`Op::beside`] on a side stream of its own (a
+    /// branch), joined back after the last.
     fn issue_all(&self, ops: &[Op]) -> Result<(), Error> {
-        let mut apart = false;
+        let mut branches = 0;
         for op in ops {
             match &self.imp {
                 Imp::Cuda(gpu) if op.beside => {
-                    gpu.beside(|| (op.issue)(self))?;
-                    apart = true;
+                    gpu.beside(branches, || (op.issue)(self))?;
+                    branches += 1;
                 }
                 _ => (op.issue)(self)?,
             }
         }
         match &self.imp {
-            Imp::Cuda(gpu) if apart => gpu.rejoin(),
+            Imp::Cuda(gpu) if branches > 0 => gpu.rejoin(branches),
             _ => Ok(()),
         }
     }

@@ -15,8 +15,8 @@
 //! | `integrate` | Euler, the boundary rule, deaths | always |
 //! | `substeps` | broad, narrow and integrate again for each further substep | worlds with substeps |
 //! | `pilot` | the autopilot's input for the next step (one warp), beside the stages after it (on the GPU a branch of the step's graph) | games |
-//! | `effects` | kills burst into particles, the others move and fade (before `free` rebuilds the flags it reads) | games with explosions |
-//! | `free` | the free lists: flags, their prefix sum, gather | always |
+//! | `free` | the free lists: flags (which mark the step's deaths), their prefix sum, gather | always |
+//! | `effects` | kills burst into particles, the others move and fade, beside the tally (on the GPU a branch of the step's graph) | games with explosions |
 //! | `tally` | the master after the physics (one warp) | games |
 //!
 //! The scene decides which stages exist and which kernels they launch; every step of a

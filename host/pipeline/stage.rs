@@ -33,10 +33,11 @@ pub enum Stage {
     /// The autopilot's input for the next step (one warp), beside the stages after it;
     /// games.
     Pilot,
-    /// Kills burst into particles, the others move and fade; games with explosions.
-    Effects,
     /// The free lists: flags, their prefix sum, gather; always.
     Free,
+    /// Kills burst into particles, the others move and fade, beside the tally; games with
+    /// explosions.
+    Effects,
     /// The master after the physics (one warp); games.
     Tally,
 }
@@ -53,8 +54,8 @@ impl Stage {
         Stage::Integrate,
         Stage::Substeps,
         Stage::Pilot,
-        Stage::Effects,
         Stage::Free,
+        Stage::Effects,
         Stage::Tally,
     ];
 

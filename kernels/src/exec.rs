@@ -194,6 +194,10 @@ impl<T> Copy for DevSlice<T> {}
 unsafe impl<T: 'static> bytemuck::NoUninit for DevSlice<T> {}
 const _: () = assert!(size_of::<DevSlice<u8>>() == 16);
 
+/// Runs [`DevSlice::fold_runs`] reads at a time: four runs of four words are 16 loads in
+/// flight a thread.
+pub const RUNS_IN_FLIGHT: usize = 4;
+
 // SAFETY: a `DevSlice` is an address and a length; the data races it could allow are excluded
 // by each kernel's contract (disjoint writes, atomics for shared counters), stated at launch.
 unsafe impl<T: Send> Send for DevSlice<T> {}
@@ -373,6 +377,53 @@ impl<T: Copy> DevSlice<T> {
                 let folded = f(acc, value);
                 acc = if i + j * stride < end { folded } else { acc };
             }
+        }
+        acc
+    }
+
+    /// Folds `f` over the runs of `N` elements from `first`, `first + stride`, … below `end`,
+    /// in that order, with a single bounds check: [`RUNS_IN_FLIGHT`] runs at a time, whose
+    /// loads the GPU keeps in flight together (where [`DevSlice::fold_every`] keeps four
+    /// elements). `first`, `end` and `stride` are multiples of `N`, so that a run starting
+    /// below `end` ends by it, and `stride` is not zero. In place of the runs past the end,
+    /// the last run is read and folded again, and the result dropped, so `f` must be a
+    /// function of its arguments alone.
+    #[inline(always)]
+    pub fn fold_runs<const N: usize, A: Copy>(
+        &self,
+        (first, end, stride): (u32, u32, u32),
+        init: A,
+        f: impl Fn(A, [T; N]) -> A,
+    ) -> A
+    where
+        T: bytemuck::Pod,
+    {
+        if first >= end {
+            return init;
+        }
+        if end > self.len {
+            out_of_bounds(end - 1, self.len);
+        }
+        let base = self.addr as *const T;
+        let (end, stride) = (u64::from(end), u64::from(stride.max(1)));
+        let last = end.saturating_sub(N as u64);
+        // SAFETY: every run read ends by `end`, at most the length (checked).
+        let read = |i: u64| unsafe { base.wrapping_add(i as usize).cast::<[T; N]>().read() };
+        let (mut acc, mut i) = (init, u64::from(first));
+        while i < end {
+            // Every load before the first use, and no branch around `f`: the thread waits
+            // once a round. Written out, so that the runs stay in registers.
+            let at = |j: u64| (i + j * stride).min(last);
+            let runs = [read(at(0)), read(at(1)), read(at(2)), read(at(3))];
+            for (j, run) in runs.into_iter().enumerate() {
+                let folded = f(acc, run);
+                acc = if i + j as u64 * stride < end {
+                    folded
+                } else {
+                    acc
+                };
+            }
+            i += RUNS_IN_FLIGHT as u64 * stride;
         }
         acc
     }

@@ -1,6 +1,7 @@
 //! `DevSlice::fold_every` visits exactly the elements `first, first + stride, …` below
-//! `end`, in that order, whatever the length of its last batch: checked against the same
-//! walk written as a plain loop, over every small case.
+//! `end`, in that order, whatever the length of its last batch, and `DevSlice::fold_runs`
+//! the runs that start there: checked against the same walks written as plain loops, over
+//! every small case.
 
 use gpuwars_kernels::DevSlice;
 
@@ -26,6 +27,34 @@ fn folds_every_strided_element_in_order_once() {
                         i += stride;
                     }
                     let got = view.fold_every((first, end, stride), 17u64, mix);
+                    assert_eq!(got, expected, "len {len}, {first}..{end} by {stride}");
+                }
+            }
+        }
+    }
+}
+
+/// Runs of four: every first, end and stride that are multiples of four, over lengths
+/// that leave the last round of runs anywhere from full to nearly empty.
+#[test]
+fn folds_every_strided_run_in_order_once() {
+    const N: u32 = 4;
+    let mix_run = |acc: u64, run: [u32; N as usize]| run.into_iter().fold(acc, mix);
+    for len in (0u32..=160).step_by(N as usize) {
+        let data: Vec<u32> = (0..len).map(|i| i * 7 + 3).collect();
+        // SAFETY: `data` outlives every use of the view, and nothing writes it meanwhile.
+        let view = unsafe { DevSlice::from_raw_parts(data.as_ptr() as u64, len) };
+        for end in (0..=len).step_by(N as usize) {
+            for first in (0..end + 2 * N).step_by(N as usize) {
+                for stride in (N..=3 * N).step_by(N as usize) {
+                    let mut expected = 17u64;
+                    let mut i = first;
+                    while i < end {
+                        let run = data[i as usize..(i + N) as usize].iter();
+                        expected = run.fold(expected, |acc, &v| mix(acc, v));
+                        i += stride;
+                    }
+                    let got = view.fold_runs::<4, _>((first, end, stride), 17u64, mix_run);
                     assert_eq!(got, expected, "len {len}, {first}..{end} by {stride}");
                 }
             }

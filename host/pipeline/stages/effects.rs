@@ -1,5 +1,5 @@
-//! `effects`: kills burst into particles, the others move and fade (before `free` rebuilds
-//! the flags it reads).
+//! `effects`: kills burst into particles, the others move and fade (after `free`, whose flags
+//! mark the deaths), beside the tally.
 
 use gpuwars_kernels::game::effects::EffectsArgs;
 use gpuwars_kernels::registry;
@@ -10,7 +10,7 @@ use crate::pipeline::world::World;
 use crate::primitives::threads;
 use crate::sim::state::made;
 
-/// A thread a particle, in games with explosions.
+/// A thread a particle, beside the stages after it, in games with explosions.
 pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     let Some(game) = &world.game else {
         return Vec::new();
@@ -22,14 +22,13 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     let mut b = unsafe { Binder::new() };
     let args = EffectsArgs {
         bodies: world.state.bodies(&mut b),
-        ranges: b.view(&world.state.tables.ranges),
         brains: b.view(&game.data.brains),
-        was_free: b.view(&world.scratch.marks.flags),
+        flags: b.view(&world.scratch.marks.flags),
         particles: made(particles.convert(&mut b)),
         burst: *burst,
     };
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
-    vec![unsafe {
+    let op = unsafe {
         threads(
             registry::BURST_AND_FADE,
             burst.particles(),
@@ -37,5 +36,9 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
             b,
             28 * u64::from(burst.particles()),
         )
-    }]
+    };
+    // SAFETY: the stage after it (the tally) writes the status, the mailbox and the frozen
+    // flag, none of which the explosions read (the bodies' kinds, places and velocities,
+    // the brains and the free-list flags), and reads or writes no particle.
+    vec![unsafe { op.beside() }]
 }

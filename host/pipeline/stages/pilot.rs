@@ -35,8 +35,8 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
             64 * u64::from(warp::WARP),
         )
     };
-    // SAFETY: the stages after it (effects, free lists, tally) write particles, the free
-    // lists, the status, the mailbox and the frozen flag, none of which the autopilot reads
+    // SAFETY: the stages after it (free lists, effects, tally) write the free lists,
+    // particles, the status, the mailbox and the frozen flag, none of which the autopilot reads
     // (it reads bodies' liveness, places and velocities, the kinds and the grid), and none
     // of them touches the input it writes, which the next step's master reads.
     vec![unsafe { op.beside() }]

@@ -3,7 +3,7 @@
 //! looks around the ship through the step's grid (buckets of slots; positions as they are
 //! now) and leaves its input for the next step, whose master takes it unless the host's
 //! [`Command`](super::control::Command) says the player flies; so a bot-played step needs
-//! no read-back, and the search runs beside the end of the step (effects, free lists,
+//! no read-back, and the search runs beside the end of the step (free lists, effects,
 //! tally), off the chain of launches that a step waits for.
 //!
 //! It flies away from the enemies near it (each weighted by closeness, those heading for it

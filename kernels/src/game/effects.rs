@@ -2,11 +2,11 @@
 //! from the kill. Particles only move and fade: no collisions, no machine, no effect on the
 //! game, so the state hash of a game does not cover them.
 //!
-//! One launch a step, after the physics and before the free lists are rebuilt, one thread a
-//! particle. The enemy slots `first_slot .. end_slot` each own [`Burst::per_kill`]
+//! One launch a step, after the free lists are rebuilt (whose flags mark the deaths), one
+//! thread a particle. The enemy slots `first_slot .. end_slot` each own [`Burst::per_kill`]
 //! consecutive particles, so a burst needs no allocation and no ordering: thread `p` looks at
-//! its owner's slot, and if that enemy died this step (it was not free after the last step,
-//! and it is not alive now) the particle is born at the enemy's place; otherwise a live
+//! its owner's slot, and if that enemy died this step (its slot held a body after the last
+//! rebuild and is free now) the particle is born at the enemy's place; otherwise a live
 //! particle moves, slows and ages. Every particle has one writer, so the result is the same
 //! on every schedule and backend.
 
@@ -15,7 +15,8 @@ use core::f32::consts::TAU;
 use glam::Vec2;
 
 use super::rules::Brain;
-use crate::sim::{Bodies, SlotRange};
+use crate::sim::Bodies;
+use crate::sim::free_list::DIED;
 use crate::{DevSlice, Thread, device_data, kernel_args};
 
 /// Most particles one kill makes.
@@ -86,12 +87,11 @@ kernel_args! {
     pub struct EffectsArgs {
         /// The bodies (read only).
         pub bodies: Bodies,
-        /// Slot range of each kind.
-        pub ranges: DevSlice<SlotRange>,
         /// Each kind's brain: only kinds with a machine burst.
         pub brains: DevSlice<Brain>,
-        /// The free-list flags of the previous step (1: the slot was free), not yet rebuilt.
-        pub was_free: DevSlice<u32>,
+        /// The free-list flags as this step's rebuild left them ([`DIED`]: the slot's body
+        /// died this step).
+        pub flags: DevSlice<u32>,
         /// The particles: born, moved and aged.
         pub particles: Particles,
         /// How kills burst.
@@ -103,13 +103,7 @@ kernel_args! {
 /// slot that held a body after the last step and holds none now.
 #[inline(always)]
 pub fn died(args: &EffectsArgs, slot: u32) -> bool {
-    let b = &args.bodies;
-    if b.is_alive(slot) || args.was_free.get(slot) != 0 {
-        return false;
-    }
-    let kind = b.kind.get(slot);
-    let range = args.ranges.get(kind);
-    slot >= range.start && slot < range.end() && args.brains.get(kind).machine != 0
+    args.flags.get(slot) & DIED != 0 && args.brains.get(args.bodies.kind.get(slot)).machine != 0
 }
 
 /// A well-mixed 32-bit hash (a murmur-style finaliser): the particles' only randomness,

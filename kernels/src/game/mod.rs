@@ -9,8 +9,9 @@
 //! 4. [`ai::think`], once per enemy kind: perception through the grid, the finite-state
 //!    machine ([`fsm`]), the steering force;
 //! 5. integration; then [`autopilot::autopilot`] (the next step's input, from this step's
-//!    grid) beside [`effects::burst_and_fade`] (a scene's explosions), the free lists
-//!    (`crate::sim`) and [`master::tally`]: score, FPS meter, game over.
+//!    grid) beside the free lists (`crate::sim`), which mark the deaths, then
+//!    [`effects::burst_and_fade`] (a scene's explosions) beside [`master::tally`]: score,
+//!    FPS meter, game over.
 //!
 //! [`control`] holds the two structs that cross between CPU and GPU; [`rules`] the scene's
 //! constants.

@@ -2,8 +2,9 @@
 //! indicate available positions for individuals creation"), rebuilt after every step by
 //! stream compaction so that it needs neither atomics nor a sequential scan:
 //!
-//! 1. [`mark_free`]: `flags[i]` = 1 where slot `i` is a usable slot without a live body, and
-//!    each warp's count of its 32 slots' flags (a tile: ranges are aligned to warps);
+//! 1. [`mark_free`]: `flags[i]` has [`FREE`] where slot `i` is a usable slot without a live
+//!    body (and [`DIED`] too if it held one after the last rebuild), and each warp's count of
+//!    its 32 slots' free ones (a tile: ranges are aligned to warps);
 //! 2. the exclusive prefix sum of the tiles' counts, 32 times shorter than the slots;
 //! 3. [`gather_free`]: each free slot writes itself into its range's list at its rank (its
 //!    tile's offset and the free slots before it in the tile, a warp scan), and the last slot
@@ -32,7 +33,8 @@ device_data! {
 device_data! {
     /// The rebuild's own arrays, remade every step.
     pub struct FreeMarks(slots, tiles) {
-        /// 1 for a free usable slot, else 0 (written by [`mark_free`]).
+        /// [`FREE`] for a free usable slot, with [`DIED`] if it held a body after the last
+        /// rebuild; else 0 (written by [`mark_free`]).
         flags: [u32; slots],
         /// The free slots of each tile of 32 slots, then their exclusive prefix sums in place;
         /// one more element for the total (see [`FreeMarks::tiles_for`]).
@@ -47,6 +49,23 @@ impl FreeMarks {
     }
 }
 
+/// A flag's bit: the slot is usable and holds no live body.
+pub const FREE: u32 = 1;
+
+/// A flag's bit, beside [`FREE`]: the slot held a body after the rebuild before (its body
+/// died since: the explosions' test).
+pub const DIED: u32 = 2;
+
+/// The flag of a slot that is `free` now and was flagged `old` by the rebuild before.
+#[inline(always)]
+fn flag(free: bool, old: u32) -> u32 {
+    match (free, old & FREE) {
+        (false, _) => 0,
+        (true, 0) => FREE | DIED,
+        (true, _) => FREE,
+    }
+}
+
 kernel_args! {
     /// Arguments of [`mark_free`].
     pub struct MarkArgs {
@@ -54,7 +73,8 @@ kernel_args! {
         pub bodies: Bodies,
         /// Slot range of each kind.
         pub ranges: DevSlice<SlotRange>,
-        /// Output: 1 for a free usable slot, else 0; one per slot.
+        /// The flags of the rebuild before, replaced by this one's (see
+        /// [`FreeMarks::flags`]); one per slot.
         pub flags: DevSlice<u32>,
         /// Output: the free slots of each tile of 32 slots.
         pub tiles: DevSlice<u32>,
@@ -78,10 +98,10 @@ pub fn mark_free(t: Thread, args: &MarkArgs) {
     let b = &args.bodies;
     let free = |s: u32| usable(s, args.ranges.get(b.kind.get(s))) && !b.is_alive(s);
     let mine = free(slot);
-    args.flags.set(slot, mine as u32);
+    args.flags.set(slot, flag(mine, args.flags.get(slot)));
     let (lane, first) = (t.lane(), slot - t.lane());
-    let flag = |l: u32| free(first + l) as u32;
-    let count = warp::sum_u32_in_lane0(lane, warp::own_or(lane, mine as u32, flag));
+    let theirs = |l: u32| free(first + l) as u32;
+    let count = warp::sum_u32_in_lane0(lane, warp::own_or(lane, mine as u32, theirs));
     if lane == 0 {
         args.tiles.set(slot / WARP, count);
     }
@@ -120,7 +140,7 @@ pub fn gather_free(t: Thread, args: &GatherArgs) {
     let before = if args.tiles.get(tile + 1) == offset {
         0
     } else {
-        warp::exclusive_sum_u32(lane, |l| args.flags.get(tile * WARP + l))
+        warp::exclusive_sum_u32(lane, |l| args.flags.get(tile * WARP + l) & FREE)
     };
     let kind = args.kind.get(slot);
     let range = args.ranges.get(kind);
@@ -129,31 +149,31 @@ pub fn gather_free(t: Thread, args: &GatherArgs) {
     }
     // A range starts a tile: the free slots before it are its first tile's offset.
     let rank = offset + before - args.tiles.get(range.start / WARP);
-    let flag = args.flags.get(slot);
-    place_in_list((&args.list, &args.count), (slot, kind, range), rank, flag);
+    let free = args.flags.get(slot) & FREE;
+    place_in_list((&args.list, &args.count), (slot, kind, range), rank, free);
 }
 
 /// Usable slot `slot` of kind `kind`'s `range`, with `rank` free slots of the range before
-/// it: written at its rank into the kind's list if it is free (`flag` 1), and, as the
+/// it: written at its rank into the kind's list if it is free (`free` 1), and, as the
 /// range's last, the kind's count of free slots.
 #[inline(always)]
 fn place_in_list(
     (list, count): (&DevSlice<u32>, &DevSlice<u32>),
     (slot, kind, range): (u32, u32, SlotRange),
     rank: u32,
-    flag: u32,
+    free: u32,
 ) {
-    if flag != 0 {
+    if free != 0 {
         list.set(range.start + rank, slot);
     }
     if slot + 1 == range.end() {
-        count.set(kind, rank + flag);
+        count.set(kind, rank + free);
     }
 }
 
 /// The largest kind range whose free list [`mark_and_gather_free`] rebuilds: its last warp
-/// reads the liveness of every slot of the range before it, `ONE_LAUNCH_RANGE / 32 / 4`
-/// rounds of four loads a lane.
+/// reads the liveness of every slot of the range before it, `ONE_LAUNCH_RANGE / 32 / 16`
+/// rounds of 16 loads a lane (see [`crate::exec::RUNS_IN_FLIGHT`]).
 pub const ONE_LAUNCH_RANGE: u32 = 4096;
 
 kernel_args! {
@@ -163,7 +183,8 @@ kernel_args! {
         pub bodies: Bodies,
         /// Slot range of each kind, none larger than [`ONE_LAUNCH_RANGE`] slots.
         pub ranges: DevSlice<SlotRange>,
-        /// Output: 1 for a free usable slot, else 0; one per slot.
+        /// The flags of the rebuild before, replaced by this one's (see
+        /// [`FreeMarks::flags`]); one per slot.
         pub flags: DevSlice<u32>,
         /// Output: as [`GatherArgs::list`].
         pub list: DevSlice<u32>,
@@ -190,14 +211,19 @@ pub fn mark_and_gather_free(t: Thread, args: &MarkGatherArgs) {
     let kind = b.kind.get(slot);
     let range = args.ranges.get(kind);
     let free = |s: u32| usable(s, range) && !b.is_alive(s);
-    let flag = free(slot) as u32;
-    args.flags.set(slot, flag);
+    let mine = free(slot) as u32;
+    args.flags.set(slot, flag(mine != 0, args.flags.get(slot)));
+    // Each lane reads runs of four slots, every `4 · WARP`-th: the range's start and the
+    // warp's first slot are multiples of 32.
     let before = warp::sum_u32(lane, |l| {
-        let dead = |n: u32, alive: u32| n + u32::from(alive == 0);
-        b.alive.fold_every((range.start + l, first, WARP), 0, dead)
+        let dead = |n: u32, [a, b, c, d]: [u32; 4]| {
+            n + u32::from(a == 0) + u32::from(b == 0) + u32::from(c == 0) + u32::from(d == 0)
+        };
+        b.alive
+            .fold_runs((range.start + 4 * l, first, 4 * WARP), 0, dead)
     });
     let within =
-        warp::exclusive_sum_u32(lane, warp::own_or(lane, flag, |l| free(first + l) as u32));
+        warp::exclusive_sum_u32(lane, warp::own_or(lane, mine, |l| free(first + l) as u32));
     if !usable(slot, range) {
         return;
     }
@@ -205,6 +231,6 @@ pub fn mark_and_gather_free(t: Thread, args: &MarkGatherArgs) {
         (&args.list, &args.count),
         (slot, kind, range),
         before + within,
-        flag,
+        mine,
     );
 }
