@@ -9,7 +9,7 @@
 //! adds up the sums of the tiles before its own (a warp collective) and scans its own, so
 //! the scan takes two launches.
 
-use crate::{DevSlice, Thread, kernel_args, warp};
+use crate::{DevSlice, Thread, asked, kernel_args, warp};
 
 /// Elements per thread. 32 keeps a tile in one 128-byte line and leaves 2^19 threads at n = 2^24.
 pub const TILE: u32 = 32;
@@ -88,9 +88,11 @@ pub fn scan_tiles(t: Thread, args: &ScanArgs) {
 
 /// [`scan_tiles`] where `tile_offsets` holds the tile sums themselves (of [`reduce_tiles`],
 /// at most [`FLAT_TILES`] of them, not scanned). The warp of tiles `w .. w + 32` adds up the
-/// sums before `w` together, each lane every 32nd of them (at most `FLAT_TILES / 32` reads a
-/// lane instead of up to `FLAT_TILES` for the last tile alone), and scans its own 32 sums
-/// across its lanes. Integer sums: the result does not depend on their order.
+/// sums before `w` together, each lane runs of four, every `4 · 32`-th (at most
+/// `FLAT_TILES / 32` reads a lane, in flight together, instead of up to `FLAT_TILES` for the
+/// last tile alone), and scans its own 32 sums across its lanes. Integer sums: the result
+/// does not depend on their order. A full tile's values are asked for first, so that the
+/// thread waits for memory once.
 #[inline(always)]
 pub fn scan_tiles_after_sums(t: Thread, args: &ScanArgs) {
     let tile = t.global();
@@ -99,9 +101,22 @@ pub fn scan_tiles_after_sums(t: Thread, args: &ScanArgs) {
     let first = tile - lane;
     let count = tiles(args.n);
     let sums = args.tile_offsets;
-    // A warp wholly past the last tile (its block's tail) reads no further than it.
+    let start = tile * TILE;
+    let full = start + TILE <= args.n;
+    let values = match full {
+        true => asked(args.input.get_run::<{ TILE as usize }>(start)),
+        false => [0; TILE as usize],
+    };
+    // A warp wholly past the last tile (its block's tail) sums nothing: it writes nothing.
+    let before_end = if first < count { first } else { 0 };
     let before = warp::sum_u32(lane, |l| {
-        sums.fold_every((l, first.min(count), warp::WARP), 0u32, u32::wrapping_add)
+        let add = |sum: u32, [a, b, c, d]: [u32; 4]| {
+            sum.wrapping_add(a)
+                .wrapping_add(b)
+                .wrapping_add(c)
+                .wrapping_add(d)
+        };
+        sums.fold_runs((4 * l, before_end, 4 * warp::WARP), 0u32, add)
     });
     let within = warp::exclusive_sum_u32(lane, |l| {
         if first + l < count {
@@ -113,7 +128,11 @@ pub fn scan_tiles_after_sums(t: Thread, args: &ScanArgs) {
     if tile >= count {
         return;
     }
-    scan_tile(args, tile, before.wrapping_add(within));
+    let running = before.wrapping_add(within);
+    match full {
+        true => scan_run(args, start, values, running),
+        false => scan_tile(args, tile, running),
+    }
 }
 
 /// Writes the exclusive prefix sums of tile `tile`, from `running`.
@@ -122,11 +141,7 @@ fn scan_tile(args: &ScanArgs, tile: u32, mut running: u32) {
     let start = tile * TILE;
     let end = args.n.min(start + TILE);
     if end - start == TILE {
-        let mut values: [u32; TILE as usize] = args.input.get_run(start);
-        for value in &mut values {
-            (*value, running) = (running, running.wrapping_add(*value));
-        }
-        args.output.set_run(start, values);
+        scan_run(args, start, args.input.get_run(start), running);
     } else {
         for i in start..end {
             let value = args.input.get(i);
@@ -134,4 +149,14 @@ fn scan_tile(args: &ScanArgs, tile: u32, mut running: u32) {
             running = running.wrapping_add(value);
         }
     }
+}
+
+/// Writes the exclusive prefix sums of the full tile from `start`, whose values are
+/// `values`, from `running`.
+#[inline(always)]
+fn scan_run(args: &ScanArgs, start: u32, mut values: [u32; TILE as usize], mut running: u32) {
+    for value in &mut values {
+        (*value, running) = (running, running.wrapping_add(*value));
+    }
+    args.output.set_run(start, values);
 }

@@ -78,11 +78,14 @@ pub fn count_cells(t: Thread, args: &CountArgs) {
     if slot >= args.keys.len() {
         return;
     }
-    if !b.is_alive(slot) {
+    // Asked for at once, before the branch: the thread waits for memory once.
+    let [alive, kind] = asked([b.alive.get(slot), b.kind.get(slot)]);
+    let pos = asked(b.pos.get(slot));
+    if alive == 0 {
         args.keys.set(slot, NO_BUCKET);
         return;
     }
-    let key = b.kind.get(slot) * args.space.cells() + args.space.cell_of(b.pos.get(slot));
+    let key = kind * args.space.cells() + args.space.cell_of(pos);
     args.keys.set(slot, key);
     args.ranks.set(slot, args.counts.atomic_add(key, 1));
 }
@@ -118,10 +121,10 @@ pub fn place_in_cells(t: Thread, args: &PlaceArgs) {
     if slot >= args.keys.len() {
         return;
     }
-    let key = args.keys.get(slot);
+    // The rank with the key (a dead slot's is stale, and unused): one wait, not two.
+    let [key, rank] = asked([args.keys.get(slot), args.ranks.get(slot)]);
     if key != NO_BUCKET {
-        args.unordered
-            .set(args.start.get(key) + args.ranks.get(slot), slot);
+        args.unordered.set(args.start.get(key) + rank, slot);
     }
 }
 
@@ -166,12 +169,17 @@ pub const DONE: u32 = u32::MAX;
 #[inline(always)]
 pub fn order_cells(t: Thread, args: &OrderArgs) {
     let j = t.global();
-    let live = args.start.get(args.start.len() - 1);
+    if j >= args.unordered.len() {
+        return;
+    }
+    // Each wait asks for all it can: the entry with the count of entries (past it, a stale
+    // entry, unused), then its slot's key with its place.
+    let [live, slot] = asked([args.start.get(args.start.len() - 1), args.unordered.get(j)]);
     if j >= live {
         return;
     }
-    let slot = args.unordered.get(j);
-    let key = args.keys.get(slot);
+    let key = asked(args.keys.get(slot));
+    let pos = asked(args.pos.get(slot));
     let (first, end) = (args.start.get(key), args.start.get(key + 1));
     if args.bounded != 0 {
         if end - first > RUN {
@@ -192,7 +200,7 @@ pub fn order_cells(t: Thread, args: &OrderArgs) {
         rank += u32::from(other < slot);
     });
     args.slots.set(first + rank, slot);
-    args.entry_pos.set(first + rank, args.pos.get(slot));
+    args.entry_pos.set(first + rank, pos);
 }
 
 kernel_args! {
