@@ -246,7 +246,9 @@ fn the_autopilot_survives_a_minute_of_the_paper_scene(device: &Device) {
 
 /// A team of lanes a body folds what its lanes find in the order of one thread (contacts) or
 /// merges exact sums (sight): whatever the width, every scene plays the game of one thread a
-/// body on the CPU, bit for bit.
+/// body on the CPU, bit for bit; so does the machines' launch that runs the narrow phase too
+/// (`collide_circles_and_think`, which teams wider than one lane get in worlds without
+/// rectangles) against the two launches of one thread a body.
 fn teams_of_any_width_play_the_game_of_one_thread_a_body(device: &Device) {
     let hash = |device: &Device, scene: &Scene, lanes: Lanes| {
         let options = Options {

@@ -72,3 +72,32 @@ proptest! {
         prop_assert!(seen[first_slot as usize..].iter().all(|&c| c == 1), "{:?}", seen);
     }
 }
+
+proptest! {
+    /// Teams put within wider ones (`Teams::within`) span the wider ones' kinds and slots,
+    /// each of their own kinds keeping its width and the others taking the wider teams'.
+    #[test]
+    fn teams_within_wider_ones_keep_their_own_widths(
+        logs in prop::collection::vec((0u32..6, 0u32..6), 1..9),
+        cut in (0usize..9, 0usize..9),
+    ) {
+        let n = logs.len();
+        let table = ranges(&vec![40; n]);
+        let (first, last) = (cut.0.min(n - 1), cut.1.min(n - 1));
+        let (first, last) = (first.min(last), first.max(last));
+        let span = |a: usize, b: usize| (table[a].start, table[b].start + 64);
+        let wide = Teams::new((0, n as u32), span(0, n - 1), |k| 1 << logs[k as usize].0);
+        let own = Teams::new(
+            (first as u32, last as u32 + 1),
+            span(first, last),
+            |k| 1 << logs[k as usize].1,
+        );
+        let within = own.within(&wide);
+        prop_assert_eq!((within.first_kind, within.end_kind), (0, n as u32));
+        prop_assert_eq!((within.first_slot, within.end_slot), span(0, n - 1));
+        for (k, &(w, o)) in logs.iter().enumerate() {
+            let expected = if (first..=last).contains(&k) { 1 << o } else { 1 << w };
+            prop_assert_eq!(within.width(k as u32), expected, "kind {}", k);
+        }
+    }
+}

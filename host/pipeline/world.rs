@@ -39,6 +39,11 @@ pub(crate) struct Config {
     pub narrow_teams: Teams,
     /// The machines' threads per body of each kind, if a kind has a machine.
     pub think_teams: Option<Teams>,
+    /// Whether the machines' launch runs the narrow phase too (`collide_circles_and_think`):
+    /// in games without rectangles whose machines run in teams (small worlds, on the GPU),
+    /// where it saves a launch on the step's chain; the `narrow` stage then launches
+    /// nothing in the first substep.
+    pub think_collides: bool,
     /// Every how many steps the bodies move to slots in the grid's order (0: never).
     pub renumber_every: u32,
     /// Whether the free lists are rebuilt in one launch (`mark_and_gather_free`): where
@@ -143,6 +148,9 @@ impl World {
         let resident = device
             .gpu_properties()
             .map(|p| u64::from(p.multiprocessors) * u64::from(p.threads_per_multiprocessor));
+        let think_teams = game
+            .as_ref()
+            .and_then(|g| teams::think(lanes, resident, g, &layout, &space));
         let config = Config {
             collide: collides.then_some(if spec.has_rects() {
                 registry::COLLIDE
@@ -153,9 +161,10 @@ impl World {
             // A game's autopilot looks through the grid whenever it flies.
             grid: builds_grid(spec, game.is_some()),
             narrow_teams: teams::narrow(lanes, resident, spec, &layout, &space),
-            think_teams: game
-                .as_ref()
-                .and_then(|g| teams::think(lanes, resident, g, &layout, &space)),
+            think_teams,
+            think_collides: collides
+                && !spec.has_rects()
+                && think_teams.is_some_and(|teams| !teams.single()),
             renumber_every: renumber_every(spec, &layout, game.is_some()),
             free_in_one_launch: (resident.is_some() || layout.slots <= CPU_ONE_LAUNCH_SLOTS)
                 && (layout.ranges.iter()).all(|r| r.capacity <= free_list::ONE_LAUNCH_RANGE),

@@ -7,12 +7,15 @@ use crate::backend::Binder;
 use crate::pipeline::world::World;
 use crate::primitives::threads;
 
-/// The narrow phase of substep `substep`, a team of threads a slot, if anything collides.
+/// The narrow phase of substep `substep`, a team of threads a slot, if anything collides
+/// (and, in the first substep, the machines' launch does not: see `Config::think_collides`).
 pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
     let Some(kernel) = world.config.collide else {
         return Vec::new();
     };
-    let physics = &world.spec.physics;
+    if substep == 0 && world.config.think_collides {
+        return Vec::new();
+    }
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
     let args = CollideArgs {
@@ -23,10 +26,7 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         space: world.space,
         grid: world.cells(&mut b),
         contacts: world.scratch.contacts(&mut b),
-        relax: Relaxation {
-            fraction: physics.relaxation,
-            averaged: u32::from(physics.averaged),
-        },
+        relax: relaxation(world),
         substep,
         reserved: 0,
     };
@@ -42,4 +42,13 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
             52 * u64::from(world.layout.slots),
         )
     }]
+}
+
+/// How the world's physics combines a body's pushes.
+pub(super) fn relaxation(world: &World) -> Relaxation {
+    let physics = &world.spec.physics;
+    Relaxation {
+        fraction: physics.relaxation,
+        averaged: u32::from(physics.averaged),
+    }
 }

@@ -1,17 +1,25 @@
-//! `think`: every enemy's machine, in one launch over the enemy kinds' slots.
+//! `think`: every enemy's machine, in one launch over the enemy kinds' slots; in small
+//! worlds without rectangles, the narrow phase's launch too.
 
-use gpuwars_kernels::game::ai::ThinkArgs;
+use gpuwars_kernels::game::ai::{CollideThinkArgs, ThinkArgs};
 use gpuwars_kernels::registry;
 
+use super::narrow::relaxation;
 use crate::Op;
 use crate::backend::Binder;
 use crate::pipeline::world::World;
 use crate::primitives::threads;
 
-/// A team of threads a slot of the kinds with a machine, in games with enemies.
+/// A team of threads a slot of the kinds with a machine, in games with enemies; where the
+/// machines run the narrow phase too (`Config::think_collides`), a team a slot of every
+/// kind.
 pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     let (Some(game), Some(teams)) = (&world.game, world.config.think_teams) else {
         return Vec::new();
+    };
+    let teams = match world.config.think_collides {
+        true => teams.within(&world.config.narrow_teams),
+        false => teams,
     };
     let slots = u64::from(teams.end_slot - teams.first_slot);
     // SAFETY: the views go into this op only.
@@ -30,11 +38,34 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     };
     let threads_needed = u32::try_from(teams.threads(&world.layout.ranges))
         .expect("at most 32 threads a slot of at most 2^24 slots");
-    let kernel = if teams.single() {
-        registry::THINK
+    // SAFETY (each op below): the world's buffers, sized as the kernels ask (see `World`).
+    let op = if world.config.think_collides {
+        let args = CollideThinkArgs {
+            think: args,
+            relax: relaxation(world),
+        };
+        // The narrow phase's bytes and the machines'.
+        unsafe {
+            threads(
+                registry::COLLIDE_CIRCLES_AND_THINK,
+                threads_needed,
+                args,
+                b,
+                108 * slots,
+            )
+        }
+    } else if teams.single() {
+        unsafe { threads(registry::THINK, threads_needed, args, b, 56 * slots) }
     } else {
-        registry::THINK_IN_TEAMS
+        unsafe {
+            threads(
+                registry::THINK_IN_TEAMS,
+                threads_needed,
+                args,
+                b,
+                56 * slots,
+            )
+        }
     };
-    // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
-    vec![unsafe { threads(kernel, threads_needed, args, b, 56 * slots) }]
+    vec![op]
 }

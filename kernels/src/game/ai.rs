@@ -19,6 +19,7 @@ use glam::Vec2;
 use super::fsm::{Machine, Percept, State, next_state};
 use super::rules::Brain;
 use crate::sim::broad::{CellIndex, Near, kind_bit};
+use crate::sim::narrow::{CollideArgs, Relaxation, collide_slot};
 use crate::sim::teams::Teams;
 use crate::sim::{Bodies, Contacts, KindInfo, SlotRange, Space};
 use crate::warp::{Handed, Team};
@@ -366,9 +367,54 @@ pub fn think_in_teams(t: Thread, args: &ThinkArgs) {
 
 #[inline(always)]
 fn think_with<const TEAMS: bool>(t: Thread, args: &ThinkArgs) {
-    let Some((slot, team)) = args.teams.member(t, &args.ranges) else {
+    if let Some((slot, team)) = args.teams.member(t, &args.ranges) {
+        think_slot::<TEAMS>(args, slot, team);
+    }
+}
+
+kernel_args! {
+    /// Arguments of [`collide_circles_and_think`].
+    pub struct CollideThinkArgs {
+        /// The machines' arguments; their teams span every kind (a kind with a machine
+        /// keeps its machine's width, the others take their narrow phase's).
+        pub think: ThinkArgs,
+        /// How the narrow phase combines a body's pushes.
+        pub relax: Relaxation,
+    }
+}
+
+/// The narrow phase without rectangles and the machines in one launch: each slot of every
+/// kind gets its team, which finds the slot's contacts and their response
+/// ([`collide_slot`]), then runs the machine of a body of a kind with one. A machine reads
+/// only its own body's hits and energy, which its own team has just written, and the
+/// narrow phase reads nothing a machine writes (other bodies' velocities and masses, the
+/// grid), so the results are those of the two launches one after the other.
+#[inline(always)]
+pub fn collide_circles_and_think(t: Thread, args: &CollideThinkArgs) {
+    let think = &args.think;
+    let Some((slot, team)) = think.teams.member(t, &think.ranges) else {
         return;
     };
+    let collide = CollideArgs {
+        bodies: think.bodies,
+        kinds: think.kinds,
+        ranges: think.ranges,
+        teams: think.teams,
+        space: think.space,
+        grid: think.grid,
+        contacts: think.contacts,
+        relax: args.relax,
+        substep: 0,
+        reserved: 0,
+    };
+    collide_slot::<false>(&collide, slot, team);
+    think_slot::<true>(think, slot, team);
+}
+
+/// Slot `slot`'s share of [`think`], by its `team`: if a body of a kind with a machine
+/// lives there, perceive (the team), transition and act (its first lane).
+#[inline(always)]
+fn think_slot<const TEAMS: bool>(args: &ThinkArgs, slot: u32, team: Team) {
     // Without teams the width is known to be 1, and the teams' code compiles out.
     let team = if TEAMS { team } else { Team::ALONE };
     let b = &args.bodies;

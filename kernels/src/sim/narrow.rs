@@ -15,7 +15,7 @@ use super::contact::{contact, tie_break};
 use super::kinds::{Bound, KindInfo, SlotRange};
 use super::space::Space;
 use super::teams::Teams;
-use crate::warp::Handed;
+use crate::warp::{Handed, Team};
 use crate::{DevSlice, Thread, asked, kernel_args};
 
 kernel_args! {
@@ -167,11 +167,18 @@ impl Handed for Touch {
 
 #[inline(always)]
 fn collide_bounds<const RECTS: bool>(t: Thread, args: &CollideArgs) {
+    if let Some((slot, team)) = args.teams.member(t, &args.ranges) {
+        collide_slot::<RECTS>(args, slot, team);
+    }
+}
+
+/// Slot `slot`'s share of [`collide`], by its `team`: the team sums the slot's responses to
+/// the bodies it overlaps, and its first lane writes them and the slot's energy loss (with
+/// `RECTS` false, every kind taken as its circle).
+#[inline(always)]
+pub fn collide_slot<const RECTS: bool>(args: &CollideArgs, slot: u32, team: Team) {
     let bodies = &args.bodies;
     let out = &args.contacts;
-    let Some((slot, team)) = args.teams.member(t, &args.ranges) else {
-        return;
-    };
     if slot >= bodies.slots() {
         return;
     }

@@ -68,6 +68,23 @@ impl Teams {
         }
     }
 
+    /// `self` over the kinds and slots of `wider` (which hold `self`'s): `self`'s widths for
+    /// its kinds, `wider`'s for the others.
+    pub fn within(&self, wider: &Teams) -> Teams {
+        let own = |k: u32| (self.first_kind..self.end_kind).contains(&k);
+        Teams::new(
+            (wider.first_kind, wider.end_kind),
+            (wider.first_slot, wider.end_slot),
+            |k| {
+                if own(k) {
+                    self.width(k)
+                } else {
+                    wider.width(k)
+                }
+            },
+        )
+    }
+
     /// Lanes a body of kind `kind` gets.
     #[inline(always)]
     pub fn width(&self, kind: u32) -> u32 {
