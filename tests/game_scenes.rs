@@ -119,15 +119,28 @@ fn buffers_are_sized_from_the_scene() {
 fn the_game_hash_does_not_depend_on_the_emulators_schedule() {
     // Blocks and threads in shuffled orders: a result that depended on which thread ran
     // first (the grid's atomic bucket counts hand out ranks in arrival order) would move.
-    let scene = scene("paper");
-    let in_order = hash_after(common::cpu(), &scene, 1, 120);
-    for seed in [1, 2] {
-        let device = Device::cpu_scheduled(Some(2), Schedule::Shuffled { seed }, "tests").unwrap();
-        assert_eq!(
-            hash_after(&device, &scene, 1, 120),
-            in_order,
-            "shuffle seed {seed}"
-        );
+    // With teams of 8 lanes, the bodies take their step in one launch
+    // (`collide_think_integrate`): a body that read another's place or velocity while that
+    // one's team moved it would move too (kamikazes ramming a ship that outlives them
+    // collide with it nearly every step).
+    for (scene, steps) in [(scene("paper"), 120), (doomed(), 300)] {
+        let in_order = hash_after(common::cpu(), &scene, 1, steps);
+        for seed in [1, 2] {
+            let device =
+                Device::cpu_scheduled(Some(2), Schedule::Shuffled { seed }, "tests").unwrap();
+            for lanes in [Lanes::Auto, Lanes::Fixed(8)] {
+                let options = Options {
+                    lanes,
+                    ..Options::default()
+                };
+                assert_eq!(
+                    hash_with(&device, &scene, 1, steps, options),
+                    in_order,
+                    "{}: shuffle seed {seed}, {lanes:?}",
+                    scene.name
+                );
+            }
+        }
     }
 }
 
@@ -246,9 +259,9 @@ fn the_autopilot_survives_a_minute_of_the_paper_scene(device: &Device) {
 
 /// A team of lanes a body folds what its lanes find in the order of one thread (contacts) or
 /// merges exact sums (sight): whatever the width, every scene plays the game of one thread a
-/// body on the CPU, bit for bit; so does the machines' launch that runs the narrow phase too
-/// (`collide_circles_and_think`, which teams wider than one lane get in worlds without
-/// rectangles) against the two launches of one thread a body.
+/// body on the CPU, bit for bit; so does the one launch of the narrow phase, the machines and
+/// the integrator (`collide_think_integrate`, which teams wider than one lane get in worlds
+/// of circles) against the three launches of one thread a body.
 fn teams_of_any_width_play_the_game_of_one_thread_a_body(device: &Device) {
     let hash = |device: &Device, scene: &Scene, lanes: Lanes| {
         let options = Options {

@@ -39,11 +39,12 @@ pub(crate) struct Config {
     pub narrow_teams: Teams,
     /// The machines' threads per body of each kind, if a kind has a machine.
     pub think_teams: Option<Teams>,
-    /// Whether the machines' launch runs the narrow phase too (`collide_circles_and_think`):
-    /// in games without rectangles whose machines run in teams (small worlds, on the GPU),
-    /// where it saves a launch on the step's chain; the `narrow` stage then launches
-    /// nothing in the first substep.
-    pub think_collides: bool,
+    /// Whether one launch runs the narrow phase, the machines and the integrator
+    /// (`collide_think_integrate`), whose grid then keeps its entries' velocities: in games
+    /// of circles of at most [`ONE_LAUNCH_SLOTS`] slots whose machines run in teams (on the
+    /// GPU), where it saves two launches on the step's chain. The `narrow` and `integrate`
+    /// stages then launch nothing in the first substep.
+    pub one_launch: bool,
     /// Every how many steps the bodies move to slots in the grid's order (0: never).
     pub renumber_every: u32,
     /// Whether the free lists are rebuilt in one launch (`mark_and_gather_free`): where
@@ -53,6 +54,11 @@ pub(crate) struct Config {
     /// far more than the scan once a world has more than a few warps.
     pub free_in_one_launch: bool,
 }
+
+/// The most slots of a world whose bodies may take their step (but the grid) in one launch
+/// (see `Config::one_launch`); larger worlds run their machines one thread a body, whose
+/// registers the narrow phase and the integrator would crowd.
+pub const ONE_LAUNCH_SLOTS: u32 = 1 << 18;
 
 /// The most slots of a world whose free lists the CPU emulation rebuilds in one launch (see
 /// `Config::free_in_one_launch`): a few warps, whose redundant counts cost less than two
@@ -91,14 +97,28 @@ pub fn bytes_needed(spec: &WorldSpec, game: Option<(u32, usize)>) -> u64 {
         made(GameData::<Unmade>::build(&mut sizes, kinds, waves));
         made(Particles::<Unmade>::build(&mut sizes, particles as usize));
     }
-    let renumbers = renumber_every(spec, &layout, game.is_some()) != 0;
-    state::bytes_needed(&layout, &layout::space(spec), kinds, renumbers) + sizes.bytes
+    let plays = game.is_some();
+    let extras = (
+        renumber_every(spec, &layout, plays) != 0,
+        moves_in_one_launch(spec, &layout, plays),
+    );
+    state::bytes_needed(&layout, &layout::space(spec), kinds, extras) + sizes.bytes
 }
 
 /// Whether a world of `spec` builds the grid: something collides, or a game's autopilot may
 /// look through it.
 fn builds_grid(spec: &WorldSpec, plays: bool) -> bool {
     plays || spec.collision_masks().iter().any(|&m| m != 0)
+}
+
+/// Whether a world of `spec` may move its bodies in the launch that queries its grid (see
+/// `Config::one_launch`), and so its grid keeps its entries' velocities: a game (`plays`)
+/// of circles, something colliding, of at most [`ONE_LAUNCH_SLOTS`] slots.
+fn moves_in_one_launch(spec: &WorldSpec, layout: &Layout, plays: bool) -> bool {
+    plays
+        && !spec.has_rects()
+        && spec.collision_masks().iter().any(|&m| m != 0)
+        && layout.slots <= ONE_LAUNCH_SLOTS
 }
 
 /// Every how many steps a world renumbers its bodies (0: never): as its physics says, in
@@ -162,8 +182,7 @@ impl World {
             grid: builds_grid(spec, game.is_some()),
             narrow_teams: teams::narrow(lanes, resident, spec, &layout, &space),
             think_teams,
-            think_collides: collides
-                && !spec.has_rects()
+            one_launch: moves_in_one_launch(spec, &layout, game.is_some())
                 && think_teams.is_some_and(|teams| !teams.single()),
             renumber_every: renumber_every(spec, &layout, game.is_some()),
             free_in_one_launch: (resident.is_some() || layout.slots <= CPU_ONE_LAUNCH_SLOTS)
@@ -171,7 +190,8 @@ impl World {
         };
         let state = WorldState::new(device, spec, &layout, seed)?;
         let renumbers = config.renumber_every != 0;
-        let scratch = Scratch::new(device, &layout, &space, kinds, renumbers)?;
+        let moving = moves_in_one_launch(spec, &layout, game.is_some());
+        let scratch = Scratch::new(device, &layout, &space, kinds, (renumbers, moving))?;
         let game = match game {
             Some(config) => {
                 let mut data = GameData::build(&mut device.zeroed(), kinds, config.waves.len())?;
@@ -212,7 +232,8 @@ impl World {
 
     /// The grid as the world's queries see it (capped as its physics says), made by `b`.
     pub fn cells(&self, b: &mut Binder) -> CellIndex {
-        self.scratch.cell_index(b, self.spec.physics.neighbour_cap)
+        let cap = self.spec.physics.neighbour_cap;
+        self.scratch.cell_index(b, cap, self.config.one_launch)
     }
 
     /// The master's and the tally's arguments, made by `b`, in games.

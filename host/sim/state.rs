@@ -5,6 +5,8 @@
 
 use std::convert::Infallible;
 
+use glam::Vec2;
+use gpuwars_kernels::DevSlice;
 use gpuwars_kernels::data::{Build, Sizes, Unmade};
 use gpuwars_kernels::registry;
 use gpuwars_kernels::rng::Mt607Params;
@@ -56,9 +58,15 @@ pub(crate) fn made<T>(result: Result<T, Infallible>) -> T {
 }
 
 /// Bytes of device memory the buffers of a world of this layout and grid take, the
-/// generators' set-up (seeds and parameter table) included, and the renumbering's buffers
-/// if it `renumbers`.
-pub fn bytes_needed(layout: &Layout, space: &Space, kinds: usize, renumbers: bool) -> u64 {
+/// generators' set-up (seeds and parameter table) included, the renumbering's buffers if it
+/// `renumbers`, and its grid entries' velocities if its bodies are `moving` in the launch
+/// that queries the grid.
+pub fn bytes_needed(
+    layout: &Layout,
+    space: &Space,
+    kinds: usize,
+    (renumbers, moving): (bool, bool),
+) -> u64 {
     let (slots, buckets) = (layout.slots as usize, buckets(space, kinds));
     let mut sizes = Sizes::default();
     let s = &mut sizes;
@@ -66,7 +74,12 @@ pub fn bytes_needed(layout: &Layout, space: &Space, kinds: usize, renumbers: boo
     made(KindTables::<Unmade>::build(s, kinds));
     made(FreeSlots::<Unmade>::build(s, slots, kinds));
     made(Contacts::<Unmade>::build(s, slots));
-    made(Grid::<Unmade>::build(s, slots, buckets));
+    made(Grid::<Unmade>::build(
+        s,
+        slots,
+        buckets,
+        moving_entries(slots, moving),
+    ));
     let tiles = FreeMarks::tiles_for(layout.slots) as usize;
     made(FreeMarks::<Unmade>::build(s, slots, tiles));
     if renumbers {
@@ -157,20 +170,26 @@ impl WorldState {
 
 impl Scratch {
     /// Scratch for a world of this layout and grid with `kinds` kinds, with the
-    /// renumbering's buffers if it `renumbers`.
+    /// renumbering's buffers if it `renumbers`, and its grid entries' velocities if its
+    /// bodies are `moving` in the launch that queries the grid.
     pub fn new(
         device: &Device,
         layout: &Layout,
         space: &Space,
         kinds: usize,
-        renumbers: bool,
+        (renumbers, moving): (bool, bool),
     ) -> Result<Self, Error> {
         let slots = layout.slots as usize;
         let buckets = buckets(space, kinds);
         let tiles = FreeMarks::tiles_for(layout.slots) as usize;
         Ok(Scratch {
             contacts: Contacts::build(&mut device.zeroed(), slots)?,
-            grid: Grid::build(&mut device.zeroed(), slots, buckets)?,
+            grid: Grid::build(
+                &mut device.zeroed(),
+                slots,
+                buckets,
+                moving_entries(slots, moving),
+            )?,
             grid_scan: PrefixSum::new(device, buckets)?,
             marks: FreeMarks::build(&mut device.zeroed(), slots, tiles)?,
             marks_scan: PrefixSum::new(device, tiles)?,
@@ -189,11 +208,12 @@ impl Scratch {
     }
 
     /// The grid as kernels query it, each query examining at most `cap` entries (0: all),
-    /// made by `b`.
-    pub fn cell_index(&self, b: &mut Binder, cap: u32) -> CellIndex {
+    /// with its entries' velocities if `moving` (see [`CellIndex::vel`]), made by `b`.
+    pub fn cell_index(&self, b: &mut Binder, cap: u32, moving: bool) -> CellIndex {
         CellIndex {
             slots: b.view(&self.grid.slots),
             pos: b.view(&self.grid.pos),
+            vel: self.entry_velocities(b, moving),
             start: b.view(&self.grid.start),
             kinds: self.kinds,
             cells: self.cells,
@@ -201,4 +221,19 @@ impl Scratch {
             reserved: 0,
         }
     }
+
+    /// The grid entries' velocities if `moving` (the world keeps them), else none, made
+    /// by `b`.
+    pub fn entry_velocities(&self, b: &mut Binder, moving: bool) -> DevSlice<Vec2> {
+        match moving {
+            true => b.view(&self.grid.vel),
+            false => DevSlice::EMPTY,
+        }
+    }
+}
+
+/// Elements of the grid's entry velocities for `slots` slots: one a slot if the bodies are
+/// `moving` in the launch that queries the grid, else none.
+fn moving_entries(slots: usize, moving: bool) -> usize {
+    if moving { slots } else { 0 }
 }

@@ -115,9 +115,9 @@ kernels! {
     /// The enemies' machines with teams of threads for the bodies that expect many
     /// neighbours.
     THINK_IN_TEAMS = think_in_teams(ai::ThinkArgs) => ai::think_in_teams;
-    /// The narrow phase without rectangles and the enemies' machines in one launch, with
-    /// teams of threads (worlds small enough for teams).
-    COLLIDE_CIRCLES_AND_THINK = collide_circles_and_think(ai::CollideThinkArgs) => ai::collide_circles_and_think;
+    /// The narrow phase without rectangles, the enemies' machines and the integrator in one
+    /// launch, with teams of threads (worlds small enough for teams).
+    COLLIDE_THINK_INTEGRATE = collide_think_integrate(ai::BodyStepArgs) => ai::collide_think_integrate;
     /// Sets up every slot's generator from its seed and the parameter table.
     SEED_STREAMS = seed_streams(streams::SeedArgs) => streams::seed_streams;
     /// Points the camera: the frame's view from the ship's position (one thread).

@@ -15,7 +15,13 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         return Vec::new();
     }
     let slots = world.layout.slots;
-    let (g, pos) = (&world.scratch.grid, &world.state.bodies.pos);
+    let (g, pos, vel) = (
+        &world.scratch.grid,
+        &world.state.bodies.pos,
+        &world.state.bodies.vel,
+    );
+    // The entries' velocities, where the bodies move in the launch that queries the grid.
+    let moving = world.config.one_launch;
     // SAFETY (every binder below): the views go into the op made with it.
     let mut b = unsafe { Binder::new() };
     let count = CountArgs {
@@ -69,11 +75,13 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     let mut b = unsafe { Binder::new() };
     let order = OrderArgs {
         pos: b.view(pos),
+        vel: b.view(vel),
         keys: b.view(&g.keys),
         start: b.view(&g.start),
         unordered: b.view(&g.unordered),
         slots: b.view(&g.slots),
         entry_pos: b.view(&g.pos),
+        entry_vel: world.scratch.entry_velocities(&mut b, moving),
         runs: b.view(&g.ranks),
         bounded: u32::from(bounded),
         reserved: 0,
@@ -102,11 +110,13 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         let mut b = unsafe { Binder::new() };
         let merge = MergeArgs {
             pos: b.view(pos),
+            vel: b.view(vel),
             start: b.view(&g.start),
             src: b.view(src),
             dst: b.view(dst),
             slots: b.view(&g.slots),
             entry_pos: b.view(&g.pos),
+            entry_vel: world.scratch.entry_velocities(&mut b, moving),
             run: broad::RUN << pass,
             reserved: 0,
         };

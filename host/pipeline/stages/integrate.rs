@@ -8,8 +8,12 @@ use crate::backend::Binder;
 use crate::pipeline::world::World;
 use crate::primitives::threads;
 
-/// The integrator of substep `substep`, a thread a slot.
+/// The integrator of substep `substep`, a thread a slot (in the first substep, unless the
+/// bodies take their step in one launch: see `Config::one_launch`).
 pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
+    if substep == 0 && world.config.one_launch {
+        return Vec::new();
+    }
     let (spec, physics) = (&world.spec, &world.spec.physics);
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
@@ -19,7 +23,7 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         contacts: world.scratch.contacts(&mut b),
         space: world.space,
         field: spec.field,
-        dt: spec.dt / physics.substeps as f32,
+        dt: step_dt(world),
         integrator: physics.integrator.code(),
         substep,
         reserved: 0,
@@ -34,4 +38,9 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
             88 * u64::from(world.layout.slots),
         )
     }]
+}
+
+/// The time step of each substep.
+pub(super) fn step_dt(world: &World) -> f32 {
+    world.spec.dt / world.spec.physics.substeps as f32
 }

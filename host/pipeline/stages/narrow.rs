@@ -8,12 +8,13 @@ use crate::pipeline::world::World;
 use crate::primitives::threads;
 
 /// The narrow phase of substep `substep`, a team of threads a slot, if anything collides
-/// (and, in the first substep, the machines' launch does not: see `Config::think_collides`).
+/// (and, in the first substep, the bodies do not take their step in one launch: see
+/// `Config::one_launch`).
 pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
     let Some(kernel) = world.config.collide else {
         return Vec::new();
     };
-    if substep == 0 && world.config.think_collides {
+    if substep == 0 && world.config.one_launch {
         return Vec::new();
     }
     // SAFETY: the views go into this op only.

@@ -1,9 +1,10 @@
 //! `think`: every enemy's machine, in one launch over the enemy kinds' slots; in small
-//! worlds without rectangles, the narrow phase's launch too.
+//! worlds of circles, the narrow phase's and the integrator's launches too.
 
-use gpuwars_kernels::game::ai::{CollideThinkArgs, ThinkArgs};
+use gpuwars_kernels::game::ai::{BodyStepArgs, ThinkArgs};
 use gpuwars_kernels::registry;
 
+use super::integrate::step_dt;
 use super::narrow::relaxation;
 use crate::Op;
 use crate::backend::Binder;
@@ -11,13 +12,13 @@ use crate::pipeline::world::World;
 use crate::primitives::threads;
 
 /// A team of threads a slot of the kinds with a machine, in games with enemies; where the
-/// machines run the narrow phase too (`Config::think_collides`), a team a slot of every
+/// bodies take their step in one launch (`Config::one_launch`), a team a slot of every
 /// kind.
 pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     let (Some(game), Some(teams)) = (&world.game, world.config.think_teams) else {
         return Vec::new();
     };
-    let teams = match world.config.think_collides {
+    let teams = match world.config.one_launch {
         true => teams.within(&world.config.narrow_teams),
         false => teams,
     };
@@ -39,19 +40,22 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     let threads_needed = u32::try_from(teams.threads(&world.layout.ranges))
         .expect("at most 32 threads a slot of at most 2^24 slots");
     // SAFETY (each op below): the world's buffers, sized as the kernels ask (see `World`).
-    let op = if world.config.think_collides {
-        let args = CollideThinkArgs {
+    let op = if world.config.one_launch {
+        let args = BodyStepArgs {
             think: args,
             relax: relaxation(world),
+            field: world.spec.field,
+            dt: step_dt(world),
+            integrator: world.spec.physics.integrator.code(),
         };
-        // The narrow phase's bytes and the machines'.
+        // The narrow phase's bytes, the machines' and the integrator's.
         unsafe {
             threads(
-                registry::COLLIDE_CIRCLES_AND_THINK,
+                registry::COLLIDE_THINK_INTEGRATE,
                 threads_needed,
                 args,
                 b,
-                108 * slots,
+                196 * slots,
             )
         }
     } else if teams.single() {

@@ -19,6 +19,7 @@ use glam::Vec2;
 use super::fsm::{Machine, Percept, State, next_state};
 use super::rules::Brain;
 use crate::sim::broad::{CellIndex, Near, kind_bit};
+use crate::sim::integrate::{Field, IntegrateArgs, integrate_slot};
 use crate::sim::narrow::{CollideArgs, Relaxation, collide_slot};
 use crate::sim::teams::Teams;
 use crate::sim::{Bodies, Contacts, KindInfo, SlotRange, Space};
@@ -109,7 +110,7 @@ pub fn threat(d: Vec2, rel: Vec2, radius: f32) -> Option<(f32, Vec2)> {
 /// one-thread `think` spills at its 56).
 #[derive(Clone, Copy)]
 struct Seen {
-    /// Non-zero once the ship is seen.
+    /// The ship's grid entry plus one once it is seen, else 0.
     ship_seen: u32,
     /// Bodies of its own kind seen.
     similar: u32,
@@ -121,6 +122,9 @@ struct Seen {
     /// The soonest threat's seconds to its closest approach (as bits) above its slot;
     /// `u64::MAX` for none. Ties go to the lower slot.
     threat: u64,
+    /// The soonest threat's grid entry (kept where bodies move in the launch that looks:
+    /// see [`CellIndex::vel`]).
+    threat_entry: u32,
 }
 
 impl Seen {
@@ -131,17 +135,23 @@ impl Seen {
         sum: [0; 2],
         crowd: [0; 2],
         threat: u64::MAX,
+        threat_entry: 0,
     };
 
     /// What `self` and `other` saw together: the same whichever is which.
     #[inline(always)]
     fn merge(self, other: Seen) -> Seen {
         Seen {
-            ship_seen: self.ship_seen | other.ship_seen,
+            ship_seen: self.ship_seen.max(other.ship_seen),
             similar: self.similar.wrapping_add(other.similar),
             sum: add_fixed(self.sum, other.sum),
             crowd: add_fixed(self.crowd, other.crowd),
             threat: self.threat.min(other.threat),
+            // The keys' slots are distinct: the same entry whichever is which.
+            threat_entry: match other.threat < self.threat {
+                true => other.threat_entry,
+                false => self.threat_entry,
+            },
         }
     }
 }
@@ -162,6 +172,7 @@ impl Handed for Seen {
             sum: pair(self.sum),
             crowd: pair(self.crowd),
             threat: self.threat.shuffle_from(source, members),
+            threat_entry: self.threat_entry.shuffle_from(source, members),
         }
     }
 }
@@ -235,9 +246,10 @@ pub struct Looker {
 
 /// What `looker`, a `machine` body driven by `brain`, sees: only bodies within its vision,
 /// found through the grid's 3×3 neighbourhood by its `team` (every lane gets the same). A
-/// kamikaze looks only for the ship.
+/// kamikaze looks only for the ship. With `MOVING` (bodies move in the launch that looks),
+/// the others' places and velocities come from the grid's entries.
 #[inline(always)]
-pub fn look(
+pub fn look<const MOVING: bool>(
     args: &ThinkArgs,
     brain: &Brain,
     machine: Machine,
@@ -270,7 +282,7 @@ pub fn look(
         &args.space,
         near,
         Seen::NONE,
-        |mut seen, other, kind, at| {
+        |mut seen, other, kind, at, entry| {
             if other == slot {
                 return seen;
             }
@@ -280,7 +292,7 @@ pub fn look(
                 return seen;
             }
             if other == args.ship {
-                seen.ship_seen = 1;
+                seen.ship_seen = entry + 1;
             } else if social && kind == brain.kind {
                 seen.similar = seen.similar.wrapping_add(1);
                 seen.sum = add_fixed(seen.sum, fixed(offset, scale));
@@ -290,26 +302,44 @@ pub fn look(
                 }
             } else if dodges
                 && kind == args.shot_kind
-                && let Some((time, _)) = threat(offset, b.vel.get(other) - vel, radius)
+                && let Some((time, _)) = threat(
+                    offset,
+                    args.grid.vel_at::<MOVING>(entry, other, &b.vel) - vel,
+                    radius,
+                )
                 && time >= 0.0
             {
                 // Seconds ahead are positive, so their bits order as they do (NaN, never).
                 let key = u64::from(time.to_bits()) << 32 | u64::from(other);
-                seen.threat = seen.threat.min(key);
+                if key < seen.threat {
+                    seen.threat = key;
+                    seen.threat_entry = entry;
+                }
             }
             seen
         },
         Seen::merge,
     );
-    // The bodies have not moved since the grid was built, so their positions now are the
-    // ones the look measured from.
+    // Where the bodies move in this launch, from the grid's entries, as the look measured;
+    // else from the bodies, which have not moved since the grid was built.
+    let grid = &args.grid;
     let dodge = (seen.threat != u64::MAX).then(|| {
-        let other = seen.threat as u32;
-        let offset = args.space.offset(pos, b.pos.get(other));
-        threat(offset, b.vel.get(other) - vel, radius).map_or(Vec2::ZERO, |(_, away)| away)
+        let (entry, other) = (seen.threat_entry, seen.threat as u32);
+        let at = if MOVING {
+            grid.pos.get(entry)
+        } else {
+            b.pos.get(other)
+        };
+        let offset = args.space.offset(pos, at);
+        let rel = grid.vel_at::<MOVING>(entry, other, &b.vel) - vel;
+        threat(offset, rel, radius).map_or(Vec2::ZERO, |(_, away)| away)
     });
+    let ship_at = |entry: u32| match MOVING {
+        true => grid.pos.get(entry),
+        false => b.pos.get(args.ship),
+    };
     Sight {
-        ship: (seen.ship_seen != 0).then(|| args.space.offset(pos, b.pos.get(args.ship))),
+        ship: (seen.ship_seen != 0).then(|| args.space.offset(pos, ship_at(seen.ship_seen - 1))),
         group: (seen.similar > 0).then(|| unfixed(seen.sum, scale) / seen.similar as f32),
         crowd: -unfixed(seen.crowd, UNIT_SCALE),
         dodge,
@@ -368,29 +398,38 @@ pub fn think_in_teams(t: Thread, args: &ThinkArgs) {
 #[inline(always)]
 fn think_with<const TEAMS: bool>(t: Thread, args: &ThinkArgs) {
     if let Some((slot, team)) = args.teams.member(t, &args.ranges) {
-        think_slot::<TEAMS>(args, slot, team);
+        think_slot::<TEAMS, false>(args, slot, team);
     }
 }
 
 kernel_args! {
-    /// Arguments of [`collide_circles_and_think`].
-    pub struct CollideThinkArgs {
+    /// Arguments of [`collide_think_integrate`].
+    pub struct BodyStepArgs {
         /// The machines' arguments; their teams span every kind (a kind with a machine
-        /// keeps its machine's width, the others take their narrow phase's).
+        /// keeps its machine's width, the others take their narrow phase's), and their grid
+        /// keeps its entries' velocities ([`CellIndex::vel`]).
         pub think: ThinkArgs,
         /// How the narrow phase combines a body's pushes.
         pub relax: Relaxation,
+        /// The force field.
+        pub field: Field,
+        /// The time step of the step's first substep.
+        pub dt: f32,
+        /// The integrator (see [`crate::sim::integrate`]).
+        pub integrator: u32,
     }
 }
 
-/// The narrow phase without rectangles and the machines in one launch: each slot of every
-/// kind gets its team, which finds the slot's contacts and their response
-/// ([`collide_slot`]), then runs the machine of a body of a kind with one. A machine reads
-/// only its own body's hits and energy, which its own team has just written, and the
-/// narrow phase reads nothing a machine writes (other bodies' velocities and masses, the
-/// grid), so the results are those of the two launches one after the other.
+/// Every body's step but the grid in one launch, for worlds without rectangles: each slot
+/// of every kind gets its team, which finds the slot's contacts and their response
+/// ([`collide_slot`]), runs the machine of a body of a kind with one, and moves the body
+/// ([`integrate_slot`], its first lane). The results are those of the three launches one
+/// after the other, bit for bit: a team reads of its own body what it has itself just
+/// written (hits, energy, force), and of the others only what nothing in the launch writes
+/// (masses, kinds, the grid's entries with their places and velocities as the grid was
+/// built), never the places and velocities that their own teams change meanwhile.
 #[inline(always)]
-pub fn collide_circles_and_think(t: Thread, args: &CollideThinkArgs) {
+pub fn collide_think_integrate(t: Thread, args: &BodyStepArgs) {
     let think = &args.think;
     let Some((slot, team)) = think.teams.member(t, &think.ranges) else {
         return;
@@ -407,14 +446,29 @@ pub fn collide_circles_and_think(t: Thread, args: &CollideThinkArgs) {
         substep: 0,
         reserved: 0,
     };
-    collide_slot::<false>(&collide, slot, team);
-    think_slot::<true>(think, slot, team);
+    collide_slot::<false, true>(&collide, slot, team);
+    think_slot::<true, true>(think, slot, team);
+    if team.leads() && slot < think.bodies.slots() {
+        let integrate = IntegrateArgs {
+            bodies: think.bodies,
+            kinds: think.kinds,
+            contacts: think.contacts,
+            space: think.space,
+            field: args.field,
+            dt: args.dt,
+            integrator: args.integrator,
+            substep: 0,
+            reserved: 0,
+        };
+        integrate_slot(&integrate, slot);
+    }
 }
 
 /// Slot `slot`'s share of [`think`], by its `team`: if a body of a kind with a machine
-/// lives there, perceive (the team), transition and act (its first lane).
+/// lives there, perceive (the team), transition and act (its first lane); `MOVING` as in
+/// [`look`].
 #[inline(always)]
-fn think_slot<const TEAMS: bool>(args: &ThinkArgs, slot: u32, team: Team) {
+fn think_slot<const TEAMS: bool, const MOVING: bool>(args: &ThinkArgs, slot: u32, team: Team) {
     // Without teams the width is known to be 1, and the teams' code compiles out.
     let team = if TEAMS { team } else { Team::ALONE };
     let b = &args.bodies;
@@ -446,11 +500,13 @@ fn think_slot<const TEAMS: bool>(args: &ThinkArgs, slot: u32, team: Team) {
     };
     match Machine::from_u32(brain.machine) {
         Machine::Kamikaze => {
-            think_as::<{ Machine::Kamikaze as u32 }>(args, &brain, &looker, full, team)
+            think_as::<{ Machine::Kamikaze as u32 }, MOVING>(args, &brain, &looker, full, team)
         }
-        Machine::Group => think_as::<{ Machine::Group as u32 }>(args, &brain, &looker, full, team),
+        Machine::Group => {
+            think_as::<{ Machine::Group as u32 }, MOVING>(args, &brain, &looker, full, team)
+        }
         Machine::Tricky => {
-            think_as::<{ Machine::Tricky as u32 }>(args, &brain, &looker, full, team)
+            think_as::<{ Machine::Tricky as u32 }, MOVING>(args, &brain, &looker, full, team)
         }
         Machine::None => {}
     }
@@ -459,7 +515,7 @@ fn think_slot<const TEAMS: bool>(args: &ThinkArgs, slot: u32, team: Team) {
 /// One body, `looker`, of a `MACHINE` kind driven by `brain`, whose bodies are born with
 /// `full` energy: perceive, transition, act.
 #[inline(always)]
-fn think_as<const MACHINE: u32>(
+fn think_as<const MACHINE: u32, const MOVING: bool>(
     args: &ThinkArgs,
     brain: &Brain,
     looker: &Looker,
@@ -468,7 +524,7 @@ fn think_as<const MACHINE: u32>(
 ) {
     let b = &args.bodies;
     let machine = Machine::from_u32(MACHINE);
-    let sight = look(args, brain, machine, looker, team);
+    let sight = look::<MOVING>(args, brain, machine, looker, team);
     if !team.leads() {
         return;
     }

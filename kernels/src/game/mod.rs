@@ -6,7 +6,8 @@
 //!    brings them to life;
 //! 2. the broad phase (`crate::sim::broad`);
 //! 3. the narrow phase (`crate::sim::narrow`): contacts, damage (in small worlds without
-//!    rectangles, in the machines' launch: [`ai::collide_circles_and_think`]);
+//!    rectangles, with the machines and the integrator in one launch:
+//!    [`ai::collide_think_integrate`]);
 //! 4. [`ai::think`], once per enemy kind: perception through the grid, the finite-state
 //!    machine ([`fsm`]), the steering force;
 //! 5. integration; then [`autopilot::autopilot`] (the next step's input, from this step's

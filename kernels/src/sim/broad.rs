@@ -30,7 +30,7 @@ use crate::{DevSlice, Thread, asked, device_data, kernel_args};
 
 device_data! {
     /// The grid's arrays: what the broad phase builds each step and [`CellIndex`] queries.
-    pub struct Grid(slots, buckets) {
+    pub struct Grid(slots, buckets, moving) {
         /// Each slot's bucket, or [`NO_BUCKET`].
         keys: [u32; slots],
         /// Each slot's arrival rank in its bucket; the merge passes' runs afterwards.
@@ -47,6 +47,9 @@ device_data! {
         slots: [u32; slots],
         /// Each entry's position.
         pos: [Vec2; slots],
+        /// Each entry's velocity, in worlds whose bodies move in the launch that queries
+        /// the grid (`moving` = slots; else none): see [`CellIndex::vel`].
+        vel: [Vec2; moving],
     }
 }
 
@@ -133,6 +136,8 @@ kernel_args! {
     pub struct OrderArgs {
         /// The bodies' positions.
         pub pos: DevSlice<Vec2>,
+        /// The bodies' velocities (read only where `entry_vel` is not empty).
+        pub vel: DevSlice<Vec2>,
         /// Each slot's bucket.
         pub keys: DevSlice<u32>,
         /// Each bucket's first entry; the last element is the number of live bodies.
@@ -144,6 +149,8 @@ kernel_args! {
         /// Output: each entry's position, so that a query reads its neighbours' places in a
         /// row instead of one scattered load per neighbour.
         pub entry_pos: DevSlice<Vec2>,
+        /// Output: each entry's velocity, or empty (see [`CellIndex::vel`]).
+        pub entry_vel: DevSlice<Vec2>,
         /// Output when `bounded`: the entries of buckets larger than [`RUN`], each run of
         /// [`RUN`] entries in slot order, for [`merge_runs`] to merge.
         pub runs: DevSlice<u32>,
@@ -180,6 +187,12 @@ pub fn order_cells(t: Thread, args: &OrderArgs) {
     }
     let key = asked(args.keys.get(slot));
     let pos = asked(args.pos.get(slot));
+    let keeps_vel = !args.entry_vel.is_empty();
+    let vel = asked(if keeps_vel {
+        args.vel.get(slot)
+    } else {
+        Vec2::ZERO
+    });
     let (first, end) = (args.start.get(key), args.start.get(key + 1));
     if args.bounded != 0 {
         if end - first > RUN {
@@ -201,6 +214,9 @@ pub fn order_cells(t: Thread, args: &OrderArgs) {
     });
     args.slots.set(first + rank, slot);
     args.entry_pos.set(first + rank, pos);
+    if keeps_vel {
+        args.entry_vel.set(first + rank, vel);
+    }
 }
 
 kernel_args! {
@@ -208,6 +224,8 @@ kernel_args! {
     pub struct MergeArgs {
         /// The bodies' positions.
         pub pos: DevSlice<Vec2>,
+        /// The bodies' velocities (read only where `entry_vel` is not empty).
+        pub vel: DevSlice<Vec2>,
         /// Each bucket's first entry; the last element is the number of live bodies.
         pub start: DevSlice<u32>,
         /// The large buckets' entries, in sorted runs of `run`.
@@ -219,6 +237,8 @@ kernel_args! {
         pub slots: DevSlice<u32>,
         /// Output: the grid's entry positions, likewise.
         pub entry_pos: DevSlice<Vec2>,
+        /// Output: each entry's velocity, or empty (see [`CellIndex::vel`]).
+        pub entry_vel: DevSlice<Vec2>,
         /// Length of the sorted runs in `src`.
         pub run: u32,
         /// Keeps the struct free of implicit padding.
@@ -281,6 +301,9 @@ pub fn merge_runs(t: Thread, args: &MergeArgs) {
     if end - first <= 2 * run {
         args.slots.set(at, x);
         args.entry_pos.set(at, args.pos.get(x));
+        if !args.entry_vel.is_empty() {
+            args.entry_vel.set(at, args.vel.get(x));
+        }
         args.dst.set(at, DONE);
     } else {
         args.dst.set(at, x);
@@ -295,6 +318,10 @@ pub struct CellIndex {
     pub slots: DevSlice<u32>,
     /// The position of each entry's body when the grid was built.
     pub pos: DevSlice<Vec2>,
+    /// The velocity of each entry's body when the grid was built, in worlds whose bodies
+    /// move in the launch that queries the grid (whose own velocities then change under the
+    /// queries); empty elsewhere, where the bodies' own are read (see [`CellIndex::vel_at`]).
+    pub vel: DevSlice<Vec2>,
     /// First entry of each bucket in `slots`, and one more element: the number of entries.
     /// Bucket `b` is `slots[start[b] .. start[b + 1]]`.
     pub start: DevSlice<u32>,
@@ -324,16 +351,33 @@ pub struct Near {
 }
 
 impl CellIndex {
-    /// Calls `visit(slot, kind, position)` for every body `near` asks for, with its position
-    /// when the grid was built. Each
-    /// body once, in a fixed order: kind by kind in increasing order, then row by row of the
-    /// block, each row's cells from left to right (as the block wraps), by increasing slot
-    /// inside a cell. Since buckets are kind-major, the cells of a row that are neighbours
+    /// The velocity, when the grid was built, of the body at entry `entry` (slot `slot`):
+    /// with `MOVING` (bodies move in the launch that queries), the grid's copy, else the
+    /// body's own, `vel[slot]`, which has not changed since.
+    #[inline(always)]
+    pub fn vel_at<const MOVING: bool>(&self, entry: u32, slot: u32, vel: &DevSlice<Vec2>) -> Vec2 {
+        if MOVING {
+            self.vel.get(entry)
+        } else {
+            vel.get(slot)
+        }
+    }
+
+    /// Calls `visit(slot, kind, position, entry)` for every body `near` asks for, with its
+    /// position when the grid was built and the index of its entry. Each body once, in a
+    /// fixed order: kind by kind in increasing order, then row by row of the block, each
+    /// row's cells from left to right (as the block wraps), by increasing slot inside a
+    /// cell. Since buckets are kind-major, the cells of a row that are neighbours
     /// in the grid too are one run of entries: three runs per kind, not nine. With a
     /// [`CellIndex::cap`], the query stops after that many entries, and reads the whole
     /// block whatever the reach, so that a cap counts the same entries at every reach.
     #[inline(always)]
-    pub fn for_each_near(&self, space: &Space, near: Near, mut visit: impl FnMut(u32, u32, Vec2)) {
+    pub fn for_each_near(
+        &self,
+        space: &Space,
+        near: Near,
+        mut visit: impl FnMut(u32, u32, Vec2, u32),
+    ) {
         let block = self.block(space, near);
         let mut rest = near.mask & kinds_mask(self.kinds);
         // Entries the cap still allows.
@@ -356,7 +400,7 @@ impl CellIndex {
                         for entry in start..end {
                             let (slot, at) = ahead;
                             ahead = self.entry(entry + 1, end);
-                            visit(slot, kind, at);
+                            visit(slot, kind, at, entry);
                         }
                     }
                     left -= end.saturating_sub(start);
@@ -401,14 +445,14 @@ impl CellIndex {
         team: Team,
         space: &Space,
         near: Near,
-        test: impl Fn(u32, u32, Vec2) -> Option<R>,
+        test: impl Fn(u32, u32, Vec2, u32) -> Option<R>,
         mut fold: impl FnMut(R),
     ) {
         let (lane, width) = team.stride();
         if width == 1 {
             // One thread walks every entry: the plain query.
-            self.for_each_near(space, near, |slot, kind, at| {
-                if let Some(found) = test(slot, kind, at) {
+            self.for_each_near(space, near, |slot, kind, at, entry| {
+                if let Some(found) = test(slot, kind, at, entry) {
                     fold(found);
                 }
             });
@@ -419,7 +463,7 @@ impl CellIndex {
             while first < end {
                 let entry = first + lane;
                 let found = if entry < end {
-                    test(self.slots.get(entry), kind, self.pos.get(entry))
+                    test(self.slots.get(entry), kind, self.pos.get(entry), entry)
                 } else {
                     None
                 };
@@ -443,21 +487,27 @@ impl CellIndex {
         space: &Space,
         near: Near,
         init: A,
-        add: impl Fn(A, u32, u32, Vec2) -> A,
+        add: impl Fn(A, u32, u32, Vec2, u32) -> A,
         merge: impl Fn(A, A) -> A,
     ) -> A {
         let (lane, width) = team.stride();
         let mut value = init;
         if width == 1 {
-            self.for_each_near(space, near, |slot, kind, at| {
-                value = add(value, slot, kind, at);
+            self.for_each_near(space, near, |slot, kind, at, entry| {
+                value = add(value, slot, kind, at, entry);
             });
             return value;
         }
         self.walk_runs_in(team, space, near, |kind, start, end| {
             let mut entry = start + lane;
             while entry < end {
-                value = add(value, self.slots.get(entry), kind, self.pos.get(entry));
+                value = add(
+                    value,
+                    self.slots.get(entry),
+                    kind,
+                    self.pos.get(entry),
+                    entry,
+                );
                 entry += width;
             }
         });

@@ -140,11 +140,16 @@ pub fn limit_speed(vel: Vec2, max_speed: f32) -> Vec2 {
 /// boundary rule keeps it in the world.
 #[inline(always)]
 pub fn integrate(t: Thread, args: &IntegrateArgs) {
-    let bodies = &args.bodies;
     let slot = t.global();
-    if slot >= bodies.slots() {
-        return;
+    if slot < args.bodies.slots() {
+        integrate_slot(args, slot);
     }
+}
+
+/// Slot `slot`'s share of [`integrate`] (a slot of the world).
+#[inline(always)]
+pub fn integrate_slot(args: &IntegrateArgs, slot: u32) {
+    let bodies = &args.bodies;
     // Every load of the slot, then its kind's entry, before anything waits on them, and
     // the new place and velocity stored whether the body moves or not (a body that does not
     // move gets its own back): with no branch between the loads and the stores, the

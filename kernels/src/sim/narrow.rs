@@ -168,15 +168,20 @@ impl Handed for Touch {
 #[inline(always)]
 fn collide_bounds<const RECTS: bool>(t: Thread, args: &CollideArgs) {
     if let Some((slot, team)) = args.teams.member(t, &args.ranges) {
-        collide_slot::<RECTS>(args, slot, team);
+        collide_slot::<RECTS, false>(args, slot, team);
     }
 }
 
 /// Slot `slot`'s share of [`collide`], by its `team`: the team sums the slot's responses to
 /// the bodies it overlaps, and its first lane writes them and the slot's energy loss (with
-/// `RECTS` false, every kind taken as its circle).
+/// `RECTS` false, every kind taken as its circle; with `MOVING`, the others' velocities
+/// read from the grid's entries: see [`CellIndex::vel_at`]).
 #[inline(always)]
-pub fn collide_slot<const RECTS: bool>(args: &CollideArgs, slot: u32, team: Team) {
+pub fn collide_slot<const RECTS: bool, const MOVING: bool>(
+    args: &CollideArgs,
+    slot: u32,
+    team: Team,
+) {
     let bodies = &args.bodies;
     let out = &args.contacts;
     if slot >= bodies.slots() {
@@ -211,7 +216,7 @@ pub fn collide_slot<const RECTS: bool>(args: &CollideArgs, slot: u32, team: Team
             team,
             &args.space,
             near,
-            |other, other_kind, at| {
+            |other, other_kind, at, entry| {
                 if other == slot {
                     return None;
                 }
@@ -223,7 +228,7 @@ pub fn collide_slot<const RECTS: bool>(args: &CollideArgs, slot: u32, team: Team
                     c.normal,
                     c.depth,
                     (inv, inverse_mass(bodies.mass.get(other))),
-                    (vel, bodies.vel.get(other)),
+                    (vel, args.grid.vel_at::<MOVING>(entry, other, &bodies.vel)),
                     info.restitution.max(other_info.restitution),
                 );
                 Some(Touch {
