@@ -341,14 +341,9 @@ impl<T: Copy> DevSlice<T> {
     where
         T: bytemuck::Pod,
     {
-        if first >= end {
+        let Some((base, end, stride)) = self.strided((first, end, stride)) else {
             return init;
-        }
-        if end > self.len {
-            out_of_bounds(end - 1, self.len);
-        }
-        let base = self.addr as *const T;
-        let (end, stride) = (u64::from(end), u64::from(stride.max(1)));
+        };
         // SAFETY (both loops): every index read is below `end`, at most the length (checked).
         let read = |i: u64| unsafe { base.wrapping_add(i as usize).read() };
         let (mut acc, mut i) = (init, u64::from(first));
@@ -381,6 +376,21 @@ impl<T: Copy> DevSlice<T> {
         acc
     }
 
+    /// The first element's address, `end` and `stride` (at least 1) of a walk from `first`
+    /// by `stride` below `end`, after one bounds check for all of it; `None` if it reads
+    /// nothing.
+    #[inline(always)]
+    fn strided(&self, (first, end, stride): (u32, u32, u32)) -> Option<(*const T, u64, u64)> {
+        if first >= end {
+            return None;
+        }
+        if end > self.len {
+            out_of_bounds(end - 1, self.len);
+        }
+        let base = self.addr as *const T;
+        Some((base, u64::from(end), u64::from(stride.max(1))))
+    }
+
     /// Folds `f` over the runs of `N` elements from `first`, `first + stride`, … below `end`,
     /// in that order, with a single bounds check: [`RUNS_IN_FLIGHT`] runs at a time, whose
     /// loads the GPU keeps in flight together (where [`DevSlice::fold_every`] keeps four
@@ -398,14 +408,9 @@ impl<T: Copy> DevSlice<T> {
     where
         T: bytemuck::Pod,
     {
-        if first >= end {
+        let Some((base, end, stride)) = self.strided((first, end, stride)) else {
             return init;
-        }
-        if end > self.len {
-            out_of_bounds(end - 1, self.len);
-        }
-        let base = self.addr as *const T;
-        let (end, stride) = (u64::from(end), u64::from(stride.max(1)));
+        };
         let last = end.saturating_sub(N as u64);
         // SAFETY: every run read ends by `end`, at most the length (checked).
         let read = |i: u64| unsafe { base.wrapping_add(i as usize).cast::<[T; N]>().read() };
