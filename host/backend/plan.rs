@@ -156,8 +156,8 @@ impl Op {
 
     /// The same op, run beside the ops after it in its plan: on the GPU on a stream of its
     /// own (another op beside the others gets another), which the plan joins back at its
-    /// end (a graph branch), so that it costs the
-    /// step nothing while they run longer; in order on the CPU.
+    /// end (a graph branch), so that it costs the step nothing while they run longer; in
+    /// order on the CPU.
     ///
     /// # Safety
     /// It reads nothing that the ops after it in its plan write, and writes nothing that

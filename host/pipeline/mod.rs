@@ -10,9 +10,9 @@
 //! | `births` | the enemies the master thread ordered come alive | games |
 //! | `broad` | the grid: bucket counts, their prefix sum, placement, canonical order | games, and worlds where something collides |
 //! | `renumber` | every few steps, the bodies move to slots in the grid's order within their kinds' ranges (gather, settle) | worlds with a grid of 8,192 slots or more, or as the scene's physics says |
-//! | `narrow` | contacts and their response (`collide_circles` without rectangles; in games without rectangles whose machines run in teams, inside `think`'s launch) | worlds where something collides |
-//! | `think` | every enemy's machine, in one launch over the enemy kinds' slots (or over every kind's, with the narrow phase: `collide_circles_and_think`) | games with enemies |
-//! | `integrate` | Euler, the boundary rule, deaths | always |
+//! | `narrow` | contacts and their response (`collide_circles` without rectangles; in small games of circles whose machines run in teams, inside `think`'s launch) | worlds where something collides |
+//! | `think` | every enemy's machine, in one launch over the enemy kinds' slots (or over every kind's, with the narrow phase and the integrator: `collide_think_integrate`) | games with enemies |
+//! | `integrate` | Euler, the boundary rule, deaths (inside `think`'s launch where the narrow phase is) | always |
 //! | `substeps` | broad, narrow and integrate again for each further substep | worlds with substeps |
 //! | `pilot` | the autopilot's input for the next step (one warp), beside the stages after it (on the GPU a branch of the step's graph) | games |
 //! | `free` | the free lists: flags (which mark the step's deaths), their prefix sum, gather | always |

@@ -171,6 +171,7 @@ impl World {
         let think_teams = game
             .as_ref()
             .and_then(|g| teams::think(lanes, resident, g, &layout, &space));
+        let moving = moves_in_one_launch(spec, &layout, game.is_some());
         let config = Config {
             collide: collides.then_some(if spec.has_rects() {
                 registry::COLLIDE
@@ -182,15 +183,13 @@ impl World {
             grid: builds_grid(spec, game.is_some()),
             narrow_teams: teams::narrow(lanes, resident, spec, &layout, &space),
             think_teams,
-            one_launch: moves_in_one_launch(spec, &layout, game.is_some())
-                && think_teams.is_some_and(|teams| !teams.single()),
+            one_launch: moving && think_teams.is_some_and(|teams| !teams.single()),
             renumber_every: renumber_every(spec, &layout, game.is_some()),
             free_in_one_launch: (resident.is_some() || layout.slots <= CPU_ONE_LAUNCH_SLOTS)
                 && (layout.ranges.iter()).all(|r| r.capacity <= free_list::ONE_LAUNCH_RANGE),
         };
         let state = WorldState::new(device, spec, &layout, seed)?;
         let renumbers = config.renumber_every != 0;
-        let moving = moves_in_one_launch(spec, &layout, game.is_some());
         let scratch = Scratch::new(device, &layout, &space, kinds, (renumbers, moving))?;
         let game = match game {
             Some(config) => {

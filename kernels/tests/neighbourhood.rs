@@ -1,8 +1,9 @@
-//! The rows and columns of a query's 3×3 block (`Space::neighbourhood`, `Space::neighbourhood_within`), checked against
-//! the block listed by hand: the cells at offsets -1, 0, +1, wrapped or cut at the edges,
-//! each once (a wrapping grid narrower than three lists its indices from 0), and their runs
-//! of consecutive indices. With a finite reach, the block keeps the cell of every point
-//! within reach (as the queries measure it, in `f32`), and no neighbour lying farther.
+//! The rows and columns of a query's 3×3 block (`Space::neighbourhood`,
+//! `Space::neighbourhood_within`), checked against the block listed by hand: the cells at
+//! offsets -1, 0, +1, wrapped or cut at the edges, each once (a wrapping grid narrower than
+//! three lists its indices from 0), and their runs of consecutive indices. With a finite
+//! reach, the block keeps the cell of every point within reach (as the queries measure it,
+//! in `f32`), and no neighbour lying farther.
 
 use glam::Vec2;
 use gpuwars_kernels::sim::Space;
