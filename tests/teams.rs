@@ -50,8 +50,10 @@ proptest! {
             .map(|k| u64::from(capacities[k].next_multiple_of(32)) * u64::from(widths[k]))
             .sum();
         prop_assert_eq!(threads, expected);
+        let warps: Vec<u32> = teams.warp_table(&table).collect();
+        prop_assert_eq!(warps.len() as u64, threads / 32);
         // SAFETY: the table outlives every use of the view, and nothing writes it meanwhile.
-        let view = unsafe { DevSlice::from_raw_parts(table.as_ptr() as u64, n as u32) };
+        let view = unsafe { DevSlice::from_raw_parts(warps.as_ptr() as u64, warps.len() as u32) };
         let block_dim = 128;
         let mut seen = vec![0u32; end_slot as usize];
         // One block more than the threads, as a launch rounds up.

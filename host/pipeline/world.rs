@@ -6,7 +6,6 @@
 //! kind's for every kind) and never replaced, which is what each stage's `SAFETY` note
 //! relies on.
 
-use gpuwars_kernels::Kernel;
 use gpuwars_kernels::data::{Sizes, Unmade};
 use gpuwars_kernels::game::GameData;
 use gpuwars_kernels::game::control::{Command, Mailbox, Status};
@@ -18,6 +17,7 @@ use gpuwars_kernels::sim::broad::CellIndex;
 use gpuwars_kernels::sim::free_list;
 use gpuwars_kernels::sim::narrow::CollideArgs;
 use gpuwars_kernels::sim::teams::Teams;
+use gpuwars_kernels::{DevSlice, Kernel};
 
 use super::GameConfig;
 use super::teams::{self, Lanes};
@@ -37,7 +37,9 @@ pub(crate) struct Config {
     pub grid: bool,
     /// The narrow phase's threads per body of each kind.
     pub narrow_teams: Teams,
-    /// The machines' threads per body of each kind, if a kind has a machine.
+    /// The machines' threads per body of each kind, if a kind has a machine; where the
+    /// bodies take their step in one launch, every kind's (a kind with a machine keeping
+    /// its machine's width, the others taking their narrow phase's: see `Teams::within`).
     pub think_teams: Option<Teams>,
     /// Whether one launch runs the narrow phase, the machines and the integrator
     /// (`collide_think_integrate`), whose grid then keeps its entries' velocities: in games
@@ -76,6 +78,39 @@ pub(crate) struct GameState {
     pub effects: Option<(Particles<Buffers>, Burst)>,
 }
 
+/// The warp tables (`Teams::warp_table`) of the launches whose bodies get teams: none where
+/// every body gets one thread.
+pub(crate) struct TeamWarps {
+    pub narrow: Option<Buffer<u32>>,
+    pub think: Option<Buffer<u32>>,
+}
+
+impl TeamWarps {
+    /// The tables of `config`'s teams over slot ranges `ranges`, on `device`.
+    fn new(device: &Device, config: &Config, layout: &Layout) -> Result<Self, Error> {
+        let table = |teams: Option<Teams>| -> Result<Option<Buffer<u32>>, Error> {
+            match teams.filter(|teams| !teams.single()) {
+                Some(teams) => {
+                    let table: Vec<u32> = teams.warp_table(&layout.ranges).collect();
+                    Ok(Some(device.upload(&table)?))
+                }
+                None => Ok(None),
+            }
+        };
+        Ok(TeamWarps {
+            narrow: table(Some(config.narrow_teams))?,
+            think: table(config.think_teams)?,
+        })
+    }
+
+    /// The view of `table`, made by `b`; empty where there is none.
+    pub fn view(b: &mut Binder, table: &Option<Buffer<u32>>) -> DevSlice<u32> {
+        table
+            .as_ref()
+            .map_or(DevSlice::EMPTY, |table| b.view(table))
+    }
+}
+
 /// A world on a device: description, buffers, and the game's if it plays one.
 pub(crate) struct World {
     pub spec: WorldSpec,
@@ -84,6 +119,7 @@ pub(crate) struct World {
     pub config: Config,
     pub state: WorldState,
     pub scratch: Scratch,
+    pub warps: TeamWarps,
     pub game: Option<GameState>,
 }
 
@@ -172,6 +208,8 @@ impl World {
             .as_ref()
             .and_then(|g| teams::think(lanes, resident, g, &layout, &space));
         let moving = moves_in_one_launch(spec, &layout, game.is_some());
+        let narrow_teams = teams::narrow(lanes, resident, spec, &layout, &space);
+        let one_launch = moving && think_teams.is_some_and(|teams| !teams.single());
         let config = Config {
             collide: collides.then_some(if spec.has_rects() {
                 registry::COLLIDE
@@ -181,9 +219,12 @@ impl World {
             }),
             // A game's autopilot looks through the grid whenever it flies.
             grid: builds_grid(spec, game.is_some()),
-            narrow_teams: teams::narrow(lanes, resident, spec, &layout, &space),
-            think_teams,
-            one_launch: moving && think_teams.is_some_and(|teams| !teams.single()),
+            narrow_teams,
+            think_teams: match one_launch {
+                true => think_teams.map(|teams| teams.within(&narrow_teams)),
+                false => think_teams,
+            },
+            one_launch,
             renumber_every: renumber_every(spec, &layout, game.is_some()),
             free_in_one_launch: (resident.is_some() || layout.slots <= CPU_ONE_LAUNCH_SLOTS)
                 && (layout.ranges.iter()).all(|r| r.capacity <= free_list::ONE_LAUNCH_RANGE),
@@ -191,6 +232,7 @@ impl World {
         let state = WorldState::new(device, spec, &layout, seed)?;
         let renumbers = config.renumber_every != 0;
         let scratch = Scratch::new(device, &layout, &space, kinds, (renumbers, moving))?;
+        let warps = TeamWarps::new(device, &config, &layout)?;
         let game = match game {
             Some(config) => {
                 let mut data = GameData::build(&mut device.zeroed(), kinds, config.waves.len())?;
@@ -225,6 +267,7 @@ impl World {
             config,
             state,
             scratch,
+            warps,
             game,
         })
     }

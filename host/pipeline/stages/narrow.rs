@@ -4,7 +4,7 @@ use gpuwars_kernels::sim::narrow::{CollideArgs, Relaxation};
 
 use crate::Op;
 use crate::backend::Binder;
-use crate::pipeline::world::World;
+use crate::pipeline::world::{TeamWarps, World};
 use crate::primitives::threads;
 
 /// The narrow phase of substep `substep`, a team of threads a slot, if anything collides
@@ -22,7 +22,7 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
     let args = CollideArgs {
         bodies: world.state.bodies(&mut b),
         kinds: b.view(&world.state.tables.info),
-        ranges: b.view(&world.state.tables.ranges),
+        warps: TeamWarps::view(&mut b, &world.warps.narrow),
         teams: world.config.narrow_teams,
         space: world.space,
         grid: world.cells(&mut b),

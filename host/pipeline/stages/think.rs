@@ -8,7 +8,7 @@ use super::integrate::step_dt;
 use super::narrow::relaxation;
 use crate::Op;
 use crate::backend::Binder;
-use crate::pipeline::world::World;
+use crate::pipeline::world::{TeamWarps, World};
 use crate::primitives::threads;
 
 /// A team of threads a slot of the kinds with a machine, in games with enemies; where the
@@ -17,10 +17,6 @@ use crate::primitives::threads;
 pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     let (Some(game), Some(teams)) = (&world.game, world.config.think_teams) else {
         return Vec::new();
-    };
-    let teams = match world.config.one_launch {
-        true => teams.within(&world.config.narrow_teams),
-        false => teams,
     };
     let slots = u64::from(teams.end_slot - teams.first_slot);
     // SAFETY: the views go into this op only.
@@ -32,8 +28,9 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         grid: world.cells(&mut b),
         contacts: world.scratch.contacts(&mut b),
         brains: b.view(&game.data.brains),
-        ranges: b.view(&world.state.tables.ranges),
+        warps: TeamWarps::view(&mut b, &world.warps.think),
         teams,
+        status: b.view(&game.data.status),
         ship: game.config.rules.ship.start,
         shot_kind: game.config.rules.shot_kind,
     };

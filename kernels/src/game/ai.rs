@@ -16,13 +16,14 @@
 
 use glam::Vec2;
 
+use super::control::Status;
 use super::fsm::{Machine, Percept, State, next_state};
 use super::rules::Brain;
 use crate::sim::broad::{CellIndex, Near, kind_bit};
 use crate::sim::integrate::{Field, IntegrateArgs, integrate_slot};
 use crate::sim::narrow::{CollideArgs, Relaxation, collide_slot};
 use crate::sim::teams::Teams;
-use crate::sim::{Bodies, Contacts, KindInfo, SlotRange, Space};
+use crate::sim::{Bodies, Contacts, KindInfo, Space};
 use crate::warp::{Handed, Team};
 use crate::{DevSlice, Thread, asked, kernel_args};
 
@@ -54,11 +55,15 @@ kernel_args! {
         pub contacts: Contacts,
         /// Each kind's brain (machine 0 for kinds without one).
         pub brains: DevSlice<Brain>,
-        /// Each kind's slots.
-        pub ranges: DevSlice<SlotRange>,
+        /// Each warp's first slot and team width ([`Teams::warp_table`]; empty where every
+        /// body gets one thread).
+        pub warps: DevSlice<u32>,
         /// How many threads each kind's bodies get, from the first kind with a machine to
         /// the last.
         pub teams: Teams,
+        /// The game's state: where the ship is as this step's grid was built (its
+        /// [`Status::ship`], one element).
+        pub status: DevSlice<Status>,
         /// The ship's slot.
         pub ship: u32,
         /// The kind of the ship's shots.
@@ -218,9 +223,15 @@ fn unfixed(v: [i64; 2], scale: f32) -> Vec2 {
 /// and unless it is a kamikaze its own kind and, if it avoids bullets, the shots'.
 #[inline(always)]
 pub fn sight_mask(brain: &Brain, machine: Machine, ship_kind: u32, shot_kind: u32) -> u32 {
-    let social = machine != Machine::Kamikaze;
-    let mut mask = kind_bit(ship_kind);
-    if social {
+    kind_bit(ship_kind) | others_mask(brain, machine, shot_kind)
+}
+
+/// The kinds of [`sight_mask`] but the ship's: those a body finds by walking the grid where
+/// it looks at the ship directly (see [`look`]).
+#[inline(always)]
+pub fn others_mask(brain: &Brain, machine: Machine, shot_kind: u32) -> u32 {
+    let mut mask = 0;
+    if machine != Machine::Kamikaze {
         mask |= kind_bit(brain.kind);
         if brain.avoid_bullets != 0 {
             mask |= kind_bit(shot_kind);
@@ -248,6 +259,12 @@ pub struct Looker {
 /// found through the grid's 3×3 neighbourhood by its `team` (every lane gets the same). A
 /// kamikaze looks only for the ship. With `MOVING` (bodies move in the launch that looks),
 /// the others' places and velocities come from the grid's entries.
+///
+/// Where the walk has no cap, the ship is not walked for: it is looked at where the status
+/// says it was as the grid was built. The grid's cells are no narrower than the widest
+/// vision, so a ship in sight lies in the block the walk reads: the walk would find it
+/// exactly when this check does (it is in the grid whenever a body thinks, since a step
+/// without a live ship is frozen), and a kamikaze walks nothing at all.
 #[inline(always)]
 pub fn look<const MOVING: bool>(
     args: &ThinkArgs,
@@ -269,7 +286,12 @@ pub fn look<const MOVING: bool>(
     let social = machine != Machine::Kamikaze;
     let dodges = social && brain.avoid_bullets != 0;
     let scale = fixed_scale(brain.vision);
-    let mask = sight_mask(brain, machine, ship_kind, args.shot_kind);
+    let direct = args.grid.cap == 0;
+    let ship_from_status = args.status.get(0).ship;
+    let mask = match direct {
+        true => others_mask(brain, machine, args.shot_kind),
+        false => sight_mask(brain, machine, ship_kind, args.shot_kind),
+    };
     // The whole block: reading only the cells within its vision made `think` slower
     // (paper 14.8 -> 17.2 µs on an H200), though fewer entries.
     let near = Near {
@@ -334,12 +356,18 @@ pub fn look<const MOVING: bool>(
         let rel = grid.vel_at::<MOVING>(entry, other, &b.vel) - vel;
         threat(offset, rel, radius).map_or(Vec2::ZERO, |(_, away)| away)
     });
-    let ship_at = |entry: u32| match MOVING {
-        true => grid.pos.get(entry),
-        false => b.pos.get(args.ship),
+    let ship = if direct {
+        let offset = args.space.offset(pos, ship_from_status);
+        (slot != args.ship && offset.length_squared() <= vision2).then_some(offset)
+    } else {
+        let at = |entry: u32| match MOVING {
+            true => grid.pos.get(entry),
+            false => b.pos.get(args.ship),
+        };
+        (seen.ship_seen != 0).then(|| args.space.offset(pos, at(seen.ship_seen - 1)))
     };
     Sight {
-        ship: (seen.ship_seen != 0).then(|| args.space.offset(pos, ship_at(seen.ship_seen - 1))),
+        ship,
         group: (seen.similar > 0).then(|| unfixed(seen.sum, scale) / seen.similar as f32),
         crowd: -unfixed(seen.crowd, UNIT_SCALE),
         dodge,
@@ -397,7 +425,7 @@ pub fn think_in_teams(t: Thread, args: &ThinkArgs) {
 
 #[inline(always)]
 fn think_with<const TEAMS: bool>(t: Thread, args: &ThinkArgs) {
-    if let Some((slot, team)) = args.teams.member(t, &args.ranges) {
+    if let Some((slot, team)) = args.teams.member(t, &args.warps) {
         think_slot::<TEAMS, false>(args, slot, team);
     }
 }
@@ -431,13 +459,13 @@ kernel_args! {
 #[inline(always)]
 pub fn collide_think_integrate(t: Thread, args: &BodyStepArgs) {
     let think = &args.think;
-    let Some((slot, team)) = think.teams.member(t, &think.ranges) else {
+    let Some((slot, team)) = think.teams.member(t, &think.warps) else {
         return;
     };
     let collide = CollideArgs {
         bodies: think.bodies,
         kinds: think.kinds,
-        ranges: think.ranges,
+        warps: think.warps,
         teams: think.teams,
         space: think.space,
         grid: think.grid,

@@ -166,7 +166,8 @@ pub struct Status {
     pub events: Events,
     /// The input this step applied (what a replay records).
     pub input: Input,
-    /// Where the ship is after the step (where it was last, once it is destroyed).
+    /// Where the ship is after the step (where it was last, once it is destroyed); while a
+    /// step is under way, where it is as the step's grid is built.
     pub ship: Vec2,
 }
 

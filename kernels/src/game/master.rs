@@ -168,6 +168,8 @@ pub fn master(t: Thread, args: &MasterArgs) {
         (aboard, shot_slot)
     };
     if aboard.ship_alive {
+        // Where the ship is as the step's grid is built (what the machines look at).
+        st.ship = aboard.ship_pos;
         fly_ship(args, &input, step, aboard.ship_energy);
         st.cooldown = st.cooldown.saturating_sub(1);
         if input.firing() && st.cooldown == 0 && aboard.shots_free > 0 {

@@ -12,7 +12,7 @@ use glam::Vec2;
 use super::bodies::{Bodies, Contacts};
 use super::broad::{CellIndex, Near};
 use super::contact::{contact, tie_break};
-use super::kinds::{Bound, KindInfo, SlotRange};
+use super::kinds::{Bound, KindInfo};
 use super::space::Space;
 use super::teams::Teams;
 use crate::warp::{Handed, Team};
@@ -25,8 +25,9 @@ kernel_args! {
         pub bodies: Bodies,
         /// Kind table.
         pub kinds: DevSlice<KindInfo>,
-        /// Each kind's slots.
-        pub ranges: DevSlice<SlotRange>,
+        /// Each warp's first slot and team width ([`Teams::warp_table`]; empty where every
+        /// body gets one thread).
+        pub warps: DevSlice<u32>,
         /// How many threads each kind's bodies get (every kind's).
         pub teams: Teams,
         /// The world and its grid.
@@ -167,7 +168,7 @@ impl Handed for Touch {
 
 #[inline(always)]
 fn collide_bounds<const RECTS: bool>(t: Thread, args: &CollideArgs) {
-    if let Some((slot, team)) = args.teams.member(t, &args.ranges) {
+    if let Some((slot, team)) = args.teams.member(t, &args.warps) {
         collide_slot::<RECTS, false>(args, slot, team);
     }
 }

@@ -114,34 +114,40 @@ impl Teams {
             .sum()
     }
 
+    /// Each warp's first slot and its bodies' team width, packed as `slot << 3 | log2(width)`,
+    /// for slot ranges `ranges` (indexed by kind): the table [`Teams::member`] reads, one
+    /// word a warp of the stage's [`Teams::threads`]. A kind's threads fill whole warps (its
+    /// padded range is a multiple of 32 slots), so a warp's lanes are one kind's.
+    pub fn warp_table<'a>(&'a self, ranges: &'a [SlotRange]) -> impl Iterator<Item = u32> + 'a {
+        (self.first_kind..self.end_kind).flat_map(move |k| {
+            let range = ranges[k as usize];
+            let log2 = self.width(k).trailing_zeros();
+            let slots = range.start..range.start + range.span();
+            slots
+                .step_by((WARP >> log2) as usize)
+                .map(move |slot| slot << 3 | log2)
+        })
+    }
+
     /// The slot the calling thread works on and its team, or `None` past the last slot and,
     /// on the CPU, for every lane but a team's first (which does the team's work alone).
+    /// `warps` is [`Teams::warp_table`]'s (unread where every body gets one thread): one
+    /// load a warp, where walking the kinds' ranges took hundreds of instructions.
     #[inline(always)]
-    pub fn member(&self, t: Thread, ranges: &DevSlice<SlotRange>) -> Option<(u32, Team)> {
+    pub fn member(&self, t: Thread, warps: &DevSlice<u32>) -> Option<(u32, Team)> {
         let global = t.global();
         if self.single() {
             let slot = self.first_slot.checked_add(global)?;
             return (slot < self.end_slot).then_some((slot, Team::new(t.lane(), 1)));
         }
-        // Every kind's range read at once (the thread waits for memory once, not once a
-        // kind), and the thread's kind found without a branch: its slot and team width.
-        let every_kind = (self.first_kind, self.end_kind, 1);
-        let first = (self.first_kind, 0u32, None);
-        let (_, _, found) = ranges.fold_every(every_kind, first, |(k, before, found), range| {
-            let log2 = self.width(k).trailing_zeros();
-            let threads = range.span() << log2;
-            // Below `before` only once found.
-            let i = global.wrapping_sub(before);
-            let here = found.is_none() & (i < threads);
-            let found = if here {
-                Some((range.start + (i >> log2), log2))
-            } else {
-                found
-            };
-            (k + 1, before + threads, found)
-        });
-        let (slot, log2) = found?;
+        let warp = global / WARP;
+        if warp >= warps.len() {
+            return None;
+        }
+        let entry = warps.get(warp);
+        let log2 = entry & 7;
         let team = Team::new(t.lane(), 1 << log2);
+        let slot = (entry >> 3) + (t.lane() >> log2);
         (!team.is_copy()).then_some((slot, team))
     }
 }
