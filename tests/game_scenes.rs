@@ -72,7 +72,7 @@ fn a_scene_launches_only_the_stages_it_uses() {
     // Every step launches the same sequence: births and the autopilot decide on the device
     // whether there is anything to do.
     for kernel in [
-        registry::BIRTHS.name,
+        registry::BIRTHS_AND_COUNT.name,
         registry::MASTER.name,
         registry::TALLY.name,
     ] {

@@ -7,8 +7,8 @@
 //! | stage | launches | in |
 //! |---|---|---|
 //! | `master` | the master before the physics: the step's input (the player's, or the one the autopilot left), ship, shots, spawns (one warp) | games |
-//! | `births` | the enemies the master thread ordered come alive | games |
-//! | `broad` | the grid: bucket counts, their prefix sum, placement, canonical order | games, and worlds where something collides |
+//! | `births` | the enemies the master thread ordered come alive | games of more than 2¹⁸ slots (in smaller ones, inside the broad phase's first launch: `births_and_count`) |
+//! | `broad` | the grid: bucket counts (with the births in small games), their prefix sum, placement, canonical order | games, and worlds where something collides |
 //! | `renumber` | every few steps, the bodies move to slots in the grid's order within their kinds' ranges (gather, settle) | worlds with a grid of 8,192 slots or more, or as the scene's physics says |
 //! | `narrow` | contacts and their response (`collide_circles` without rectangles; in small games of circles whose machines run in teams, inside `think`'s launch) | worlds where something collides |
 //! | `think` | every enemy's machine, in one launch over the enemy kinds' slots (or over every kind's, with the narrow phase and the integrator: `collide_think_integrate`) | games with enemies |

@@ -14,10 +14,12 @@ pub enum Stage {
     /// The master before the physics: the step's input (the player's, or the one the
     /// autopilot left), ship, shots, spawns (one warp); games.
     Master,
-    /// The enemies the master ordered come alive; games.
+    /// The enemies the master ordered come alive; games of more than 2¹⁸ slots (in smaller
+    /// ones, in the broad phase's first launch).
     Births,
-    /// The grid: bucket counts, their prefix sum, placement, canonical order; games, and
-    /// worlds where something collides.
+    /// The grid: bucket counts (in games of at most 2¹⁸ slots, after the births in the same
+    /// launch), their prefix sum, placement, canonical order; games, and worlds where
+    /// something collides.
     Broad,
     /// The bodies move to slots in the grid's order within their kinds' ranges (gather,
     /// settle); every few steps, in worlds that renumber.
@@ -82,7 +84,7 @@ impl Stage {
         match self {
             Stage::Master => stages::master::ops(world),
             Stage::Births => stages::births::ops(world),
-            Stage::Broad => stages::broad::ops(world),
+            Stage::Broad => stages::broad::ops(world, 0),
             Stage::Renumber => stages::renumber::ops(world),
             Stage::Narrow => stages::narrow::ops(world, 0),
             Stage::Think => stages::think::ops(world),

@@ -110,6 +110,9 @@ kernels! {
     TALLY = tally(master::MasterArgs) => master::tally;
     /// Brings the enemies the master thread ordered to life at random places.
     BIRTHS = births(master::BirthArgs) => master::births;
+    /// Brings the enemies the master thread ordered to life at random places, and counts
+    /// every slot into the grid's buckets (the broad phase's first launch, in games).
+    BIRTHS_AND_COUNT = births_and_count(master::BirthCountArgs) => master::births_and_count;
     /// The enemies' machines, every live enemy in grid order: perceive, transition, steer.
     THINK = think(ai::ThinkArgs) => ai::think;
     /// The enemies' machines with teams of threads for the bodies that expect many

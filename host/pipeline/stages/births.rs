@@ -1,6 +1,5 @@
-//! `births`: the enemies the master ordered come alive.
+//! `births`: the enemies the master ordered come alive, in a launch of their own (large games).
 
-use gpuwars_kernels::game::master::BirthArgs;
 use gpuwars_kernels::registry;
 
 use crate::Op;
@@ -12,23 +11,16 @@ use crate::primitives::threads;
 /// birth, so a step that orders none costs a short launch at any size.
 const BIRTH_THREADS: u32 = 65_536;
 
-/// Up to [`BIRTH_THREADS`] threads (no more than the slots), in games.
+/// Up to [`BIRTH_THREADS`] threads (no more than the slots), in games whose births are not
+/// in the grid's count (see `Config::births_in_count`).
 pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
-    let Some(game) = &world.game else {
+    if world.config.births_in_count {
         return Vec::new();
-    };
+    }
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
-    let args = BirthArgs {
-        bodies: world.state.bodies(&mut b),
-        kinds: b.view(&world.state.tables.info),
-        ranges: b.view(&world.state.tables.ranges),
-        free: world.state.free(&mut b),
-        births: b.view(&game.data.births),
-        birth_speed: b.view(&game.data.birth_speed),
-        space: world.space,
-        rules: game.config.rules,
-        reserved: 0,
+    let Some(args) = world.birth_args(&mut b) else {
+        return Vec::new();
     };
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
     vec![unsafe {

@@ -1,6 +1,7 @@
 //! `broad`: the grid: bucket counts, their prefix sum into starts, placement (which zeroes
 //! the counts for the next build), canonical order.
 
+use gpuwars_kernels::game::master::BirthCountArgs;
 use gpuwars_kernels::registry;
 use gpuwars_kernels::sim::broad::{self, CountArgs, MergeArgs, OrderArgs, PlaceArgs};
 
@@ -9,8 +10,11 @@ use crate::backend::Binder;
 use crate::pipeline::world::World;
 use crate::primitives::{LIGHT_BLOCK, threads, threads_in};
 
-/// The broad phase's launches, a thread a slot each, if the world has a grid.
-pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
+/// The broad phase's launches of substep `substep`, a thread a slot each, if the world has
+/// a grid; in the first substep of a game whose births are in the count
+/// (`Config::births_in_count`), the count brings the enemies the master ordered to life
+/// first (`births_and_count`).
+pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
     if !world.config.grid {
         return Vec::new();
     }
@@ -34,14 +38,25 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     // SAFETY (every op below): the world's buffers, sized as the kernels ask (see `World`);
     // the counts are zero before the first build (allocated zeroed) and after every other
     // (`place_in_cells` zeroes them).
-    let mut ops = vec![unsafe {
-        threads(
-            registry::COUNT_CELLS,
-            slots,
-            count,
-            b,
-            28 * u64::from(slots),
-        )
+    let births = match substep {
+        0 if world.config.births_in_count => world.birth_args(&mut b),
+        _ => None,
+    };
+    let mut ops = vec![match births {
+        Some(births) => {
+            let args = BirthCountArgs { births, count };
+            let bytes = 32 * u64::from(slots);
+            unsafe { threads(registry::BIRTHS_AND_COUNT, slots, args, b, bytes) }
+        }
+        None => unsafe {
+            threads(
+                registry::COUNT_CELLS,
+                slots,
+                count,
+                b,
+                28 * u64::from(slots),
+            )
+        },
     }];
     ops.extend(
         world

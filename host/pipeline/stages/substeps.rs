@@ -8,7 +8,7 @@ use crate::pipeline::world::World;
 pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     (1..world.spec.physics.substeps)
         .flat_map(|k| {
-            let mut ops = broad::ops(world);
+            let mut ops = broad::ops(world, k);
             ops.extend(narrow::ops(world, k));
             ops.extend(integrate::ops(world, k));
             ops

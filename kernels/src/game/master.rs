@@ -21,10 +21,11 @@ use glam::Vec2;
 
 use super::control::{DESTROYED, Events, Input, Mailbox, PLAYING, Status, TOO_SLOW};
 use super::rules::{Rules, Wave};
-use crate::sim::free_list::FreeSlots;
+use crate::sim::broad::{CountArgs, count_slot};
+use crate::sim::free_list::{FREE, FreeSlots, free_rank};
 use crate::sim::scatter::{Place, birth, random_place};
 use crate::sim::{Bodies, Contacts, KindInfo, SlotRange, Space};
-use crate::{DevSlice, Thread, kernel_args, warp};
+use crate::{DevSlice, Thread, asked, kernel_args, warp};
 
 kernel_args! {
     /// Arguments of [`master`].
@@ -427,7 +428,7 @@ fn fire(args: &MasterArgs, input: &Input, aboard: &Aboard, slot: u32) {
 }
 
 kernel_args! {
-    /// Arguments of [`births`].
+    /// Arguments of [`births`] (and of [`births_and_count`]'s births).
     pub struct BirthArgs {
         /// The bodies.
         pub bodies: Bodies,
@@ -437,6 +438,9 @@ kernel_args! {
         pub ranges: DevSlice<SlotRange>,
         /// The free lists the master thread counted from.
         pub free: FreeSlots,
+        /// The free-list flags of the same rebuild: which slots are free, and their ranks
+        /// in their kinds' lists.
+        pub flags: DevSlice<u32>,
         /// Bodies to spawn per kind (from [`master`]).
         pub births: DevSlice<u32>,
         /// Birth velocity deviation per kind (from [`master`]).
@@ -457,15 +461,12 @@ pub const PLACE_TRIES: u32 = 8;
 /// birth `j` of kind `k` is the slot at entry `j` of its free list (one of the first
 /// `births[k]`), which comes alive at a random place at least the spawn distance from the
 /// ship (up to [`PLACE_TRIES`] draws from the slot's generator). The work follows the births
-/// ordered, not the slots: most steps order none.
+/// ordered, not the slots: most steps order none. Large worlds only: small ones bring their
+/// births to life in the grid's count ([`births_and_count`]), one launch fewer, where a
+/// launch of millions of threads would carry the births' registers for nothing.
 #[inline(always)]
 pub fn births(t: Thread, args: &BirthArgs) {
-    let b = &args.bodies;
     let threads = t.grid_dim * t.block_dim;
-    let ship = args.rules.ship.start;
-    let far = args.rules.spawn_distance * args.rules.spawn_distance;
-    // Births write other slots than the ship's: its place holds for the whole launch.
-    let ship_pos = b.pos.get(ship);
     // The kinds with births first, from loads that do not wait for one another (a kind mask
     // has 32 bits, as many as a world has kinds at most).
     let mut pending = 0u32;
@@ -477,21 +478,66 @@ pub fn births(t: Thread, args: &BirthArgs) {
         pending &= pending - 1;
         let range = args.ranges.get(kind);
         let count = args.births.get(kind).min(range.capacity);
-        let speed = args.birth_speed.get(kind);
         let mut j = t.global();
         while j < count {
-            let slot = args.free.list.get(range.start + j);
-            let mut place = random_place(b, slot, &args.space, speed);
-            let mut tries = 1;
-            while tries < PLACE_TRIES
-                && b.is_alive(ship)
-                && args.space.offset(ship_pos, place.pos).length_squared() < far
-            {
-                place = random_place(b, slot, &args.space, speed);
-                tries += 1;
-            }
-            birth(b, &args.space, slot, place, args.kinds.get(kind).energy);
+            birth_in(args, args.free.list.get(range.start + j), kind);
             j += threads;
         }
     }
+}
+
+kernel_args! {
+    /// Arguments of [`births_and_count`].
+    pub struct BirthCountArgs {
+        /// The births the master ordered.
+        pub births: BirthArgs,
+        /// The grid's count (see [`crate::sim::broad::count_cells`]).
+        pub count: CountArgs,
+    }
+}
+
+/// [`births`] and the grid's count of every slot ([`crate::sim::broad::count_cells`]) in
+/// one launch, in small worlds: thread `i` takes slot `i`. A free slot whose rank in its
+/// kind's list ([`free_rank`]) is below the kind's births is one of the births ordered: it
+/// comes alive as [`births`] would bring it, and is counted where it is born. Births write
+/// only their own slots, and the ship (the master's, in the launch before) holds its place
+/// for the whole launch.
+#[inline(always)]
+pub fn births_and_count(t: Thread, args: &BirthCountArgs) {
+    let (a, b) = (&args.births, &args.births.bodies);
+    let slot = t.global();
+    if slot >= args.count.keys.len() {
+        return;
+    }
+    // Asked for at once: most slots are not born, and wait for memory once.
+    let [alive, kind, flag] = asked([b.alive.get(slot), b.kind.get(slot), a.flags.get(slot)]);
+    let pos = asked(b.pos.get(slot));
+    let born = flag & FREE != 0 && free_rank(flag) < a.births.get(kind);
+    let body = match born {
+        true => (true, kind, birth_in(a, slot, kind)),
+        false => (alive != 0, kind, pos),
+    };
+    count_slot(&args.count, slot, body);
+}
+
+/// Brings free slot `slot` of kind `kind` to life at a random place, at least the spawn
+/// distance from the ship if one of [`PLACE_TRIES`] draws finds one; its place.
+#[inline(always)]
+fn birth_in(args: &BirthArgs, slot: u32, kind: u32) -> Vec2 {
+    let b = &args.bodies;
+    let ship = args.rules.ship.start;
+    let far = args.rules.spawn_distance * args.rules.spawn_distance;
+    let ship_pos = b.pos.get(ship);
+    let speed = args.birth_speed.get(kind);
+    let mut place = random_place(b, slot, &args.space, speed);
+    let mut tries = 1;
+    while tries < PLACE_TRIES
+        && b.is_alive(ship)
+        && args.space.offset(ship_pos, place.pos).length_squared() < far
+    {
+        place = random_place(b, slot, &args.space, speed);
+        tries += 1;
+    }
+    birth(b, &args.space, slot, place, args.kinds.get(kind).energy);
+    b.pos.get(slot)
 }

@@ -84,7 +84,14 @@ pub fn count_cells(t: Thread, args: &CountArgs) {
     // Asked for at once, before the branch: the thread waits for memory once.
     let [alive, kind] = asked([b.alive.get(slot), b.kind.get(slot)]);
     let pos = asked(b.pos.get(slot));
-    if alive == 0 {
+    count_slot(args, slot, (alive != 0, kind, pos));
+}
+
+/// [`count_cells`]' work for slot `slot` (below the keys' length), whose body is `alive`, of
+/// kind `kind` at `pos` (as read, or as just born).
+#[inline(always)]
+pub fn count_slot(args: &CountArgs, slot: u32, (alive, kind, pos): (bool, u32, Vec2)) {
+    if !alive {
         args.keys.set(slot, NO_BUCKET);
         return;
     }

@@ -11,6 +11,8 @@
 //!    of each range writes the range's count.
 //!
 //! Lists come out in increasing slot order; the master thread takes slots from the front.
+//! Each free slot's flag also holds its rank in its list ([`free_rank`]), so that a slot
+//! can tell by itself whether the births ordered from the front of its list take it.
 //!
 //! Where every range is small ([`ONE_LAUNCH_RANGE`]), [`mark_and_gather_free`] does all three
 //! in one launch: each warp counts the free slots of its range before it itself.
@@ -34,7 +36,8 @@ device_data! {
     /// The rebuild's own arrays, remade every step.
     pub struct FreeMarks(slots, tiles) {
         /// [`FREE`] for a free usable slot, with [`DIED`] if it held a body after the last
-        /// rebuild; else 0 (written by [`mark_free`]).
+        /// rebuild, and its rank in its kind's list above [`RANK_SHIFT`]; else 0 (written
+        /// by [`mark_free`], the ranks by [`gather_free`]).
         flags: [u32; slots],
         /// The free slots of each tile of 32 slots, then their exclusive prefix sums in place;
         /// one more element for the total (see [`FreeMarks::tiles_for`]).
@@ -56,13 +59,24 @@ pub const FREE: u32 = 1;
 /// died since: the explosions' test).
 pub const DIED: u32 = 2;
 
-/// The flag of a slot that is `free` now and was flagged `old` by the rebuild before.
+/// Where a free slot's flag holds its rank in its kind's list (ranks are below the
+/// world's 2²⁴ slots).
+pub const RANK_SHIFT: u32 = 2;
+
+/// The rank in its kind's free list of the free slot flagged `flag`.
 #[inline(always)]
-fn flag(free: bool, old: u32) -> u32 {
+pub fn free_rank(flag: u32) -> u32 {
+    flag >> RANK_SHIFT
+}
+
+/// The flag of a slot that is `free` now, `rank`-th in its kind's list, and was flagged
+/// `old` by the rebuild before.
+#[inline(always)]
+fn flag(free: bool, old: u32, rank: u32) -> u32 {
     match (free, old & FREE) {
         (false, _) => 0,
-        (true, 0) => FREE | DIED,
-        (true, _) => FREE,
+        (true, 0) => FREE | DIED | rank << RANK_SHIFT,
+        (true, _) => FREE | rank << RANK_SHIFT,
     }
 }
 
@@ -98,7 +112,8 @@ pub fn mark_free(t: Thread, args: &MarkArgs) {
     let b = &args.bodies;
     let free = |s: u32| usable(s, args.ranges.get(b.kind.get(s))) && !b.is_alive(s);
     let mine = free(slot);
-    args.flags.set(slot, flag(mine, args.flags.get(slot)));
+    // The rank comes in `gather_free`.
+    args.flags.set(slot, flag(mine, args.flags.get(slot), 0));
     let (lane, first) = (t.lane(), slot - t.lane());
     let theirs = |l: u32| free(first + l) as u32;
     let count = warp::sum_u32_in_lane0(lane, warp::own_or(lane, mine as u32, theirs));
@@ -149,7 +164,13 @@ pub fn gather_free(t: Thread, args: &GatherArgs) {
     }
     // A range starts a tile: the free slots before it are its first tile's offset.
     let rank = offset + before - args.tiles.get(range.start / WARP);
-    let free = args.flags.get(slot) & FREE;
+    let flag = args.flags.get(slot);
+    let free = flag & FREE;
+    if free != 0 {
+        // Only the rank's bits change: the other lanes' reads of the flag's `FREE` above
+        // (on the CPU, where a lane reads its warp's flags) get the same bit either way.
+        args.flags.set(slot, flag | rank << RANK_SHIFT);
+    }
     place_in_list((&args.list, &args.count), (slot, kind, range), rank, free);
 }
 
@@ -212,7 +233,7 @@ pub fn mark_and_gather_free(t: Thread, args: &MarkGatherArgs) {
     let range = args.ranges.get(kind);
     let free = |s: u32| usable(s, range) && !b.is_alive(s);
     let mine = free(slot) as u32;
-    args.flags.set(slot, flag(mine != 0, args.flags.get(slot)));
+    let old = args.flags.get(slot);
     // Each lane reads runs of four slots, every `4 · WARP`-th: the range's start and the
     // warp's first slot are multiples of 32.
     let before = warp::sum_u32(lane, |l| {
@@ -224,6 +245,7 @@ pub fn mark_and_gather_free(t: Thread, args: &MarkGatherArgs) {
     });
     let within =
         warp::exclusive_sum_u32(lane, warp::own_or(lane, mine, |l| free(first + l) as u32));
+    args.flags.set(slot, flag(mine != 0, old, before + within));
     if !usable(slot, range) {
         return;
     }
