@@ -67,9 +67,13 @@ impl Thread {
 /// launched early (with the programmatic stream serialization attribute) never reads what
 /// its predecessor still writes nor writes what it still reads: only the launch's start-up
 /// overlaps the predecessor's tail. Without the attribute, the wait returns at once.
-#[cfg(all(target_arch = "nvptx64", gpuwars_dependent_launch))]
+///
+/// A kernel entered through a registry line marked `waits` calls it itself, after reading
+/// only what no launch of the step writes (the world's tables, made with it): those loads
+/// then overlap the predecessor's tail. Elsewhere (the CPU, other modules) it does nothing.
 #[inline(always)]
 pub fn follow_previous_launch() {
+    #[cfg(all(target_arch = "nvptx64", gpuwars_dependent_launch))]
     // SAFETY: both instructions only order this grid against its neighbours in the stream;
     // without `nomem`, the compiler moves no memory access above them.
     unsafe {

@@ -12,9 +12,14 @@ use crate::sim::{broad, free_list, integrate, narrow, renumber, scatter};
 use crate::{Kernel, KernelInfo};
 
 macro_rules! kernels {
+    (@wait) => {
+        crate::exec::follow_previous_launch()
+    };
+    // The body waits itself (see `follow_previous_launch`).
+    (@wait waits) => {};
     ($(
         $(#[doc = $doc:literal])+
-        $konst:ident = $entry:ident($args:ty) => $body:path;
+        $konst:ident = $entry:ident($args:ty) => $body:path $(, $waits:ident)?;
     )*) => {
         $(
             $(#[doc = $doc])+
@@ -43,8 +48,7 @@ macro_rules! kernels {
                 #[unsafe(no_mangle)]
                 /// Entry point (see the constant of the same name in upper case).
                 pub unsafe extern "ptx-kernel" fn $entry(args: $args) {
-                    #[cfg(gpuwars_dependent_launch)]
-                    crate::exec::follow_previous_launch();
+                    kernels!(@wait $($waits)?);
                     $body(crate::Thread::current(), &args)
                 }
             )*
@@ -94,8 +98,9 @@ kernels! {
     /// Writes each kind's free slots in order, and their counts.
     GATHER_FREE = gather_free(free_list::GatherArgs) => free_list::gather_free;
     /// Flags the free usable slots and writes each kind's free slots and counts, in one
-    /// launch (worlds of small ranges).
-    MARK_AND_GATHER_FREE = mark_and_gather_free(free_list::MarkGatherArgs) => free_list::mark_and_gather_free;
+    /// launch (worlds of small ranges). It reads its slots' kinds and ranges before it waits
+    /// for the launch before it.
+    MARK_AND_GATHER_FREE = mark_and_gather_free(free_list::MarkGatherArgs) => free_list::mark_and_gather_free, waits;
     /// Brings bodies to life at random places from their slots' generators.
     SCATTER = scatter(scatter::ScatterArgs) => scatter::scatter;
     /// The master before the physics: the step's input (the player's or the autopilot's),
@@ -111,16 +116,18 @@ kernels! {
     /// Brings the enemies the master thread ordered to life at random places.
     BIRTHS = births(master::BirthArgs) => master::births;
     /// Brings the enemies the master thread ordered to life at random places, and counts
-    /// every slot into the grid's buckets (the broad phase's first launch, in games).
-    BIRTHS_AND_COUNT = births_and_count(master::BirthCountArgs) => master::births_and_count;
+    /// every slot into the grid's buckets (the broad phase's first launch, in small games).
+    /// It reads its slots' kinds and free-list flags before it waits for the master.
+    BIRTHS_AND_COUNT = births_and_count(master::BirthCountArgs) => master::births_and_count, waits;
     /// The enemies' machines, every live enemy in grid order: perceive, transition, steer.
     THINK = think(ai::ThinkArgs) => ai::think;
     /// The enemies' machines with teams of threads for the bodies that expect many
     /// neighbours.
     THINK_IN_TEAMS = think_in_teams(ai::ThinkArgs) => ai::think_in_teams;
     /// The narrow phase without rectangles, the enemies' machines and the integrator in one
-    /// launch, with teams of threads (worlds small enough for teams).
-    COLLIDE_THINK_INTEGRATE = collide_think_integrate(ai::BodyStepArgs) => ai::collide_think_integrate;
+    /// launch, with teams of threads (worlds small enough for teams). It finds its slot
+    /// before it waits for the launch before it.
+    COLLIDE_THINK_INTEGRATE = collide_think_integrate(ai::BodyStepArgs) => ai::collide_think_integrate, waits;
     /// Sets up every slot's generator from its seed and the parameter table.
     SEED_STREAMS = seed_streams(streams::SeedArgs) => streams::seed_streams;
     /// Points the camera: the frame's view from the ship's position (one thread).

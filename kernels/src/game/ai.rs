@@ -19,11 +19,12 @@ use glam::Vec2;
 use super::control::Status;
 use super::fsm::{Machine, Percept, State, next_state};
 use super::rules::Brain;
+use crate::exec::follow_previous_launch;
 use crate::sim::broad::{CellIndex, Near, kind_bit};
 use crate::sim::integrate::{Field, IntegrateArgs, integrate_slot};
 use crate::sim::narrow::{CollideArgs, Relaxation, collide_slot};
 use crate::sim::teams::Teams;
-use crate::sim::{Bodies, Contacts, KindInfo, Space};
+use crate::sim::{Bodies, Contacts, KindInfo, SlotKind, Space};
 use crate::warp::{Handed, Team};
 use crate::{DevSlice, Thread, asked, kernel_args};
 
@@ -426,7 +427,27 @@ pub fn think_in_teams(t: Thread, args: &ThinkArgs) {
 #[inline(always)]
 fn think_with<const TEAMS: bool>(t: Thread, args: &ThinkArgs) {
     if let Some((slot, team)) = args.teams.member(t, &args.warps) {
-        think_slot::<TEAMS, false>(args, slot, team);
+        think_slot::<TEAMS, false>(args, slot, team, None);
+    }
+}
+
+/// What a slot's machine reads of the world's own tables, which no step writes: its kind
+/// with the kind's entry and brain (read before a launch waits for the one before it).
+#[derive(Clone, Copy)]
+struct Known {
+    kind: SlotKind,
+    brain: Brain,
+}
+
+impl Known {
+    /// Slot `slot`'s.
+    #[inline(always)]
+    fn read(args: &ThinkArgs, slot: u32) -> Known {
+        let kind = SlotKind::read(&args.bodies, &args.kinds, slot);
+        Known {
+            kind,
+            brain: asked(args.brains.get(kind.kind)),
+        }
     }
 }
 
@@ -459,7 +480,12 @@ kernel_args! {
 #[inline(always)]
 pub fn collide_think_integrate(t: Thread, args: &BodyStepArgs) {
     let think = &args.think;
-    let Some((slot, team)) = think.teams.member(t, &think.warps) else {
+    // The thread's slot and its kind's tables are the world's: read while the grid's last
+    // launch ends.
+    let member = think.teams.member(t, &think.warps);
+    let known = member.map(|(slot, _)| Known::read(think, slot));
+    follow_previous_launch();
+    let (Some((slot, team)), Some(known)) = (member, known) else {
         return;
     };
     let collide = CollideArgs {
@@ -474,8 +500,8 @@ pub fn collide_think_integrate(t: Thread, args: &BodyStepArgs) {
         substep: 0,
         reserved: 0,
     };
-    collide_slot::<false, true>(&collide, slot, team);
-    think_slot::<true, true>(think, slot, team);
+    collide_slot::<false, true>(&collide, slot, team, |_| known.kind.info);
+    think_slot::<true, true>(think, slot, team, Some(known));
     if team.leads() && slot < think.bodies.slots() {
         let integrate = IntegrateArgs {
             bodies: think.bodies,
@@ -492,16 +518,21 @@ pub fn collide_think_integrate(t: Thread, args: &BodyStepArgs) {
     }
 }
 
-/// Slot `slot`'s share of [`think`], by its `team`: if a body of a kind with a machine
-/// lives there, perceive (the team), transition and act (its first lane); `MOVING` as in
-/// [`look`].
+/// Slot `slot`'s share of [`think`], by its `team` (given what it reads of the world's
+/// tables, if read already: `known`): if a body of a kind with a machine lives there,
+/// perceive (the team), transition and act (its first lane); `MOVING` as in [`look`].
 #[inline(always)]
-fn think_slot<const TEAMS: bool, const MOVING: bool>(args: &ThinkArgs, slot: u32, team: Team) {
+fn think_slot<const TEAMS: bool, const MOVING: bool>(
+    args: &ThinkArgs,
+    slot: u32,
+    team: Team,
+    known: Option<Known>,
+) {
     // Without teams the width is known to be 1, and the teams' code compiles out.
     let team = if TEAMS { team } else { Team::ALONE };
     let b = &args.bodies;
     // Asked for at once, before the branches they decide: the thread waits for memory
-    // once, not once a branch (and once more for its kind's tables).
+    // once, not once a branch (and once more for its kind's tables, unless known).
     let [alive, kind, frozen, ship_kind] = asked([
         b.alive.get(slot),
         b.kind.get(slot),
@@ -513,12 +544,11 @@ fn think_slot<const TEAMS: bool, const MOVING: bool>(args: &ThinkArgs, slot: u32
         return;
     }
     // A kind's brain is the kind's (`brain.kind == kind`).
-    let info = args.kinds.get(kind);
-    let (brain, radius, full) = (
-        asked(args.brains.get(kind)),
-        asked(info.radius),
-        asked(info.energy),
-    );
+    let (info, brain) = match known {
+        Some(known) => (known.kind.info, known.brain),
+        None => (args.kinds.get(kind), asked(args.brains.get(kind))),
+    };
+    let (radius, full) = (asked(info.radius), asked(info.energy));
     let looker = Looker {
         slot,
         pos,

@@ -21,6 +21,7 @@ use glam::Vec2;
 
 use super::control::{DESTROYED, Events, Input, Mailbox, PLAYING, Status, TOO_SLOW};
 use super::rules::{Rules, Wave};
+use crate::exec::follow_previous_launch;
 use crate::sim::broad::{CountArgs, count_slot};
 use crate::sim::free_list::{FREE, FreeSlots, free_rank};
 use crate::sim::scatter::{Place, birth, random_place};
@@ -509,10 +510,14 @@ pub fn births_and_count(t: Thread, args: &BirthCountArgs) {
     if slot >= args.count.keys.len() {
         return;
     }
-    // Asked for at once: most slots are not born, and wait for memory once.
-    let [alive, kind, flag] = asked([b.alive.get(slot), b.kind.get(slot), a.flags.get(slot)]);
+    // A slot's kind is the world's, and its flag the last step's: both read while the
+    // master ends. The rest is asked for at once: most slots are not born, and wait for
+    // memory once.
+    let [kind, flag] = asked([b.kind.get(slot), a.flags.get(slot)]);
+    follow_previous_launch();
+    let [alive, ordered] = asked([b.alive.get(slot), a.births.get(kind)]);
     let pos = asked(b.pos.get(slot));
-    let born = flag & FREE != 0 && free_rank(flag) < a.births.get(kind);
+    let born = flag & FREE != 0 && free_rank(flag) < ordered;
     let body = match born {
         true => (true, kind, birth_in(a, slot, kind)),
         false => (alive != 0, kind, pos),

@@ -19,6 +19,7 @@
 
 use super::bodies::Bodies;
 use super::kinds::SlotRange;
+use crate::exec::follow_previous_launch;
 use crate::warp::{self, WARP};
 use crate::{DevSlice, Thread, device_data, kernel_args};
 
@@ -229,11 +230,14 @@ pub fn mark_and_gather_free(t: Thread, args: &MarkGatherArgs) {
     }
     let (b, lane) = (&args.bodies, t.lane());
     let first = slot - lane;
+    // The slot's kind and range are the world's, and its flag is only this kernel's: all
+    // read while the launch before ends.
     let kind = b.kind.get(slot);
     let range = args.ranges.get(kind);
+    let old = args.flags.get(slot);
+    follow_previous_launch();
     let free = |s: u32| usable(s, range) && !b.is_alive(s);
     let mine = free(slot) as u32;
-    let old = args.flags.get(slot);
     // Each lane reads runs of four slots, every `4 · WARP`-th: the range's start and the
     // warp's first slot are multiples of 32.
     let before = warp::sum_u32(lane, |l| {

@@ -2,6 +2,9 @@
 
 use glam::Vec2;
 
+use super::bodies::Bodies;
+use crate::{DevSlice, asked};
+
 /// [`KindInfo::shape`] of a kind bounded by a circle.
 pub const SHAPE_CIRCLE: u32 = 0;
 /// [`KindInfo::shape`] of a kind bounded by an axis-aligned rectangle.
@@ -120,5 +123,28 @@ crate::device_data! {
         info: [KindInfo; kinds],
         /// Each kind's slots.
         ranges: [SlotRange; kinds],
+    }
+}
+
+/// A slot's kind and the kind's entry: the world's own, which no step writes, so that a
+/// launch reads them before it waits for the one before it (see
+/// [`crate::exec::follow_previous_launch`]).
+#[derive(Clone, Copy, Debug)]
+pub struct SlotKind {
+    /// The slot's kind.
+    pub kind: u32,
+    /// The kind's entry.
+    pub info: KindInfo,
+}
+
+impl SlotKind {
+    /// Slot `slot`'s kind (of `bodies`) and its entry of `kinds`.
+    #[inline(always)]
+    pub fn read(bodies: &Bodies, kinds: &DevSlice<KindInfo>, slot: u32) -> Self {
+        let kind = bodies.kind.get(slot);
+        SlotKind {
+            kind,
+            info: asked(kinds.get(kind)),
+        }
     }
 }

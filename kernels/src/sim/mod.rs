@@ -36,5 +36,5 @@ pub mod space;
 pub mod teams;
 
 pub use bodies::{Bodies, Contacts};
-pub use kinds::{KindInfo, KindTables, SlotRange};
+pub use kinds::{KindInfo, KindTables, SlotKind, SlotRange};
 pub use space::Space;

@@ -169,11 +169,12 @@ impl Handed for Touch {
 #[inline(always)]
 fn collide_bounds<const RECTS: bool>(t: Thread, args: &CollideArgs) {
     if let Some((slot, team)) = args.teams.member(t, &args.warps) {
-        collide_slot::<RECTS, false>(args, slot, team);
+        collide_slot::<RECTS, false>(args, slot, team, |kind| args.kinds.get(kind));
     }
 }
 
-/// Slot `slot`'s share of [`collide`], by its `team`: the team sums the slot's responses to
+/// Slot `slot`'s share of [`collide`], by its `team`, with `info_of` giving its kind's entry:
+/// the team sums the slot's responses to
 /// the bodies it overlaps, and its first lane writes them and the slot's energy loss (with
 /// `RECTS` false, every kind taken as its circle; with `MOVING`, the others' velocities
 /// read from the grid's entries: see [`CellIndex::vel_at`]).
@@ -182,6 +183,7 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool>(
     args: &CollideArgs,
     slot: u32,
     team: Team,
+    info_of: impl Fn(u32) -> KindInfo,
 ) {
     let bodies = &args.bodies;
     let out = &args.contacts;
@@ -189,7 +191,8 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool>(
         return;
     }
     // Asked for at once, before the branches they decide: the thread waits for memory
-    // once, not once a branch (and once more for its kind's entry).
+    // once, not once a branch (and once more for its kind's entry, unless `info_of` holds
+    // it already).
     let [frozen, alive, kind] = asked([
         bodies.frozen.get(0),
         bodies.alive.get(slot),
@@ -205,7 +208,7 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool>(
     let mut count = 0u32;
     let mut damage = 0i32;
     if alive != 0 {
-        let info = args.kinds.get(kind);
+        let info = info_of(kind);
         let inv = inverse_mass(mass);
         // Only the kinds it collides with: the grid's buckets skip the others unread.
         let near = Near {
