@@ -87,7 +87,9 @@ pub(crate) struct GameState {
 /// The warp tables (`Teams::warp_table`) of the launches whose bodies get teams: none where
 /// every body gets one thread.
 pub(crate) struct TeamWarps {
+    /// The narrow phase's (`Config::narrow_teams`).
     pub narrow: Option<Buffer<u32>>,
+    /// The machines' (`Config::think_teams`), or the bodies' step's where it is one launch.
     pub think: Option<Buffer<u32>>,
 }
 

@@ -173,6 +173,10 @@ pub struct KernelInfo {
     pub name: &'static str,
     /// One line saying what the kernel does.
     pub summary: &'static str,
+    /// Whether it reads the world's own tables before it waits for the launch before it
+    /// (its registry line says `waits`; see [`follow_previous_launch`]): it may load, but
+    /// neither store nor call, before the wait.
+    pub reads_before_waiting: bool,
 }
 
 /// A bounds-checked view of `len` elements of device memory (host memory under the emulator).

@@ -17,6 +17,12 @@ macro_rules! kernels {
     };
     // The body waits itself (see `follow_previous_launch`).
     (@wait waits) => {};
+    (@reads) => {
+        false
+    };
+    (@reads waits) => {
+        true
+    };
     ($(
         $(#[doc = $doc:literal])+
         $konst:ident = $entry:ident($args:ty) => $body:path $(, $waits:ident)?;
@@ -37,7 +43,11 @@ macro_rules! kernels {
 
         /// Every kernel of the module, in declaration order.
         pub const ALL: &[KernelInfo] = &[
-            $(KernelInfo { name: stringify!($entry), summary: concat!($($doc),+) }),*
+            $(KernelInfo {
+                name: stringify!($entry),
+                summary: concat!($($doc),+),
+                reads_before_waiting: kernels!(@reads $($waits)?),
+            }),*
         ];
 
         /// The PTX entry points: one per kernel, each a call of its body.
