@@ -69,8 +69,10 @@ impl Thread {
 /// overlaps the predecessor's tail. Without the attribute, the wait returns at once.
 ///
 /// A kernel entered through a registry line marked `waits` calls it itself, after reading
-/// only what no launch of the step writes (the world's tables, made with it): those loads
-/// then overlap the predecessor's tail. Elsewhere (the CPU, other modules) it does nothing.
+/// only what its predecessor cannot be writing: the world's own tables, made with it, or
+/// what a launch two or more before it wrote (that launch ended before the predecessor's
+/// blocks passed this same wait, so before this launch started). Those loads then overlap
+/// the predecessor's tail. Elsewhere (the CPU, other modules) it does nothing.
 #[inline(always)]
 pub fn follow_previous_launch() {
     #[cfg(all(target_arch = "nvptx64", gpuwars_dependent_launch))]
@@ -173,9 +175,9 @@ pub struct KernelInfo {
     pub name: &'static str,
     /// One line saying what the kernel does.
     pub summary: &'static str,
-    /// Whether it reads the world's own tables before it waits for the launch before it
-    /// (its registry line says `waits`; see [`follow_previous_launch`]): it may load, but
-    /// neither store nor call, before the wait.
+    /// Whether it reads before it waits for the launch before it what that launch cannot
+    /// be writing (its registry line says `waits`; see [`follow_previous_launch`]): it may
+    /// load, but neither store nor call, before the wait.
     pub reads_before_waiting: bool,
 }
 

@@ -85,8 +85,9 @@ kernels! {
     SORT_SCATTER = sort_scatter(sort::ScatterArgs) => sort::scatter_digits;
     /// Keys every live body by its (cell, kind) bucket and counts the buckets (atomics).
     COUNT_CELLS = count_cells(broad::CountArgs) => broad::count_cells;
-    /// Writes every live body into its bucket, in arrival order.
-    PLACE_IN_CELLS = place_in_cells(broad::PlaceArgs) => broad::place_in_cells;
+    /// Writes every live body into its bucket, in arrival order. It reads the count's keys
+    /// and ranks before it waits for the scan.
+    PLACE_IN_CELLS = place_in_cells(broad::PlaceArgs) => broad::place_in_cells, waits;
     /// Puts every bucket in increasing slot order.
     ORDER_CELLS = order_cells(broad::OrderArgs) => broad::order_cells;
     /// Merges the sorted runs of large buckets in pairs (a bounded grid's ordering).

@@ -25,6 +25,7 @@ use glam::Vec2;
 
 use super::bodies::Bodies;
 use super::space::{Space, Span};
+use crate::exec::follow_previous_launch;
 use crate::warp::{Handed, Team};
 use crate::{DevSlice, Thread, asked, device_data, kernel_args};
 
@@ -123,16 +124,20 @@ kernel_args! {
 pub fn place_in_cells(t: Thread, args: &PlaceArgs) {
     let slot = t.global();
     let threads = t.block_dim * t.grid_dim;
+    // The keys and ranks are the count's, which the scan's launches separate from this one
+    // (at least one more than the launch before): read before the wait (see
+    // `follow_previous_launch`), with the rank beside the key (a dead slot's is stale, and
+    // unused). After the wait only the bucket's start is waited for.
+    let [key, rank] = match slot < args.keys.len() {
+        true => asked([args.keys.get(slot), args.ranks.get(slot)]),
+        false => [NO_BUCKET, 0],
+    };
+    follow_previous_launch();
     let mut bucket = slot;
     while bucket < args.counts.len() {
         args.counts.set(bucket, 0);
         bucket += threads;
     }
-    if slot >= args.keys.len() {
-        return;
-    }
-    // The rank with the key (a dead slot's is stale, and unused): one wait, not two.
-    let [key, rank] = asked([args.keys.get(slot), args.ranks.get(slot)]);
     if key != NO_BUCKET {
         args.unordered.set(args.start.get(key) + rank, slot);
     }
