@@ -169,15 +169,6 @@ impl PrefixSum {
     /// `input` to `output` (which may be `input` itself), for a plan; they hold both
     /// buffers and this scratch.
     pub fn ops(&self, input: &Buffer<u32>, output: &Buffer<u32>, n: u32) -> Result<Vec<Op>, Error> {
-        self.check(input, output, n)?;
-        let mut ops = Vec::new();
-        self.push_ops(input, output, n, (0, false), &mut ops);
-        Ok(ops)
-    }
-
-    /// Fails unless a scan of `n` elements of `input` into `output` fits them and this
-    /// scratch.
-    fn check(&self, input: &Buffer<u32>, output: &Buffer<u32>, n: u32) -> Result<(), Error> {
         if n as usize > input.len().min(output.len()) || n as usize > self.capacity {
             return Err(Error::Invalid(format!(
                 "a prefix sum of {n} elements from {} into {} (capacity {})",
@@ -186,87 +177,51 @@ impl PrefixSum {
                 self.capacity
             )));
         }
-        Ok(())
-    }
-
-    /// Whether a scan of `n` elements takes its tiles' sums in one buffer, each warp adding
-    /// up those before its own (two launches: sums, then scan).
-    fn is_flat(n: u32) -> bool {
-        n > scan::TILE && scan::tiles(n) <= scan::FLAT_TILES
-    }
-
-    /// The buffer of tile sums that a scan of `n` elements reads, where the scan is flat
-    /// (see [`scan::scan_tiles_after_sums`]), for another kernel to make instead of the
-    /// scan's first launch (see [`PrefixSum::ops_after_sums`]); `None` elsewhere.
-    pub fn flat_sums(&self, n: u32) -> Option<&Buffer<u32>> {
-        match Self::is_flat(n) && n as usize <= self.capacity {
-            true => self.levels.first(),
-            false => None,
-        }
-    }
-
-    /// [`PrefixSum::ops`] for a flat scan whose tile sums are already in
-    /// [`PrefixSum::flat_sums`] when the ops run: the scan's one launch.
-    pub fn ops_after_sums(
-        &self,
-        input: &Buffer<u32>,
-        output: &Buffer<u32>,
-        n: u32,
-    ) -> Result<Vec<Op>, Error> {
-        self.check(input, output, n)?;
-        if self.flat_sums(n).is_none() {
-            return Err(Error::Invalid(format!(
-                "a prefix sum of {n} elements from tile sums made elsewhere (not a flat scan)"
-            )));
-        }
         let mut ops = Vec::new();
-        self.push_ops(input, output, n, (0, true), &mut ops);
+        self.push_ops(input, output, n, 0, &mut ops);
         Ok(ops)
     }
 
     /// The launches of [`PrefixSum::ops`] at scratch level `level`, which holds the tile sums
-    /// of `n` elements (made already if `summed`).
+    /// of `n` elements.
     fn push_ops(
         &self,
         input: &Buffer<u32>,
         output: &Buffer<u32>,
         n: u32,
-        (level, summed): (usize, bool),
+        level: usize,
         ops: &mut Vec<Op>,
     ) {
         let tiles = scan::tiles(n);
         // Few tiles: each adds up the sums before its own (two launches); else recurse.
-        let flat = Self::is_flat(n);
+        let flat = n > scan::TILE && tiles <= scan::FLAT_TILES;
         // SAFETY (both binders): their views go into the op made with each.
         let mut b = unsafe { Binder::new() };
         let tile_offsets = if n <= scan::TILE {
             DevSlice::EMPTY
         } else {
             let sums = &self.levels[level];
-            // Sums made elsewhere need no launch of their own.
-            if !summed {
-                let mut reduce = unsafe { Binder::new() };
-                let args = scan::ReduceArgs {
-                    input: reduce.view_prefix(input, n),
-                    tile_sums: reduce.view_prefix(sums, tiles),
-                    n,
-                    reserved: 0,
-                };
-                let bytes = 4 * u64::from(n + tiles);
-                // SAFETY: `n` elements in each view (checked by `ops`), the level holds `tiles`.
-                ops.push(unsafe {
-                    threads_in(
-                        registry::SCAN_REDUCE,
-                        tiles,
-                        SCAN_BLOCK,
-                        args,
-                        reduce,
-                        bytes,
-                    )
-                });
-                if !flat {
-                    self.push_ops(sums, sums, tiles, (level + 1, false), ops);
-                }
+            let mut reduce = unsafe { Binder::new() };
+            let args = scan::ReduceArgs {
+                input: reduce.view_prefix(input, n),
+                tile_sums: reduce.view_prefix(sums, tiles),
+                n,
+                reserved: 0,
+            };
+            let bytes = 4 * u64::from(n + tiles);
+            // SAFETY: `n` elements in each view (checked by `ops`), the level holds `tiles`.
+            ops.push(unsafe {
+                threads_in(
+                    registry::SCAN_REDUCE,
+                    tiles,
+                    SCAN_BLOCK,
+                    args,
+                    reduce,
+                    bytes,
+                )
+            });
+            if !flat {
+                self.push_ops(sums, sums, tiles, level + 1, ops);
             }
             b.view_prefix(sums, tiles)
         };

@@ -52,48 +52,6 @@ fn prefix_sum_in_place_and_reused(device: &Device) {
     }
 }
 
-/// A flat scan whose tile sums are there already (here, left by a whole scan of the same
-/// input) takes one launch and gives the same sums; a scan that is not flat takes none.
-fn prefix_sum_after_tile_sums(device: &Device) {
-    let scan = PrefixSum::new(device, 32 * 1024).unwrap();
-    for n in [33, 1000, 4097, 32 * 1024] {
-        let input = random_below(&mut rng_for("after_sums", n), n, 1 << 20);
-        let src = device.upload(&input).unwrap();
-        let whole = device.alloc_zeroed::<u32>(n).unwrap();
-        let after = device.upload(&vec![0xdead_beef; n]).unwrap();
-        let n = n as u32;
-        assert!(scan.flat_sums(n).is_some(), "{n} elements make a flat scan");
-        let ops = scan.ops(&src, &whole, n).unwrap();
-        assert_eq!(ops.len(), 2, "{n} elements: sums, then scan");
-        device.run(&device.plan(ops, false).unwrap()).unwrap();
-        let ops = scan.ops_after_sums(&src, &after, n).unwrap();
-        assert_eq!(ops.len(), 1, "{n} elements");
-        device.run(&device.plan(ops, false).unwrap()).unwrap();
-        assert_eq!(
-            device.download(&after).unwrap(),
-            common::exclusive_scan(&input),
-            "{n} elements"
-        );
-    }
-    let data = device.alloc_zeroed::<u32>(32 * 1024 + 1).unwrap();
-    for n in [0, 32, 32 * 1024 + 1] {
-        assert!(scan.flat_sums(n).is_none(), "{n} elements");
-        let Err(err) = scan.ops_after_sums(&data, &data, n) else {
-            panic!("{n} elements: a scan after tile sums made elsewhere");
-        };
-        let err = err.to_string();
-        assert!(
-            err.contains("not a flat scan") || err.contains("capacity"),
-            "{n}: {err}"
-        );
-    }
-    let big = PrefixSum::new(device, 32 * 1024 + 1).unwrap();
-    assert!(
-        big.flat_sums(32 * 1024 + 1).is_none(),
-        "1,025 tiles are not flat"
-    );
-}
-
 fn prefix_sum_property(device: &Device) {
     let mut runner = TestRunner::new(Config::with_cases(48));
     let strategy = prop::collection::vec(any::<u32>(), 0..5000);
@@ -266,7 +224,6 @@ on_both_backends!(
     launch_floor_runs_every_variant,
     prefix_sum_matches_reference,
     prefix_sum_in_place_and_reused,
-    prefix_sum_after_tile_sums,
     prefix_sum_property,
     histogram_matches_reference,
     counting_sort_matches_reference,

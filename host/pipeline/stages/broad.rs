@@ -2,9 +2,8 @@
 //! the counts for the next build), canonical order.
 
 use gpuwars_kernels::game::master::BirthCountArgs;
-use gpuwars_kernels::primitives::scan::tiles;
+use gpuwars_kernels::registry;
 use gpuwars_kernels::sim::broad::{self, CountArgs, MergeArgs, OrderArgs, PlaceArgs};
-use gpuwars_kernels::{DevSlice, registry};
 
 use crate::Op;
 use crate::backend::Binder;
@@ -27,11 +26,6 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
     );
     // The entries' velocities, where the bodies move in the launch that queries the grid.
     let moving = world.config.one_launch;
-    // Where the buckets' scan is flat, the count adds up its tiles too, in the scan's
-    // scratch, which spares the scan a launch.
-    let buckets = g.start.len() as u32;
-    let scan = &world.scratch.grid_scan;
-    let tile_counts = scan.flat_sums(buckets);
     // SAFETY (every binder below): the views go into the op made with it.
     let mut b = unsafe { Binder::new() };
     let count = CountArgs {
@@ -40,7 +34,6 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         keys: b.view(&g.keys),
         ranks: b.view(&g.ranks),
         counts: b.view(&g.counts),
-        tile_counts: tile_counts.map_or(DevSlice::EMPTY, |t| b.view_prefix(t, tiles(buckets))),
     };
     // SAFETY (every op below): the world's buffers, sized as the kernels ask (see `World`);
     // the counts are zero before the first build (allocated zeroed) and after every other
@@ -49,11 +42,10 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         0 if world.config.births_in_count => world.birth_args(&mut b),
         _ => None,
     };
-    let tile_bytes = if tile_counts.is_some() { 4 } else { 0 };
     let mut ops = vec![match births {
         Some(births) => {
             let args = BirthCountArgs { births, count };
-            let bytes = (32 + tile_bytes) * u64::from(slots);
+            let bytes = 32 * u64::from(slots);
             unsafe { threads(registry::BIRTHS_AND_COUNT, slots, args, b, bytes) }
         }
         None => unsafe {
@@ -62,15 +54,17 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
                 slots,
                 count,
                 b,
-                (28 + tile_bytes) * u64::from(slots),
+                28 * u64::from(slots),
             )
         },
     }];
-    let scan_ops = match tile_counts {
-        Some(_) => scan.ops_after_sums(&g.counts, &g.start, buckets),
-        None => scan.ops(&g.counts, &g.start, buckets),
-    };
-    ops.extend(scan_ops.expect("the scan was made for the buckets"));
+    ops.extend(
+        world
+            .scratch
+            .grid_scan
+            .ops(&g.counts, &g.start, g.start.len() as u32)
+            .expect("the scan was made for the buckets"),
+    );
     let mut b = unsafe { Binder::new() };
     let place = PlaceArgs {
         keys: b.view(&g.keys),
@@ -78,9 +72,8 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         start: b.view(&g.start),
         unordered: b.view(&g.unordered),
         counts: b.view(&g.counts),
-        tile_counts: tile_counts.map_or(DevSlice::EMPTY, |t| b.view_prefix(t, tiles(buckets))),
     };
-    let buckets = u64::from(buckets);
+    let buckets = g.counts.len() as u64;
     ops.push(unsafe {
         threads_in(
             registry::PLACE_IN_CELLS,

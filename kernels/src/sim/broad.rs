@@ -11,9 +11,7 @@
 //! Build, with no sort and work that grows with the live bodies:
 //! 1. [`count_cells`]: each live body adds itself to its bucket's count with an atomic add,
 //!    which hands out ranks in whatever order threads arrive (the counts do not depend on it);
-//! 2. the exclusive prefix sum of the counts: each bucket's first entry (in grids of few
-//!    enough buckets, the count also adds each body to its tile's count, which spares the
-//!    sum the launch that adds up each tile);
+//! 2. the exclusive prefix sum of the counts: each bucket's first entry;
 //! 3. [`place_in_cells`]: each body writes its slot at its bucket's start plus its rank, a
 //!    scheduling-dependent order inside the bucket, and the counts go back to zero for the
 //!    next build (so no clear runs between the step's launches);
@@ -28,7 +26,6 @@ use glam::Vec2;
 use super::bodies::Bodies;
 use super::space::{Space, Span};
 use crate::exec::follow_previous_launch;
-use crate::primitives::scan;
 use crate::warp::{Handed, Team};
 use crate::{DevSlice, Thread, asked, device_data, kernel_args};
 
@@ -74,10 +71,6 @@ kernel_args! {
         /// Bodies per bucket, zero before (as [`place_in_cells`] leaves them); `kinds ·
         /// cells` buckets.
         pub counts: DevSlice<u32>,
-        /// Bodies per tile of [`scan::TILE`] buckets, zero before (as [`place_in_cells`]
-        /// leaves them), where the prefix sum takes them from here instead of adding up
-        /// each tile in a launch of its own; else empty.
-        pub tile_counts: DevSlice<u32>,
     }
 }
 
@@ -106,9 +99,6 @@ pub fn count_slot(args: &CountArgs, slot: u32, (alive, kind, pos): (bool, u32, V
     let key = kind * args.space.cells() + args.space.cell_of(pos);
     args.keys.set(slot, key);
     args.ranks.set(slot, args.counts.atomic_add(key, 1));
-    if !args.tile_counts.is_empty() {
-        args.tile_counts.atomic_add(key / scan::TILE, 1);
-    }
 }
 
 kernel_args! {
@@ -124,15 +114,12 @@ kernel_args! {
         pub unordered: DevSlice<u32>,
         /// The counts that were scanned into `start`: set back to zero.
         pub counts: DevSlice<u32>,
-        /// The tiles' counts, if the count made them (see [`CountArgs::tile_counts`]): set
-        /// back to zero.
-        pub tile_counts: DevSlice<u32>,
     }
 }
 
 /// Thread `i` writes slot `i` into its bucket: each entry has exactly one writer, since the
-/// ranks of a bucket are distinct. The threads also zero the counts (and the tiles'), every
-/// `threads`-th each, for the next build: nothing in this launch reads them.
+/// ranks of a bucket are distinct. The threads also zero the counts, every `threads`-th
+/// bucket each, for the next build: nothing in this launch reads them.
 #[inline(always)]
 pub fn place_in_cells(t: Thread, args: &PlaceArgs) {
     let slot = t.global();
@@ -146,12 +133,10 @@ pub fn place_in_cells(t: Thread, args: &PlaceArgs) {
         false => [NO_BUCKET, 0],
     };
     follow_previous_launch();
-    for counts in [args.counts, args.tile_counts] {
-        let mut i = slot;
-        while i < counts.len() {
-            counts.set(i, 0);
-            i += threads;
-        }
+    let mut bucket = slot;
+    while bucket < args.counts.len() {
+        args.counts.set(bucket, 0);
+        bucket += threads;
     }
     if key != NO_BUCKET {
         args.unordered.set(args.start.get(key) + rank, slot);
