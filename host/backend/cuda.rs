@@ -690,9 +690,9 @@ pub(super) fn address<T>(slice: &CudaSlice<T>) -> u64 {
     addr
 }
 
-/// Streams for the branches of a plan (see [`Gpu::beside`]): the autopilot's and the
-/// explosions'.
-const BRANCHES: usize = 2;
+/// Streams for the branches of a plan (see [`Gpu::beside`]): the autopilot's, the
+/// explosions' and the tally's.
+const BRANCHES: usize = 3;
 
 /// Launches `function` on `stream` with programmatic stream serialization: its blocks may
 /// start once every block of the launch before it has signalled its dependents or ended

@@ -24,6 +24,10 @@ pub enum Stage {
     /// The bodies move to slots in the grid's order within their kinds' ranges (gather,
     /// settle); every few steps, in worlds that renumber.
     Renumber,
+    /// The autopilot's input for the next step (one warp), from the step's grid; beside
+    /// the stages after it where they leave the grid as it is (no substeps) and the grid
+    /// keeps its entries' velocities; games.
+    Pilot,
     /// Contacts and their response; worlds where something collides.
     Narrow,
     /// Every enemy's machine, in one launch over the enemy kinds' slots; games with enemies.
@@ -32,16 +36,13 @@ pub enum Stage {
     Integrate,
     /// Broad, narrow and integrate again for each further substep; worlds with substeps.
     Substeps,
-    /// The autopilot's input for the next step (one warp), beside the stages after it;
-    /// games.
-    Pilot,
+    /// Kills burst into particles, the others move and fade, beside the stages after it;
+    /// games with explosions.
+    Effects,
+    /// The master after the physics (one warp), beside the free lists; games.
+    Tally,
     /// The free lists: flags, their prefix sum, gather; always.
     Free,
-    /// Kills burst into particles, the others move and fade, beside the tally; games with
-    /// explosions.
-    Effects,
-    /// The master after the physics (one warp); games.
-    Tally,
 }
 
 impl Stage {
@@ -51,14 +52,14 @@ impl Stage {
         Stage::Births,
         Stage::Broad,
         Stage::Renumber,
+        Stage::Pilot,
         Stage::Narrow,
         Stage::Think,
         Stage::Integrate,
         Stage::Substeps,
-        Stage::Pilot,
-        Stage::Free,
         Stage::Effects,
         Stage::Tally,
+        Stage::Free,
     ];
 
     /// The stage's name, as profiles and the documentation spell it.
@@ -68,14 +69,14 @@ impl Stage {
             Stage::Births => "births",
             Stage::Broad => "broad",
             Stage::Renumber => "renumber",
+            Stage::Pilot => "pilot",
             Stage::Narrow => "narrow",
             Stage::Think => "think",
             Stage::Integrate => "integrate",
             Stage::Substeps => "substeps",
-            Stage::Pilot => "pilot",
             Stage::Effects => "effects",
-            Stage::Free => "free",
             Stage::Tally => "tally",
+            Stage::Free => "free",
         }
     }
 
@@ -86,14 +87,14 @@ impl Stage {
             Stage::Births => stages::births::ops(world),
             Stage::Broad => stages::broad::ops(world, 0),
             Stage::Renumber => stages::renumber::ops(world),
+            Stage::Pilot => stages::pilot::ops(world),
             Stage::Narrow => stages::narrow::ops(world, 0),
             Stage::Think => stages::think::ops(world),
             Stage::Integrate => stages::integrate::ops(world, 0),
             Stage::Substeps => stages::substeps::ops(world),
-            Stage::Pilot => stages::pilot::ops(world),
             Stage::Effects => stages::effects::ops(world),
-            Stage::Free => stages::free::ops(world),
             Stage::Tally => stages::tally::ops(world),
+            Stage::Free => stages::free::ops(world),
         }
     }
 }

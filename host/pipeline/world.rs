@@ -12,11 +12,11 @@ use gpuwars_kernels::game::control::{Command, Mailbox, Status};
 use gpuwars_kernels::game::effects::{Burst, Particles};
 use gpuwars_kernels::game::master::{BirthArgs, MasterArgs};
 use gpuwars_kernels::registry;
-use gpuwars_kernels::sim::Space;
 use gpuwars_kernels::sim::broad::CellIndex;
 use gpuwars_kernels::sim::free_list;
 use gpuwars_kernels::sim::narrow::CollideArgs;
 use gpuwars_kernels::sim::teams::Teams;
+use gpuwars_kernels::sim::{Deaths, Space};
 use gpuwars_kernels::{DevSlice, Kernel};
 
 use super::GameConfig;
@@ -150,7 +150,17 @@ pub fn bytes_needed(spec: &WorldSpec, game: Option<(u32, usize)>) -> u64 {
     let kinds = spec.kinds.len();
     let mut sizes = Sizes::default();
     if let Some((particles, waves)) = game {
-        made(GameData::<Unmade>::build(&mut sizes, kinds, waves));
+        let burst_slots = if particles > 0 {
+            layout.slots as usize
+        } else {
+            0
+        };
+        made(GameData::<Unmade>::build(
+            &mut sizes,
+            kinds,
+            waves,
+            burst_slots,
+        ));
         made(Particles::<Unmade>::build(&mut sizes, particles as usize));
     }
     let plays = game.is_some();
@@ -256,7 +266,12 @@ impl World {
         let warps = TeamWarps::new(device, &config, &layout)?;
         let game = match game {
             Some(config) => {
-                let mut data = GameData::build(&mut device.zeroed(), kinds, config.waves.len())?;
+                let burst_slots = match config.effects {
+                    Some(burst) if burst.particles() > 0 => layout.slots as usize,
+                    _ => 0,
+                };
+                let mut data =
+                    GameData::build(&mut device.zeroed(), kinds, config.waves.len(), burst_slots)?;
                 device.write(&mut data.brains, &config.brains)?;
                 device.write(&mut data.waves, &config.waves)?;
                 let effects = match config.effects {
@@ -299,6 +314,18 @@ impl World {
         self.scratch.cell_index(b, cap, self.config.one_launch)
     }
 
+    /// Where the physics counts its deaths, made by `b`: in games, for the tally and the
+    /// explosions; elsewhere nowhere.
+    pub fn deaths(&self, b: &mut Binder) -> Deaths {
+        match &self.game {
+            Some(game) => Deaths {
+                per_kind: b.view(&game.data.deaths),
+                per_slot: b.view(&game.data.slot_deaths),
+            },
+            None => Deaths::NONE,
+        }
+    }
+
     /// The master's and the tally's arguments, made by `b`, in games.
     pub fn master_args(&self, b: &mut Binder) -> Option<MasterArgs> {
         let game = self.game.as_ref()?;
@@ -316,6 +343,8 @@ impl World {
             spawned: b.view(&data.spawned),
             births: b.view(&data.births),
             birth_speed: b.view(&data.birth_speed),
+            census: b.view(&data.census),
+            deaths: b.view(&data.deaths),
             waves: b.view(&data.waves),
             space: self.space,
             rules: game.config.rules,

@@ -1,5 +1,5 @@
-//! `effects`: kills burst into particles, the others move and fade (after `free`, whose flags
-//! mark the deaths), beside the tally.
+//! `effects`: kills burst into particles (the deaths the physics counted in their slots),
+//! the others move and fade, beside the tally and the free lists.
 
 use gpuwars_kernels::game::effects::EffectsArgs;
 use gpuwars_kernels::registry;
@@ -23,7 +23,7 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     let args = EffectsArgs {
         bodies: world.state.bodies(&mut b),
         brains: b.view(&game.data.brains),
-        flags: b.view(&world.scratch.marks.flags),
+        deaths: b.view(&game.data.slot_deaths),
         particles: made(particles.convert(&mut b)),
         burst: *burst,
     };
@@ -37,8 +37,9 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
             28 * u64::from(burst.particles()),
         )
     };
-    // SAFETY: the stage after it (the tally) writes the status, the mailbox and the frozen
-    // flag, none of which the explosions read (the bodies' kinds, places and velocities,
-    // the brains and the free-list flags), and reads or writes no particle.
+    // SAFETY: the stages after it (the tally, the free lists) write the status, the
+    // mailbox, the kinds' deaths, the frozen flag and the free lists, none of which the
+    // explosions read (the bodies' kinds, places and velocities, the brains and the slots'
+    // deaths), and read or write no particle.
     vec![unsafe { op.beside() }]
 }

@@ -25,6 +25,7 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         field: spec.field,
         dt: step_dt(world),
         integrator: physics.integrator.code(),
+        deaths: world.deaths(&mut b),
         substep,
         reserved: 0,
     };

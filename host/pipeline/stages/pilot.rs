@@ -1,5 +1,5 @@
-//! `pilot`: the autopilot's input for the next step, from the grid and the bodies as the
-//! step leaves them, beside the step's last stages.
+//! `pilot`: the autopilot's input for the next step, from the step's grid as it was built,
+//! beside the rest of the step where that leaves what it reads alone.
 
 use gpuwars_kernels::game::autopilot::AutopilotArgs;
 use gpuwars_kernels::{registry, warp};
@@ -9,18 +9,21 @@ use crate::backend::Binder;
 use crate::pipeline::world::World;
 use crate::primitives::threads;
 
-/// The autopilot on one warp, beside the stages after it, in games.
+/// The autopilot on one warp, in games: beside the stages after it where no substep
+/// rebuilds the grid and the grid keeps its entries' velocities, else in order.
 pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     let Some(game) = &world.game else {
         return Vec::new();
     };
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
+    let grid = world.cells(&mut b);
     let args = AutopilotArgs {
-        bodies: world.state.bodies(&mut b),
+        vel: b.view(&world.state.bodies.vel),
+        keys: b.view(&world.scratch.grid.keys),
         kinds: b.view(&world.state.tables.info),
         space: world.space,
-        grid: world.cells(&mut b),
+        grid,
         steered: b.view(&game.data.steered),
         rules: game.config.rules,
         reserved: 0,
@@ -35,9 +38,16 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
             64 * u64::from(warp::WARP),
         )
     };
-    // SAFETY: the stages after it (free lists, effects, tally) write the free lists,
-    // particles, the status, the mailbox and the frozen flag, none of which the autopilot reads
-    // (it reads bodies' liveness, places and velocities, the kinds and the grid), and none
-    // of them touches the input it writes, which the next step's master reads.
+    if world.spec.physics.substeps > 1 || grid.vel.is_empty() {
+        // The grid's next build, or the integrator (the bodies' velocities), would change
+        // what the autopilot reads under it.
+        return vec![op];
+    }
+    // SAFETY: the stages after it (the physics, free lists, effects, tally) write the
+    // bodies, contacts, free lists, particles, the status, the mailbox and the frozen flag,
+    // none of which the autopilot reads (the grid's keys, entries, places and velocities,
+    // and the kinds: written by the broad phase and the renumbering, before it, or made
+    // with the world), and none of them touches the input it writes, which the next step's
+    // master reads.
     vec![unsafe { op.beside() }]
 }

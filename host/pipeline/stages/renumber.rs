@@ -29,7 +29,6 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
             ranges: b.view(&state.tables.ranges),
             start: b.view(&scratch.grid.start),
             entries: b.view(&scratch.grid.slots),
-            was_free: b.view(&scratch.marks.flags),
             moved: made(moved.convert(&mut b)),
             cells: scratch.cells,
             reserved: 0,

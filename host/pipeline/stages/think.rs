@@ -33,6 +33,7 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         status: b.view(&game.data.status),
         ship: game.config.rules.ship.start,
         shot_kind: game.config.rules.shot_kind,
+        deaths: world.deaths(&mut b),
     };
     let threads_needed = u32::try_from(teams.threads(&world.layout.ranges))
         .expect("at most 32 threads a slot of at most 2^24 slots");

@@ -24,7 +24,7 @@ use crate::sim::broad::{CellIndex, Near, kind_bit};
 use crate::sim::integrate::{Field, IntegrateArgs, integrate_slot};
 use crate::sim::narrow::{CollideArgs, Relaxation, collide_slot};
 use crate::sim::teams::Teams;
-use crate::sim::{Bodies, Contacts, KindInfo, SlotKind, Space};
+use crate::sim::{Bodies, Contacts, Deaths, KindInfo, SlotKind, Space};
 use crate::warp::{Handed, Team};
 use crate::{DevSlice, Thread, asked, kernel_args};
 
@@ -69,6 +69,8 @@ kernel_args! {
         pub ship: u32,
         /// The kind of the ship's shots.
         pub shot_kind: u32,
+        /// Where the deaths are counted.
+        pub deaths: Deaths,
     }
 }
 
@@ -511,6 +513,7 @@ pub fn collide_think_integrate(t: Thread, args: &BodyStepArgs) {
             field: args.field,
             dt: args.dt,
             integrator: args.integrator,
+            deaths: think.deaths,
             substep: 0,
             reserved: 0,
         };
@@ -601,6 +604,7 @@ fn think_as<const MACHINE: u32, const MOVING: bool>(
     b.state.set(slot, state as u32);
     if state == State::Dead {
         b.alive.set(slot, 0);
+        args.deaths.count(slot, brain.kind);
         return;
     }
     if state == State::Escaping

@@ -1,10 +1,11 @@
 //! The autopilot: a deterministic bot that writes the ship's [`Input`] on the device, for the
-//! headless demo, the benchmarks and the tests. Each step, once the bodies have moved, it
-//! looks around the ship through the step's grid (buckets of slots; positions as they are
-//! now) and leaves its input for the next step, whose master takes it unless the host's
-//! [`Command`](super::control::Command) says the player flies; so a bot-played step needs
-//! no read-back, and the search runs beside the end of the step (free lists, effects,
-//! tally), off the chain of launches that a step waits for.
+//! headless demo, the benchmarks and the tests. Each step it looks around the ship through
+//! the step's grid, as the grid was built (the places and velocities its entries hold, before
+//! the step's physics moves anything), and leaves its input for the next step, whose master
+//! takes it unless the host's [`Command`](super::control::Command) says the player flies; so
+//! a bot-played step needs no read-back, and, reading nothing the physics writes, the search
+//! runs beside the rest of the step (the physics, free lists, effects, tally), off the chain
+//! of launches that a step waits for.
 //!
 //! It flies away from the enemies near it (each weighted by closeness, those heading for it
 //! more), keeps off the world's edges when they clamp, drifts back to the middle when nothing
@@ -14,20 +15,24 @@ use glam::Vec2;
 
 use super::control::Input;
 use super::rules::Rules;
-use crate::sim::broad::{CellIndex, Near, kind_bit};
-use crate::sim::{Bodies, KindInfo, Space};
-use crate::{DevSlice, Thread, kernel_args, warp};
+use crate::sim::broad::{CellIndex, NO_BUCKET, Near, kind_bit};
+use crate::sim::{KindInfo, Space};
+use crate::{DevSlice, Thread, asked, kernel_args, warp};
 
 kernel_args! {
     /// Arguments of [`autopilot`].
     pub struct AutopilotArgs {
-        /// The bodies (read only).
-        pub bodies: Bodies,
+        /// The bodies' velocities, read where the grid keeps none of its entries' (see
+        /// [`CellIndex::vel`]); nothing before the autopilot has changed them since the grid
+        /// was built then.
+        pub vel: DevSlice<Vec2>,
+        /// Each slot's bucket in the grid (see `Grid::keys`): the ship's tells its entry.
+        pub keys: DevSlice<u32>,
         /// Kind table (which kinds are enemies).
         pub kinds: DevSlice<KindInfo>,
         /// The world.
         pub space: Space,
-        /// The step's grid.
+        /// The step's grid (its first, in worlds with substeps).
         pub grid: CellIndex,
         /// Output: the autopilot's input for the next step (one element).
         pub steered: DevSlice<Input>,
@@ -49,8 +54,8 @@ struct Sighting {
     /// The nearest enemy: its squared distance's bits over its visiting order (smaller is
     /// nearer, then earlier), or `u64::MAX` for none.
     nearest: u64,
-    /// The nearest enemy's slot.
-    slot: u32,
+    /// The nearest enemy's entry in the grid.
+    entry: u32,
     /// Entries visited (before the cap).
     entries: u32,
 }
@@ -59,7 +64,7 @@ impl Sighting {
     const NONE: Sighting = Sighting {
         flee: Vec2::ZERO,
         nearest: u64::MAX,
-        slot: 0,
+        entry: 0,
         entries: 0,
     };
 
@@ -67,15 +72,15 @@ impl Sighting {
     /// `nearest` are distinct, so one of two keys is strictly smaller).
     #[inline(always)]
     fn merge(self, other: Sighting) -> Sighting {
-        let (nearest, slot) = if other.nearest < self.nearest {
-            (other.nearest, other.slot)
+        let (nearest, entry) = if other.nearest < self.nearest {
+            (other.nearest, other.entry)
         } else {
-            (self.nearest, self.slot)
+            (self.nearest, self.entry)
         };
         Sighting {
             flee: self.flee + other.flee,
             nearest,
-            slot,
+            entry,
             entries: self.entries.wrapping_add(other.entries),
         }
     }
@@ -88,7 +93,7 @@ impl warp::Lanes for Sighting {
         Sighting {
             flee: self.flee.shuffle_xor(mask),
             nearest: self.nearest.shuffle_xor(mask),
-            slot: self.slot.shuffle_xor(mask),
+            entry: self.entry.shuffle_xor(mask),
             entries: self.entries.shuffle_xor(mask),
         }
     }
@@ -105,15 +110,19 @@ pub fn autopilot(t: Thread, args: &AutopilotArgs) {
     if t.global() >= warp::WARP || warp::is_copy_of_lane0(lane) {
         return;
     }
-    let (b, rules, space) = (&args.bodies, &args.rules, &args.space);
-    let ship = rules.ship.start;
-    if !b.is_alive(ship) {
+    let (grid, rules, space) = (&args.grid, &args.rules, &args.space);
+    let Some(ship) = ship_entry(args) else {
         if lane == 0 {
             args.steered.set(0, Input::default());
         }
         return;
-    }
-    let pos = b.pos.get(ship);
+    };
+    // Entry `entry`'s velocity as the grid was built.
+    let vel_of = |entry: u32| match grid.vel.is_empty() {
+        true => args.vel.get(grid.slots.get(entry)),
+        false => grid.vel.get(entry),
+    };
+    let pos = grid.pos.get(ship);
     let sight = rules.autopilot_sight;
     // The enemies: the kinds driven by a machine.
     let kinds = args.kinds.len();
@@ -132,9 +141,6 @@ pub fn autopilot(t: Thread, args: &AutopilotArgs) {
         },
         |a, c| a | c,
     );
-    // The grid is the step's; the enemies have moved since: their places now, so the whole
-    // block (a body may have left a cell that its old place put out of reach).
-    let grid = &args.grid;
     let near = grid.near_runs(
         space,
         Near {
@@ -160,34 +166,43 @@ pub fn autopilot(t: Thread, args: &AutopilotArgs) {
                 entries: end - start,
                 ..Sighting::NONE
             };
-            for entry in start..start + allowed {
-                let other = grid.slots.get(entry);
-                if !b.is_alive(other) {
-                    continue;
+            let stop = start + allowed;
+            let mut first = start;
+            while first < stop {
+                // Four entries at a time, their places and velocities asked for at once
+                // (past the run's end, the run's last entry again, unused).
+                let at = |k: u32| (first + k).min(stop - 1);
+                let places = asked([0, 1, 2, 3].map(|k| grid.pos.get(at(k))));
+                let vels = asked([0, 1, 2, 3].map(|k| vel_of(at(k))));
+                for k in 0..4 {
+                    let entry = first + k as u32;
+                    if entry >= stop {
+                        continue;
+                    }
+                    let d = space.offset(pos, places[k]);
+                    let dist2 = d.length_squared();
+                    if dist2 > sight * sight || dist2 <= 0.0 {
+                        continue;
+                    }
+                    let (vel, dist) = (vels[k], libm::sqrtf(dist2));
+                    // Closer enemies, and those coming at the ship, weigh more.
+                    let coming = (-d.dot(vel) / dist).max(0.0) / rules.ship_speed;
+                    let weight = (1.0 + coming) * (sight / dist - 1.0);
+                    mine.flee -= d / dist * weight;
+                    let order = before + (entry - start);
+                    let key = u64::from(dist2.to_bits()) << 32 | u64::from(order);
+                    if key < mine.nearest {
+                        (mine.nearest, mine.entry) = (key, entry);
+                    }
                 }
-                let d = space.offset(pos, b.pos.get(other));
-                let dist2 = d.length_squared();
-                if dist2 > sight * sight || dist2 <= 0.0 {
-                    continue;
-                }
-                let vel = b.vel.get(other);
-                let dist = libm::sqrtf(dist2);
-                // Closer enemies, and those coming at the ship, weigh more.
-                let coming = (-d.dot(vel) / dist).max(0.0) / rules.ship_speed;
-                let weight = (1.0 + coming) * (sight / dist - 1.0);
-                mine.flee -= d / dist * weight;
-                let order = before + (entry - start);
-                let key = u64::from(dist2.to_bits()) << 32 | u64::from(order);
-                if key < mine.nearest {
-                    (mine.nearest, mine.slot) = (key, other);
-                }
+                first += 4;
             }
             mine
         };
         let chunk_found = warp::reduce(lane, lane_sighting, Sighting::merge);
         found.flee += chunk_found.flee;
         if chunk_found.nearest < found.nearest {
-            (found.nearest, found.slot) = (chunk_found.nearest, chunk_found.slot);
+            (found.nearest, found.entry) = (chunk_found.nearest, chunk_found.entry);
         }
         seen = seen.saturating_add(chunk_found.entries);
         chunk += warp::WARP;
@@ -207,10 +222,11 @@ pub fn autopilot(t: Thread, args: &AutopilotArgs) {
     };
     let (move_x, move_y) = Input::move_towards(wish.clamp_length_max(1.0));
     let (aim, fire) = if found.nearest != u64::MAX {
-        let d = space.offset(pos, b.pos.get(found.slot));
-        let vel = b.vel.get(found.slot);
+        let d = space.offset(pos, grid.pos.get(found.entry));
+        let vel = vel_of(found.entry);
         let lead = libm::sqrtf(d.length_squared()) / rules.shot_speed;
-        (Input::aim_towards(d + (vel - b.vel.get(ship)) * lead), 1)
+        let ship_vel = vel_of(ship);
+        (Input::aim_towards(d + (vel - ship_vel) * lead), 1)
     } else {
         (0, 0)
     };
@@ -223,6 +239,20 @@ pub fn autopilot(t: Thread, args: &AutopilotArgs) {
             fire,
         },
     );
+}
+
+/// The ship's entry in the grid, if it was alive as the grid was built: the entry of its
+/// slot in the bucket its key names (a bucket of the ship's kind). Before the first grid
+/// (every key and bucket start zero) the bucket is empty.
+#[inline(always)]
+fn ship_entry(args: &AutopilotArgs) -> Option<u32> {
+    let (grid, ship) = (&args.grid, args.rules.ship.start);
+    let key = args.keys.get(ship);
+    if key == NO_BUCKET || key / grid.cells != args.rules.ship_kind {
+        return None;
+    }
+    let (start, end) = (grid.start.get(key), grid.start.get(key + 1));
+    (start..end).find(|&entry| grid.slots.get(entry) == ship)
 }
 
 /// A push away from each edge closer than `margin`, growing to 1 at the edge.

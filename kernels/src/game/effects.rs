@@ -2,11 +2,12 @@
 //! from the kill. Particles only move and fade: no collisions, no machine, no effect on the
 //! game, so the state hash of a game does not cover them.
 //!
-//! One launch a step, after the free lists are rebuilt (whose flags mark the deaths), one
-//! thread a particle. The enemy slots `first_slot .. end_slot` each own [`Burst::per_kill`]
+//! One launch a step, after the physics (which counts each slot's deaths, see
+//! [`Deaths`](crate::sim::Deaths)), beside the free lists and the tally, one thread a
+//! particle. The enemy slots `first_slot .. end_slot` each own [`Burst::per_kill`]
 //! consecutive particles, so a burst needs no allocation and no ordering: thread `p` looks at
-//! its owner's slot, and if that enemy died this step (its slot held a body after the last
-//! rebuild and is free now) the particle is born at the enemy's place; otherwise a live
+//! its owner's slot, and if that slot's deaths changed since the particle last looked (its
+//! enemy died this step) the particle is born at the enemy's place; otherwise a live
 //! particle moves, slows and ages. Every particle has one writer, so the result is the same
 //! on every schedule and backend.
 
@@ -16,7 +17,6 @@ use glam::Vec2;
 
 use super::rules::Brain;
 use crate::sim::Bodies;
-use crate::sim::free_list::DIED;
 use crate::{DevSlice, Thread, device_data, kernel_args};
 
 /// Most particles one kill makes.
@@ -35,6 +35,9 @@ device_data! {
         life: [u32; count],
         /// Kind of the enemy whose death made it (its colour).
         kind: [u32; count],
+        /// Its owner slot's deaths (see [`Deaths::per_slot`](crate::sim::Deaths)) as it
+        /// last saw them.
+        seen: [u32; count],
     }
 }
 
@@ -89,9 +92,8 @@ kernel_args! {
         pub bodies: Bodies,
         /// Each kind's brain: only kinds with a machine burst.
         pub brains: DevSlice<Brain>,
-        /// The free-list flags as this step's rebuild left them ([`DIED`]: the slot's body
-        /// died this step).
-        pub flags: DevSlice<u32>,
+        /// Each slot's deaths so far (see [`Deaths::per_slot`](crate::sim::Deaths)).
+        pub deaths: DevSlice<u32>,
         /// The particles: born, moved and aged.
         pub particles: Particles,
         /// How kills burst.
@@ -99,11 +101,17 @@ kernel_args! {
     }
 }
 
-/// Whether the body in `slot` died this step: an enemy (a kind with a machine) in a usable
-/// slot that held a body after the last step and holds none now.
+/// Whether particle `p`, of the owner slot `slot`, sees a kill to burst from: its slot's
+/// deaths changed since it last looked (which it notes), and of an enemy (a kind with a
+/// machine).
 #[inline(always)]
-pub fn died(args: &EffectsArgs, slot: u32) -> bool {
-    args.flags.get(slot) & DIED != 0 && args.brains.get(args.bodies.kind.get(slot)).machine != 0
+fn sees_a_kill(args: &EffectsArgs, p: u32, slot: u32) -> bool {
+    let (deaths, seen) = (args.deaths.get(slot), args.particles.seen.get(p));
+    if deaths == seen {
+        return false;
+    }
+    args.particles.seen.set(p, deaths);
+    args.brains.get(args.bodies.kind.get(slot)).machine != 0
 }
 
 /// A well-mixed 32-bit hash (a murmur-style finaliser): the particles' only randomness,
@@ -137,7 +145,7 @@ pub fn burst_and_fade(t: Thread, args: &EffectsArgs) {
     }
     let burst = &args.burst;
     let slot = burst.first_slot + p / burst.per_kill;
-    if slot < burst.end_slot && died(args, slot) {
+    if slot < burst.end_slot && sees_a_kill(args, p, slot) {
         let b = &args.bodies;
         let pos = b.pos.get(slot);
         // Different for every particle and every death (the place of death varies).

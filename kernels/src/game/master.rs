@@ -57,6 +57,12 @@ kernel_args! {
         pub births: DevSlice<u32>,
         /// Output: birth velocity deviation per kind, from the last due wave of the kind.
         pub birth_speed: DevSlice<f32>,
+        /// Output of [`master`]: each kind's bodies alive once this step's births are made
+        /// (its shot not counted), for [`tally`].
+        pub census: DevSlice<u32>,
+        /// Each kind's deaths in this step's physics (see [`crate::sim::Deaths`]): read,
+        /// then set back to zero, by [`tally`].
+        pub deaths: DevSlice<u32>,
         /// The spawn schedule.
         pub waves: DevSlice<Wave>,
         /// The world.
@@ -100,8 +106,11 @@ pub fn master(t: Thread, args: &MasterArgs) {
     while k < kinds {
         let kind = spawns(args, k, step);
         let spawned = args.spawned.get(k);
+        let (capacity, free) = (args.ranges.get(k).capacity, args.free.count.get(k));
         let births = if over { 0 } else { kind.births };
         args.births.set(k, births);
+        // At most the range's capacity: births take free slots only.
+        args.census.set(k, capacity - free + births);
         if let (Some(speed), false) = (kind.speed, over) {
             args.birth_speed.set(k, speed);
         }
@@ -271,7 +280,8 @@ fn spawns(args: &MasterArgs, kind: u32, step: u32) -> Spawns {
         })
 }
 
-/// The master warp after the physics, from the rebuilt free lists:
+/// The master warp after the physics, beside the free lists' rebuild (it counts the bodies
+/// alive from the master's census and the deaths the physics counted):
 /// 1. counts and score: an enemy kind's dead are those spawned minus those alive, each
 ///    worth its birth energy; the kills and the score saturate at `u32::MAX` instead of
 ///    wrapping, and never go back (a saturated spawn count would undercount the dead);
@@ -298,7 +308,16 @@ pub fn tally(t: Thread, args: &MasterArgs) {
     let (ship_alive, ship_at) = (b.is_alive(ship), b.pos.get(ship));
     let (energy, ship_hits) = (b.energy.get(ship), args.contacts.count.get(ship));
     let shots = args.ranges.get(rules.shot_kind);
-    let shots_free = args.free.count.get(rules.shot_kind);
+    // The bodies of kind `k` alive now: those the master counted, and its shot, less the
+    // physics' deaths.
+    let alive = |k: u32| {
+        let fired = if k == rules.shot_kind {
+            before.events.shots_fired
+        } else {
+            0
+        };
+        args.census.get(k) + fired - args.deaths.get(k)
+    };
     // A kind a lane; the sums saturate, which keeps them independent of their order.
     let counts = warp::reduce(
         lane,
@@ -306,8 +325,8 @@ pub fn tally(t: Thread, args: &MasterArgs) {
             let mut counts = Counts::default();
             let mut k = l;
             while k < args.kinds.len() {
-                let (info, range) = (args.kinds.get(k), args.ranges.get(k));
-                let now = range.capacity - args.free.count.get(k);
+                let info = args.kinds.get(k);
+                let now = alive(k);
                 let dead = args.spawned.get(k).saturating_sub(now);
                 // Birth energies are at least 1.
                 let worth = dead.saturating_mul(info.energy as u32);
@@ -332,8 +351,14 @@ pub fn tally(t: Thread, args: &MasterArgs) {
         let hit = |hits: u32, damage: i32| hits + u32::from(damage > 0);
         args.contacts.damage.fold_every(every_32nd, 0, hit)
     });
+    let shots_alive = alive(rules.shot_kind);
     if lane != 0 {
         return;
+    }
+    // Every lane has read the deaths (the reductions above gather them): the next step's
+    // count starts from zero.
+    for k in 0..args.kinds.len() {
+        args.deaths.set(k, 0);
     }
     let mut st = before;
     let killed = counts.killed.max(st.enemies_killed);
@@ -341,7 +366,7 @@ pub fn tally(t: Thread, args: &MasterArgs) {
     st.enemies_alive = counts.alive;
     st.enemies_killed = killed;
     st.score = counts.score.max(st.score);
-    st.shots_alive = shots.capacity - shots_free;
+    st.shots_alive = shots_alive;
     st.events.shot_hits = shot_hits;
     st.events.ship_hits = if ship_alive { ship_hits } else { 0 };
     if ship_alive {

@@ -32,7 +32,7 @@ use rules::{Brain, Wave};
 crate::device_data! {
     /// The game's own buffers: the scene's tables, what crosses between host and device, and
     /// the spawn counters.
-    pub struct GameData(kinds, waves) {
+    pub struct GameData(kinds, waves, burst_slots) {
         /// Each kind's brain (machine 0 for kinds that have none).
         brains: [Brain; kinds],
         /// The spawn schedule.
@@ -53,5 +53,14 @@ crate::device_data! {
         births: [u32; kinds],
         /// The speed they are born with, per kind.
         birth_speed: [f32; kinds],
+        /// Bodies of each kind alive once the step's births are made (see
+        /// [`master::MasterArgs::census`]).
+        census: [u32; kinds],
+        /// Deaths of each kind in the step's physics (see [`crate::sim::Deaths::per_kind`]).
+        deaths: [u32; kinds],
+        /// Deaths of each slot so far where kills burst into particles (`burst_slots`: the
+        /// world's slots in games with explosions, else none; see
+        /// [`crate::sim::Deaths::per_slot`]).
+        slot_deaths: [u32; burst_slots],
     }
 }

@@ -2,8 +2,8 @@
 
 use glam::Vec2;
 
-use crate::device_data;
 use crate::rng::RngStreams;
+use crate::{DevSlice, device_data};
 
 device_data! {
     /// Every per-body array, one element per slot. Slots of dead bodies keep their kind, mass
@@ -56,6 +56,40 @@ impl Bodies {
     #[inline(always)]
     pub fn is_alive(&self, slot: u32) -> bool {
         self.alive.get(slot) != 0
+    }
+}
+
+/// Where the step's physics counts the deaths it causes, for a game's tally and explosions,
+/// which then need not wait for the free lists (empty views, counting nothing, elsewhere).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
+pub struct Deaths {
+    /// Each kind's deaths this step, added to atomically (their sum does not depend on the
+    /// order); the tally reads them and sets them back to zero.
+    pub per_kind: DevSlice<u32>,
+    /// Each slot's deaths so far, modulo 2³², where kills burst into particles: a
+    /// particle that sees its slot's count change bursts.
+    pub per_slot: DevSlice<u32>,
+}
+
+impl Deaths {
+    /// Counting nothing.
+    pub const NONE: Deaths = Deaths {
+        per_kind: DevSlice::EMPTY,
+        per_slot: DevSlice::EMPTY,
+    };
+
+    /// Counts the death of the body of kind `kind` in slot `slot`: a body dies at most once
+    /// a step, and only its own thread counts it in its slot.
+    #[inline(always)]
+    pub fn count(&self, slot: u32, kind: u32) {
+        if !self.per_kind.is_empty() {
+            self.per_kind.atomic_add(kind, 1);
+        }
+        if !self.per_slot.is_empty() {
+            self.per_slot
+                .set(slot, self.per_slot.get(slot).wrapping_add(1));
+        }
     }
 }
 

@@ -3,8 +3,8 @@
 //! stream compaction so that it needs neither atomics nor a sequential scan:
 //!
 //! 1. [`mark_free`]: `flags[i]` has [`FREE`] where slot `i` is a usable slot without a live
-//!    body (and [`DIED`] too if it held one after the last rebuild), and each warp's count of
-//!    its 32 slots' free ones (a tile: ranges are aligned to warps);
+//!    body, and each warp's count of its 32 slots' free ones (a tile: ranges are aligned to
+//!    warps);
 //! 2. the exclusive prefix sum of the tiles' counts, 32 times shorter than the slots;
 //! 3. [`gather_free`]: each free slot writes itself into its range's list at its rank (its
 //!    tile's offset and the free slots before it in the tile, a warp scan), and the last slot
@@ -36,9 +36,8 @@ device_data! {
 device_data! {
     /// The rebuild's own arrays, remade every step.
     pub struct FreeMarks(slots, tiles) {
-        /// [`FREE`] for a free usable slot, with [`DIED`] if it held a body after the last
-        /// rebuild, and its rank in its kind's list above [`RANK_SHIFT`]; else 0 (written
-        /// by [`mark_free`], the ranks by [`gather_free`]).
+        /// [`FREE`] for a free usable slot, with its rank in its kind's list above
+        /// [`RANK_SHIFT`]; else 0 (written by [`mark_free`], the ranks by [`gather_free`]).
         flags: [u32; slots],
         /// The free slots of each tile of 32 slots, then their exclusive prefix sums in place;
         /// one more element for the total (see [`FreeMarks::tiles_for`]).
@@ -56,13 +55,9 @@ impl FreeMarks {
 /// A flag's bit: the slot is usable and holds no live body.
 pub const FREE: u32 = 1;
 
-/// A flag's bit, beside [`FREE`]: the slot held a body after the rebuild before (its body
-/// died since: the explosions' test).
-pub const DIED: u32 = 2;
-
 /// Where a free slot's flag holds its rank in its kind's list (ranks are below the
 /// world's 2²⁴ slots).
-pub const RANK_SHIFT: u32 = 2;
+pub const RANK_SHIFT: u32 = 1;
 
 /// The rank in its kind's free list of the free slot flagged `flag`.
 #[inline(always)]
@@ -70,14 +65,12 @@ pub fn free_rank(flag: u32) -> u32 {
     flag >> RANK_SHIFT
 }
 
-/// The flag of a slot that is `free` now, `rank`-th in its kind's list, and was flagged
-/// `old` by the rebuild before.
+/// The flag of a slot that is `free` now, `rank`-th in its kind's list.
 #[inline(always)]
-fn flag(free: bool, old: u32, rank: u32) -> u32 {
-    match (free, old & FREE) {
-        (false, _) => 0,
-        (true, 0) => FREE | DIED | rank << RANK_SHIFT,
-        (true, _) => FREE | rank << RANK_SHIFT,
+fn flag(free: bool, rank: u32) -> u32 {
+    match free {
+        false => 0,
+        true => FREE | rank << RANK_SHIFT,
     }
 }
 
@@ -88,8 +81,7 @@ kernel_args! {
         pub bodies: Bodies,
         /// Slot range of each kind.
         pub ranges: DevSlice<SlotRange>,
-        /// The flags of the rebuild before, replaced by this one's (see
-        /// [`FreeMarks::flags`]); one per slot.
+        /// Output: the flags (see [`FreeMarks::flags`]), one per slot.
         pub flags: DevSlice<u32>,
         /// Output: the free slots of each tile of 32 slots.
         pub tiles: DevSlice<u32>,
@@ -114,7 +106,7 @@ pub fn mark_free(t: Thread, args: &MarkArgs) {
     let free = |s: u32| usable(s, args.ranges.get(b.kind.get(s))) && !b.is_alive(s);
     let mine = free(slot);
     // The rank comes in `gather_free`.
-    args.flags.set(slot, flag(mine, args.flags.get(slot), 0));
+    args.flags.set(slot, flag(mine, 0));
     let (lane, first) = (t.lane(), slot - t.lane());
     let theirs = |l: u32| free(first + l) as u32;
     let count = warp::sum_u32_in_lane0(lane, warp::own_or(lane, mine as u32, theirs));
@@ -205,8 +197,7 @@ kernel_args! {
         pub bodies: Bodies,
         /// Slot range of each kind, none larger than [`ONE_LAUNCH_RANGE`] slots.
         pub ranges: DevSlice<SlotRange>,
-        /// The flags of the rebuild before, replaced by this one's (see
-        /// [`FreeMarks::flags`]); one per slot.
+        /// Output: the flags (see [`FreeMarks::flags`]), one per slot.
         pub flags: DevSlice<u32>,
         /// Output: as [`GatherArgs::list`].
         pub list: DevSlice<u32>,
@@ -230,11 +221,9 @@ pub fn mark_and_gather_free(t: Thread, args: &MarkGatherArgs) {
     }
     let (b, lane) = (&args.bodies, t.lane());
     let first = slot - lane;
-    // The slot's kind and range are the world's, and its flag is only this kernel's: all
-    // read while the launch before ends.
+    // The slot's kind and range are the world's: read while the launch before ends.
     let kind = b.kind.get(slot);
     let range = args.ranges.get(kind);
-    let old = args.flags.get(slot);
     follow_previous_launch();
     let free = |s: u32| usable(s, range) && !b.is_alive(s);
     let mine = free(slot) as u32;
@@ -249,7 +238,7 @@ pub fn mark_and_gather_free(t: Thread, args: &MarkGatherArgs) {
     });
     let within =
         warp::exclusive_sum_u32(lane, warp::own_or(lane, mine, |l| free(first + l) as u32));
-    args.flags.set(slot, flag(mine != 0, old, before + within));
+    args.flags.set(slot, flag(mine != 0, before + within));
     if !usable(slot, range) {
         return;
     }

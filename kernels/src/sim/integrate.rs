@@ -8,7 +8,7 @@
 
 use glam::Vec2;
 
-use super::bodies::{Bodies, Contacts};
+use super::bodies::{Bodies, Contacts, Deaths};
 use super::kinds::KindInfo;
 use super::narrow::inverse_mass;
 use super::space::Space;
@@ -73,6 +73,8 @@ kernel_args! {
         pub dt: f32,
         /// One of [`SEMI_IMPLICIT_EULER`], [`EXPLICIT_EULER`], [`VELOCITY_VERLET`].
         pub integrator: u32,
+        /// Where the deaths are counted.
+        pub deaths: Deaths,
         /// Which substep of the step this is: bodies age and die in substep 0 only.
         pub substep: u32,
         /// Keeps the struct free of implicit padding.
@@ -176,6 +178,7 @@ pub fn integrate_slot(args: &IntegrateArgs, slot: u32) {
     let dies = aging && ((energy <= 0 && info.dies_at_zero_energy()) || info.expired(aged));
     if live && dies {
         bodies.alive.set(slot, 0);
+        args.deaths.count(slot, kind);
     }
     let moves = live && !dies;
     if moves && aging {

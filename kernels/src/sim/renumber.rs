@@ -13,8 +13,7 @@
 //!    slots.
 //!
 //! What moves is what a body carries from step to step: place, velocity, force, facing,
-//! energy, state, age, and whether its slot was free after the last step (the free lists'
-//! test for a death, which the explosions read). Kind and mass are those of the range;
+//! energy, state, age. Kind and mass are those of the range;
 //! each slot keeps its generator, so a body draws from the generator of the slot it holds,
 //! as a body born there would. The grid's buckets keep their order (a bucket's bodies get
 //! increasing slots in the order they were listed), so every query folds its neighbours in
@@ -43,8 +42,6 @@ device_data! {
         state: [u32; slots],
         /// Age.
         age: [u32; slots],
-        /// Whether the slot was free after the last step.
-        was_free: [u32; slots],
     }
 }
 
@@ -59,8 +56,6 @@ kernel_args! {
         pub start: DevSlice<u32>,
         /// The grid's entries: the slots of each bucket; renamed to the new slots.
         pub entries: DevSlice<u32>,
-        /// The free-list flags of the last step (1: the slot was free), moved with the bodies.
-        pub was_free: DevSlice<u32>,
         /// The state between the two launches.
         pub moved: Moved,
         /// Cells of the grid.
@@ -127,7 +122,6 @@ pub fn gather_in_cell_order(t: Thread, args: &RenumberArgs) {
     };
     let from = args.entries.get(entry);
     carry!(args.moved, i, args.bodies, from);
-    args.moved.was_free.set(i, args.was_free.get(from));
 }
 
 /// Thread `i`: slot `i` takes the body [`gather_in_cell_order`] copied for it, and its grid
@@ -141,13 +135,11 @@ pub fn settle_in_cell_order(t: Thread, args: &RenumberArgs) {
         None => return,
         Some(Destination::Free) => {
             b.alive.set(i, 0);
-            args.was_free.set(i, 1);
             return;
         }
         Some(Destination::Body(entry)) => entry,
     };
     carry!(args.bodies, i, args.moved, i);
     b.alive.set(i, 1);
-    args.was_free.set(i, args.moved.was_free.get(i));
     args.entries.set(entry, i);
 }
