@@ -4,8 +4,8 @@
 mod common;
 
 use common::{histogram_op as histogram, random_below, rng_for};
-use gpuwars::primitives::CountingSort;
-use gpuwars::{Device, Error};
+use gpuwars::primitives::{CountingSort, PrefixSum};
+use gpuwars::{Device, Error, Op};
 
 fn launches_outside_the_block_limits_are_refused(device: &Device) {
     let keys = device.upload(&[0u32]).unwrap();
@@ -141,9 +141,48 @@ fn an_op_beside_the_others_is_joined_at_the_plans_end(device: &Device) {
     }
 }
 
+/// An op made [`gpuwars::Op::after_branches`] runs once the ops beside the others before it
+/// are done: the prefix sums of a slow histogram's counts, run beside the fast one and
+/// read by the op after the branches, are those of the finished counts on every run.
+fn an_op_after_the_branches_sees_what_they_wrote(device: &Device) {
+    let mut rng = rng_for("after_branches", 0);
+    let slow_n = 1 << 21;
+    let slow_keys = random_below(&mut rng, slow_n, 8);
+    let counts: Vec<u32> = (0..8)
+        .map(|k| slow_keys.iter().filter(|&&v| v == k).count() as u32)
+        .collect();
+    for graph in [true, false] {
+        let slow = device.upload(&slow_keys).unwrap();
+        let slow_counts = device.alloc_zeroed::<u32>(8).unwrap();
+        let sums = device.alloc_zeroed::<u32>(8).unwrap();
+        let fast = device.upload(&[1u32; 1000]).unwrap();
+        let fast_counts = device.alloc_zeroed::<u32>(8).unwrap();
+        let scan = PrefixSum::new(device, 8).unwrap();
+        let beside = histogram(&slow, &slow_counts, slow_n as u32, slow_n as u32 / 32, 32);
+        // SAFETY: the op after it touches other buffers, up to the scan after the branches.
+        let mut ops = vec![
+            unsafe { beside.beside() },
+            histogram(&fast, &fast_counts, 1000, 8, 128),
+        ];
+        let scanned = scan.ops(&slow_counts, &sums, 8).unwrap();
+        ops.extend(scanned.into_iter().map(Op::after_branches));
+        let plan = device.plan(ops, graph).unwrap();
+        for run in 1..=3 {
+            device.run(&plan).unwrap();
+            let done: Vec<u32> = counts.iter().map(|c| run * c).collect();
+            assert_eq!(
+                device.download(&sums).unwrap(),
+                common::exclusive_scan(&done),
+                "run {run}, graph {graph}"
+            );
+        }
+    }
+}
+
 on_both_backends!(
     launches_outside_the_block_limits_are_refused,
     an_op_beside_the_others_is_joined_at_the_plans_end,
+    an_op_after_the_branches_sees_what_they_wrote,
     every_thread_of_the_grid_runs_once,
     a_plan_keeps_its_buffers_alive,
     shared_memory_is_reached_by_kernels_and_the_host,

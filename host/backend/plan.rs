@@ -107,6 +107,8 @@ pub struct Op {
     issue: Issue,
     /// Whether it runs beside the plan's ops after it (see [`Op::beside`]).
     beside: bool,
+    /// Whether it waits for the ops before it that run beside (see [`Op::after_branches`]).
+    joins: bool,
     /// The buffers the arguments view.
     _holds: Arc<[Hold]>,
 }
@@ -130,6 +132,7 @@ impl Op {
             grid: launch.grid,
             bytes,
             beside: false,
+            joins: false,
             _holds: binder.holds.into(),
             // SAFETY: the caller's promise covers every run of the op, and the op holds the
             // buffers its views are of.
@@ -148,6 +151,7 @@ impl Op {
             grid: 0,
             bytes: u64::from(view.len()) * size_of::<T>() as u64,
             beside: false,
+            joins: false,
             _holds: binder.holds.into(),
             // SAFETY: as in `launch`.
             issue: Arc::new(move |device| unsafe { device.clear(view) }),
@@ -161,10 +165,22 @@ impl Op {
     ///
     /// # Safety
     /// It reads nothing that the ops after it in its plan write, and writes nothing that
-    /// they read or write: on the GPU they run at the same time.
+    /// they read or write, up to the first after it made [`Op::after_branches`]: on the
+    /// GPU they run at the same time.
     pub unsafe fn beside(self) -> Op {
         Op {
             beside: true,
+            ..self
+        }
+    }
+
+    /// The same op, run once the ops before it in its plan that run beside the others
+    /// ([`Op::beside`]) are done: on the GPU the branches join the device's stream before
+    /// it (and again at the plan's end); on the CPU, where they ran in order, it changes
+    /// nothing. So an op beside the others need only stay off what the ops up to here write.
+    pub fn after_branches(self) -> Op {
+        Op {
+            joins: true,
             ..self
         }
     }
@@ -257,10 +273,16 @@ impl Device {
     }
 
     /// Issues `ops` in order, each marked [`Op::beside`] on a side stream of its own (a
-    /// branch), joined back after the last.
+    /// branch), joined back before each op marked [`Op::after_branches`] and after the last.
     fn issue_all(&self, ops: &[Op]) -> Result<(), Error> {
         let mut branches = 0;
         for op in ops {
+            if let Imp::Cuda(gpu) = &self.imp
+                && op.joins
+                && branches > 0
+            {
+                gpu.rejoin(branches)?;
+            }
             match &self.imp {
                 Imp::Cuda(gpu) if op.beside => {
                     gpu.beside(branches, || (op.issue)(self))?;

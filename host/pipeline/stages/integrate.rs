@@ -30,7 +30,7 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         reserved: 0,
     };
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
-    vec![unsafe {
+    let op = unsafe {
         threads(
             registry::INTEGRATE,
             world.layout.slots,
@@ -38,7 +38,9 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
             b,
             88 * u64::from(world.layout.slots),
         )
-    }]
+    };
+    // The autopilot's branch, where it reads the bodies' velocities, ends before they move.
+    vec![op.after_branches()]
 }
 
 /// The time step of each substep.

@@ -9,8 +9,10 @@ use crate::backend::Binder;
 use crate::pipeline::world::World;
 use crate::primitives::threads;
 
-/// The autopilot on one warp, in games: beside the stages after it where no substep
-/// rebuilds the grid and the grid keeps its entries' velocities, else in order.
+/// The autopilot on one warp, in games, beside the stages after it: to the step's end where
+/// the grid keeps its entries' velocities, else until the integrator (which joins it
+/// before it moves the bodies); in order where the step's end would be after a substep's
+/// new grid.
 pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     let Some(game) = &world.game else {
         return Vec::new();
@@ -38,16 +40,18 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
             64 * u64::from(warp::WARP),
         )
     };
-    if world.spec.physics.substeps > 1 || grid.vel.is_empty() {
-        // The grid's next build, or the integrator (the bodies' velocities), would change
-        // what the autopilot reads under it.
+    let to_the_end = !grid.vel.is_empty();
+    if to_the_end && world.spec.physics.substeps > 1 {
+        // The next substep's grid would replace the one it reads.
         return vec![op];
     }
-    // SAFETY: the stages after it (the physics, free lists, effects, tally) write the
-    // bodies, contacts, free lists, particles, the status, the mailbox and the frozen flag,
-    // none of which the autopilot reads (the grid's keys, entries, places and velocities,
-    // and the kinds: written by the broad phase and the renumbering, before it, or made
-    // with the world), and none of them touches the input it writes, which the next step's
-    // master reads.
+    // SAFETY: the stages after it (the physics, free lists, effects, tally; where the grid
+    // keeps no velocities, up to the integrator, which joins it) write the bodies'
+    // contacts, forces, machines, energies and liveness, the free lists, particles, the
+    // status, the mailbox and the frozen flag, none of which the autopilot reads (the
+    // grid's keys, entries, places and velocities, and the kinds: written by the broad
+    // phase and the renumbering, before it, or made with the world; the bodies'
+    // velocities only where the integrator joins it before it changes them), and none of
+    // them touches the input it writes, which the next step's master reads.
     vec![unsafe { op.beside() }]
 }
