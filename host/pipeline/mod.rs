@@ -16,7 +16,7 @@
 //! | `integrate` | Euler, the boundary rule, deaths (inside `think`'s launch where the narrow phase is) | always |
 //! | `substeps` | broad, narrow and integrate again for each further substep | worlds with substeps |
 //! | `effects` | kills (the deaths the physics counted in their slots) burst into particles, the others move and fade, beside the stages after it (on the GPU a branch of the step's graph) | games with explosions |
-//! | `tally` | the master after the physics (one warp): counts from the master's census and the physics' deaths, beside the free lists (a branch) | games |
+//! | `tally` | the master after the physics (one warp): counts from the free slots the master found, its births and the physics' deaths, beside the free lists (a branch) | games |
 //! | `free` | the free lists: flags, their prefix sum, gather | always |
 //!
 //! The scene decides which stages exist and which kernels they launch; every step of a

@@ -343,7 +343,7 @@ impl World {
             spawned: b.view(&data.spawned),
             births: b.view(&data.births),
             birth_speed: b.view(&data.birth_speed),
-            census: b.view(&data.census),
+            free_before: b.view(&data.free_before),
             deaths: b.view(&data.deaths),
             waves: b.view(&data.waves),
             space: self.space,

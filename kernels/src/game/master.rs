@@ -57,9 +57,9 @@ kernel_args! {
         pub births: DevSlice<u32>,
         /// Output: birth velocity deviation per kind, from the last due wave of the kind.
         pub birth_speed: DevSlice<f32>,
-        /// Output of [`master`]: each kind's bodies alive once this step's births are made
-        /// (its shot not counted), for [`tally`].
-        pub census: DevSlice<u32>,
+        /// Output of [`master`]: each kind's free slots before this step's births, for
+        /// [`tally`] (which runs beside the free lists' rebuild).
+        pub free_before: DevSlice<u32>,
         /// Each kind's deaths in this step's physics (see [`crate::sim::Deaths`]): read,
         /// then set back to zero, by [`tally`].
         pub deaths: DevSlice<u32>,
@@ -104,13 +104,12 @@ pub fn master(t: Thread, args: &MasterArgs) {
     let mut mine = Spawns::default();
     let mut k = lane;
     while k < kinds {
+        let free = args.free.count.get(k);
         let kind = spawns(args, k, step);
         let spawned = args.spawned.get(k);
-        let (capacity, free) = (args.ranges.get(k).capacity, args.free.count.get(k));
         let births = if over { 0 } else { kind.births };
         args.births.set(k, births);
-        // At most the range's capacity: births take free slots only.
-        args.census.set(k, capacity - free + births);
+        args.free_before.set(k, free);
         if let (Some(speed), false) = (kind.speed, over) {
             args.birth_speed.set(k, speed);
         }
@@ -281,7 +280,8 @@ fn spawns(args: &MasterArgs, kind: u32, step: u32) -> Spawns {
 }
 
 /// The master warp after the physics, beside the free lists' rebuild (it counts the bodies
-/// alive from the master's census and the deaths the physics counted):
+/// alive from the free slots the master found, its births and the deaths the physics
+/// counted):
 /// 1. counts and score: an enemy kind's dead are those spawned minus those alive, each
 ///    worth its birth energy; the kills and the score saturate at `u32::MAX` instead of
 ///    wrapping, and never go back (a saturated spawn count would undercount the dead);
@@ -308,15 +308,17 @@ pub fn tally(t: Thread, args: &MasterArgs) {
     let (ship_alive, ship_at) = (b.is_alive(ship), b.pos.get(ship));
     let (energy, ship_hits) = (b.energy.get(ship), args.contacts.count.get(ship));
     let shots = args.ranges.get(rules.shot_kind);
-    // The bodies of kind `k` alive now: those the master counted, and its shot, less the
-    // physics' deaths.
+    // The bodies of kind `k` alive now: those alive as the step began, those the master
+    // brought to life (births, its shot), less the physics' deaths.
     let alive = |k: u32| {
         let fired = if k == rules.shot_kind {
             before.events.shots_fired
         } else {
             0
         };
-        args.census.get(k) + fired - args.deaths.get(k)
+        let (range, free) = (args.ranges.get(k), args.free_before.get(k));
+        let born = args.births.get(k) + fired;
+        range.capacity - free + born - args.deaths.get(k)
     };
     // A kind a lane; the sums saturate, which keeps them independent of their order.
     let counts = warp::reduce(

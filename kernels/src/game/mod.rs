@@ -53,9 +53,8 @@ crate::device_data! {
         births: [u32; kinds],
         /// The speed they are born with, per kind.
         birth_speed: [f32; kinds],
-        /// Bodies of each kind alive once the step's births are made (see
-        /// [`master::MasterArgs::census`]).
-        census: [u32; kinds],
+        /// Each kind's free slots as the step began (see [`master::MasterArgs::free_before`]).
+        free_before: [u32; kinds],
         /// Deaths of each kind in the step's physics (see [`crate::sim::Deaths::per_kind`]).
         deaths: [u32; kinds],
         /// Deaths of each slot so far where kills burst into particles (`burst_slots`: the
