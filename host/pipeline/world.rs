@@ -150,11 +150,7 @@ pub fn bytes_needed(spec: &WorldSpec, game: Option<(u32, usize)>) -> u64 {
     let kinds = spec.kinds.len();
     let mut sizes = Sizes::default();
     if let Some((particles, waves)) = game {
-        let burst_slots = if particles > 0 {
-            layout.slots as usize
-        } else {
-            0
-        };
+        let burst_slots = burst_slots(&layout, particles);
         made(GameData::<Unmade>::build(
             &mut sizes,
             kinds,
@@ -169,6 +165,16 @@ pub fn bytes_needed(spec: &WorldSpec, game: Option<(u32, usize)>) -> u64 {
         moves_in_one_launch(spec, &layout, plays),
     );
     state::bytes_needed(&layout, &layout::space(spec), kinds, extras) + sizes.bytes
+}
+
+/// The slots whose deaths a game counts for its explosions (`GameData::slot_deaths`): every
+/// slot where kills burst into `particles` particles, none without explosions.
+fn burst_slots(layout: &Layout, particles: u32) -> usize {
+    if particles > 0 {
+        layout.slots as usize
+    } else {
+        0
+    }
 }
 
 /// Whether a world of `spec` builds the grid: something collides, or a game's autopilot may
@@ -266,10 +272,8 @@ impl World {
         let warps = TeamWarps::new(device, &config, &layout)?;
         let game = match game {
             Some(config) => {
-                let burst_slots = match config.effects {
-                    Some(burst) if burst.particles() > 0 => layout.slots as usize,
-                    _ => 0,
-                };
+                let particles = sized.map_or(0, |(particles, _)| particles);
+                let burst_slots = burst_slots(&layout, particles);
                 let mut data =
                     GameData::build(&mut device.zeroed(), kinds, config.waves.len(), burst_slots)?;
                 device.write(&mut data.brains, &config.brains)?;

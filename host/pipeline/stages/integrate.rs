@@ -39,8 +39,12 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
             88 * u64::from(world.layout.slots),
         )
     };
-    // The autopilot's branch, where it reads the bodies' velocities, ends before they move.
-    vec![op.after_branches()]
+    // The autopilot's branch, where it reads the bodies' velocities, ends before they first
+    // move.
+    match substep {
+        0 => vec![op.after_branches()],
+        _ => vec![op],
+    }
 }
 
 /// The time step of each substep.

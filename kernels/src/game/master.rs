@@ -105,7 +105,7 @@ pub fn master(t: Thread, args: &MasterArgs) {
     let mut k = lane;
     while k < kinds {
         let free = args.free.count.get(k);
-        let kind = spawns(args, k, step);
+        let kind = spawns(args, (k, free), step);
         let spawned = args.spawned.get(k);
         let births = if over { 0 } else { kind.births };
         args.births.set(k, births);
@@ -130,7 +130,7 @@ pub fn master(t: Thread, args: &MasterArgs) {
         let mut theirs = Spawns::default();
         let mut k = l;
         while k < kinds {
-            let kind = spawns(args, k, step);
+            let kind = spawns(args, (k, args.free.count.get(k)), step);
             theirs.births += kind.births;
             theirs.waves += kind.waves;
             k += warp::WARP;
@@ -257,11 +257,10 @@ impl Spawns {
     }
 }
 
-/// Kind `kind`'s spawns at step `step`: each due wave of the kind, in schedule order, takes
-/// what the kind's free slots have left.
+/// Kind `kind`'s spawns at step `step`, with `free` free slots: each due wave of the kind,
+/// in schedule order, takes what the kind's free slots have left.
 #[inline(always)]
-fn spawns(args: &MasterArgs, kind: u32, step: u32) -> Spawns {
-    let free = args.free.count.get(kind);
+fn spawns(args: &MasterArgs, (kind, free): (u32, u32), step: u32) -> Spawns {
     let every_wave = (0, args.waves.len(), 1);
     args.waves
         .fold_every(every_wave, Spawns::default(), |mut out, wave| {
