@@ -779,6 +779,7 @@ fn the_physics_table_reads_every_choice() {
             neighbour_cap: 16,
             vision_scale: 0.75,
             renumber_every: Some(4),
+            trace_paths: false,
         }
     );
     // Without the table, and with an empty one, the paper's defaults.

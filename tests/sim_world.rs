@@ -241,12 +241,25 @@ fn a_world_takes_the_bytes_its_memory_check_counts() {
     // 10,000 slots renumber unless the physics says never.
     let mut in_place = dense.clone();
     in_place.physics.renumber_every = Some(0);
+    // A world that keeps its bodies' paths, for an audit.
+    let mut traced = valid();
+    traced.physics.trace_paths = true;
     // Worlds without a game, whose grids keep no velocities of their entries.
-    for (spec, renumbers) in [(valid(), false), (in_place, false), (dense, true)] {
+    for (spec, renumbers) in [
+        (valid(), false),
+        (in_place, false),
+        (dense, true),
+        (traced, false),
+    ] {
         let device = Device::cpu(Some(1), "tests").unwrap();
         let sim = Simulation::new(&device, &spec, 1).unwrap();
         let (layout, kinds) = (sim.layout(), spec.kinds.len());
-        let expected = state::bytes_needed(layout, sim.space(), kinds, (renumbers, false));
+        let extras = state::Extras {
+            renumbers,
+            moving: false,
+            traces: spec.traces(),
+        };
+        let expected = state::bytes_needed(layout, sim.space(), kinds, extras);
         assert_eq!(device.allocated_bytes(), expected);
     }
 }

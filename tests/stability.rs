@@ -28,7 +28,7 @@ use gpuwars::game::{Game, Scene};
 use gpuwars::pipeline::Simulation;
 use gpuwars::sim::layout::{Layout, space};
 use gpuwars::sim::spec::{MAX_MASS, MAX_SIDE, MIN_MASS};
-use gpuwars::sim::{Boundary, Field, Integrator, KindSpec, Shape, Snapshot, WorldSpec};
+use gpuwars::sim::{Boundary, Field, Integrator, KindSpec, Shape, Snapshot, Sweep, WorldSpec};
 use proptest::prelude::*;
 
 // ---------------------------------------------------------------------------------------
@@ -330,12 +330,15 @@ fn predicted_stop(speed: f64, dt: f64, substeps: u32, half: f64, radius: f64) ->
 fn ball_at_a_wall(
     device: &Device,
     speed: f32,
-    half: f32,
-    radius: f32,
+    (half, radius): (f32, f32),
     substeps: u32,
+    sweep: Sweep,
 ) -> (Vec2, Vec2, u64) {
     let mut ball = kind("ball", circle(radius), 1, &["wall"]);
     ball.restitution = 1.0;
+    // Its speed exactly: the limit changes nothing, and sizes the swept test's reach.
+    ball.max_speed = speed;
+    ball.sweep = sweep;
     let mut wall = kind("wall", rect(half, 300.0), 1, &[]);
     wall.mass = f32::INFINITY;
     let mut spec = world(Vec2::splat(1000.0), Boundary::Clamp, vec![ball, wall]);
@@ -380,7 +383,7 @@ fn tunnelling_through_a_thin_wall_stops_at_the_predicted_substeps(device: &Devic
             half.into(),
             radius.into(),
         );
-        let (pos, vel, _) = ball_at_a_wall(device, speed, half, radius, substeps);
+        let (pos, vel, _) = ball_at_a_wall(device, speed, (half, radius), substeps, Sweep::Off);
         if expected {
             assert!(
                 pos.x < WALL_X && vel == Vec2::new(-speed, 0.0),
@@ -403,7 +406,25 @@ fn tunnelling_through_a_thin_wall_stops_at_the_predicted_substeps(device: &Devic
         needed + 4
     );
     same_everywhere(device, |device| {
-        ball_at_a_wall(device, speed, half, radius, needed).2
+        ball_at_a_wall(device, speed, (half, radius), needed, Sweep::Off).2
+    });
+}
+
+/// The thin wall of [`tunnelling_through_a_thin_wall_stops_at_the_predicted_substeps`] with
+/// the ball's contacts swept: every substep count stops it, since the swept test finds the
+/// contact wherever the sampled path skips it. The ball comes back at the speed it came,
+/// on the near side, and the result is the same on every backend and schedule.
+fn a_swept_ball_never_tunnels_through_a_thin_wall(device: &Device) {
+    let (speed, half, radius) = (3000.0f32, 0.5f32, 1.0f32);
+    for substeps in 1..=38 {
+        let (pos, vel, _) = ball_at_a_wall(device, speed, (half, radius), substeps, Sweep::On);
+        assert!(
+            pos.x < WALL_X && vel == Vec2::new(-speed, 0.0),
+            "{substeps} substeps, swept: expected a stop, the ball is at {pos} moving {vel}"
+        );
+    }
+    same_everywhere(device, |device| {
+        ball_at_a_wall(device, speed, (half, radius), 1, Sweep::On).2
     });
 }
 
@@ -1123,6 +1144,7 @@ on_both_backends!(
     the_bounded_grid_order_is_the_counting_order,
     every_time_step_keeps_a_colliding_world_finite_inside_and_bounded,
     tunnelling_through_a_thin_wall_stops_at_the_predicted_substeps,
+    a_swept_ball_never_tunnels_through_a_thin_wall,
     bodies_crossing_many_cells_a_step_lose_no_contact,
     a_crowded_cell_is_bounded_by_the_cap,
     contacts_on_cell_borders_and_world_edges_match_brute_force,

@@ -163,6 +163,7 @@ fn snapshot(spec_bodies: u32, bodies: &[(Vec2, Vec2)]) -> Snapshot {
             alive,
             state: vec![0; n],
             age: vec![0; n],
+            prev: Vec::new(),
             frozen: vec![0],
             rng: RngStreams {
                 params: Vec::new(),

@@ -32,8 +32,8 @@ use super::spec::{
 // Errors of the file's own rules read like the world's: a field and what is allowed.
 use crate::sim::spec::{
     Boundary, Field, Integrator, KindSpec, MAX_CELL_SCALE, MAX_MASS, MAX_RENUMBER_EVERY, MAX_SIDE,
-    MAX_SLOTS, MAX_SUBSTEPS, MAX_VISION_SCALE, MIN_MASS, Physics, Shape, SpecError, WorldSpec,
-    error as invalid,
+    MAX_SLOTS, MAX_SUBSTEPS, MAX_VISION_SCALE, MIN_MASS, Physics, Shape, SpecError, Sweep,
+    WorldSpec, error as invalid,
 };
 
 /// Largest speed, distance or time (seconds) in a scene: as far as f32 world coordinates go.
@@ -225,12 +225,20 @@ fn read_scene(root: &Node<'_>) -> Result<Scene, SceneError> {
     let fps = read_fps(&top.need("fps")?)?;
     let spawn = read_spawn(&top.need("spawn")?)?;
     let effects = top.or("effects", None, |n| read_effects(n).map(Some))?;
-    let (kinds, behaviours) = top
+    let (mut kinds, behaviours): (Vec<KindSpec>, _) = top
         .need("kinds")?
         .array("an array of tables ([[kinds]])")?
         .iter()
         .map(read_kind)
         .collect::<Result<_, _>>()?;
+    // The game knows how fast the ship and its shots go, which sizes their swept contacts.
+    for kind in &mut kinds {
+        if kind.name == ship.kind {
+            kind.top_speed = ship.speed;
+        } else if kind.name == ship.shot {
+            kind.top_speed = ship.shot_speed;
+        }
+    }
     Ok(Scene {
         name,
         description,
@@ -299,6 +307,8 @@ fn read_physics(node: &Node<'_>) -> Result<Physics, SceneError> {
         renumber_every: table.or("renumber_every", d.renumber_every, |n| {
             n.whole(0, MAX_RENUMBER_EVERY).map(Some)
         })?,
+        // Kept for audits, which ask for it; a scene has no say.
+        trace_paths: false,
     })
 }
 
@@ -389,6 +399,7 @@ fn read_kind(node: &Node<'_>) -> Result<(KindSpec, Option<Behaviour>), SceneErro
         "max_speed",
         "lifetime",
         "collides_with",
+        "swept",
         "behaviour",
     ])?;
     let name = kind.need("name")?.string("a name in quotes")?;
@@ -441,6 +452,12 @@ fn read_kind(node: &Node<'_>) -> Result<(KindSpec, Option<Behaviour>), SceneErro
             n.real(above(0.0, f32::INFINITY))
         })?,
         controlled: behaviour.is_some(),
+        // Left out: the rule decides (`WorldSpec::sweeps`).
+        sweep: kind.or("swept", Sweep::Auto, |n| {
+            n.flag().map(|on| if on { Sweep::On } else { Sweep::Off })
+        })?,
+        // The ship's and the shots' come from `[ship]` (see `Scene::from_toml`).
+        top_speed: f32::INFINITY,
     };
     Ok((spec, behaviour))
 }

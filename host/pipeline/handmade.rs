@@ -56,7 +56,8 @@ impl Pipeline<'_> {
     }
 
     /// Brings bodies to life at exact places: `bodies` lists `(slot, position, velocity)`,
-    /// and those slots come alive with their kind's energy, no force, and state 0.
+    /// and those slots come alive with their kind's energy, no force, and state 0, not yet
+    /// moved.
     pub fn place(&mut self, bodies: &[(u32, glam::Vec2, glam::Vec2)]) -> Result<(), Error> {
         let snapshot = self.snapshot()?;
         let mut all = snapshot.bodies;
@@ -82,6 +83,10 @@ impl Pipeline<'_> {
             all.alive[s] = 1;
             all.state[s] = 0;
             all.age[s] = 0;
+            // Born here: its first path starts here (where the world keeps paths).
+            if let Some(prev) = all.prev.get_mut(s) {
+                *prev = pos;
+            }
         }
         let (d, b) = (self.device, &mut self.world.state.bodies);
         d.write(&mut b.pos, &all.pos)?;
@@ -92,6 +97,7 @@ impl Pipeline<'_> {
         d.write(&mut b.alive, &all.alive)?;
         d.write(&mut b.state, &all.state)?;
         d.write(&mut b.age, &all.age)?;
+        d.write(&mut b.prev, &all.prev)?;
         self.run_stage(Stage::Free)
     }
 

@@ -24,7 +24,7 @@ use super::teams::{self, Lanes};
 use crate::Buffer;
 use crate::backend::{Binder, Buffers};
 use crate::sim::layout::{self, Layout};
-use crate::sim::state::{self, Scratch, WorldState, made};
+use crate::sim::state::{self, Extras, Scratch, WorldState, made};
 use crate::sim::{SpecError, WorldSpec};
 use crate::{Device, Error};
 
@@ -160,10 +160,11 @@ pub fn bytes_needed(spec: &WorldSpec, game: Option<(u32, usize)>) -> u64 {
         made(Particles::<Unmade>::build(&mut sizes, particles as usize));
     }
     let plays = game.is_some();
-    let extras = (
-        renumber_every(spec, &layout, plays) != 0,
-        moves_in_one_launch(spec, &layout, plays),
-    );
+    let extras = Extras {
+        renumbers: renumber_every(spec, &layout, plays) != 0,
+        moving: moves_in_one_launch(spec, &layout, plays),
+        traces: spec.traces(),
+    };
     state::bytes_needed(&layout, &layout::space(spec), kinds, extras) + sizes.bytes
 }
 
@@ -267,8 +268,12 @@ impl World {
             bytes_needed(spec, sized) + TeamWarps::bytes(&config, &layout),
         )?;
         let state = WorldState::new(device, spec, &layout, seed)?;
-        let renumbers = config.renumber_every != 0;
-        let scratch = Scratch::new(device, &layout, &space, kinds, (renumbers, moving))?;
+        let extras = Extras {
+            renumbers: config.renumber_every != 0,
+            moving,
+            traces: spec.traces(),
+        };
+        let scratch = Scratch::new(device, &layout, &space, kinds, extras)?;
         let warps = TeamWarps::new(device, &config, &layout)?;
         let game = match game {
             Some(config) => {

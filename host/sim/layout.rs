@@ -2,7 +2,7 @@
 
 use gpuwars_kernels::sim::{KindInfo, SlotRange, Space, kinds};
 
-use super::spec::{Boundary, Shape, WorldSpec};
+use super::spec::{Boundary, SWEEP_MARGIN, Shape, WorldSpec};
 
 /// Slots per warp: each kind's range starts on a multiple of it.
 pub const WARP: u32 = gpuwars_kernels::warp::WARP;
@@ -55,15 +55,30 @@ impl Layout {
 
 /// The kernels' table of kinds.
 pub fn kind_table(spec: &WorldSpec) -> Vec<KindInfo> {
+    let sweeps = spec.sweep_masks();
+    let step = spec.dt / spec.physics.substeps as f32;
+    // How far a body of each kind may travel in a (sub)step, for swept pairs' reach.
+    let travel: Vec<f32> = (spec.kinds.iter())
+        .map(|k| match k.speed_bound() {
+            b if b.is_finite() => SWEEP_MARGIN * b * step,
+            _ => 0.0,
+        })
+        .collect();
     spec.kinds
         .iter()
+        .enumerate()
         .zip(spec.collision_masks())
-        .map(|(kind, collides_with)| {
-            // Rectangles lie inside their circles, so the circles' sum bounds every pair.
+        .map(|((i, kind), collides_with)| {
+            // Rectangles lie inside their circles, so the circles' sum bounds every pair; a
+            // swept pair's query reaches as far as both can travel besides.
             let reach = kind.shape.reach();
             let partner = (0..spec.kinds.len())
                 .filter(|&k| collides_with & (1 << k) != 0)
-                .map(|k| spec.kinds[k].shape.reach())
+                .map(|k| {
+                    let swept = sweeps[i] & (1 << k) != 0;
+                    let extra = if swept { travel[i] + travel[k] } else { 0.0 };
+                    spec.kinds[k].shape.reach() + extra
+                })
                 .reduce(f32::max);
             let (shape, half) = match kind.shape {
                 Shape::Circle { radius } => (kinds::SHAPE_CIRCLE, glam::Vec2::splat(radius)),
@@ -83,6 +98,8 @@ pub fn kind_table(spec: &WorldSpec) -> Vec<KindInfo> {
                 // its machines to its own kernels.
                 controlled: u32::from(kind.controlled),
                 contact_reach: partner.map_or(0.0, |partner| reach + partner),
+                sweeps_with: sweeps[i],
+                reserved: 0,
             }
         })
         .collect()
@@ -100,7 +117,12 @@ pub fn space(spec: &WorldSpec) -> Space {
         .filter(|(_, mask)| **mask != 0)
         .map(|(kind, _)| 2.0 * kind.shape.reach())
         .fold(0.0f32, f32::max);
-    let cell = touch.max(spec.vision) * CELL_MARGIN * spec.physics.cell_scale;
+    // A swept pair's query reaches farther: as far as both can travel in a (sub)step.
+    let swept = kind_table(spec)
+        .iter()
+        .map(|k| k.contact_reach)
+        .fold(0.0f32, f32::max);
+    let cell = touch.max(swept).max(spec.vision) * CELL_MARGIN * spec.physics.cell_scale;
     let fit = |side: f32| {
         if cell > 0.0 {
             ((side / cell) as u32).clamp(1, MAX_CELLS)

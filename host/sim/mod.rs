@@ -9,4 +9,6 @@ pub mod spec;
 pub mod state;
 
 pub use snapshot::Snapshot;
-pub use spec::{Boundary, Field, Integrator, KindSpec, Physics, Shape, SpecError, WorldSpec};
+pub use spec::{
+    Boundary, Field, Integrator, KindSpec, PairSweep, Physics, Shape, SpecError, Sweep, WorldSpec,
+};

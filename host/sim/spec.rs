@@ -126,6 +126,9 @@ pub struct Physics {
     /// [`MAX_RENUMBER_EVERY`]); `None` lets the world's size choose (see
     /// [`Physics::renumber_period`]).
     pub renumber_every: Option<u32>,
+    /// Whether each body's last path is kept even where no pair is swept, for an audit of
+    /// the contacts (`crate::sim::audit`): a store a body a step, nothing else changes.
+    pub trace_paths: bool,
 }
 
 impl Default for Physics {
@@ -139,6 +142,7 @@ impl Default for Physics {
             neighbour_cap: 0,
             vision_scale: 1.0,
             renumber_every: None,
+            trace_paths: false,
         }
     }
 }
@@ -288,6 +292,81 @@ pub struct KindSpec {
     /// Whether a controller (the game's machines) drives bodies of this kind: they die when
     /// it says so, not when their energy runs out.
     pub controlled: bool,
+    /// Whether its contacts are swept over each step's motion (see [`Sweep`]).
+    pub sweep: Sweep,
+    /// How fast its bodies can move where the speed limit does not say (the ship's and the
+    /// shots' speeds in a game), in units per second; `f32::INFINITY` when unknown. It
+    /// decides and sizes swept contacts (see [`KindSpec::speed_bound`]).
+    pub top_speed: f32,
+}
+
+impl KindSpec {
+    /// The fastest its bodies are known to move: the smaller of its speed limit and its
+    /// [`KindSpec::top_speed`] (`f32::INFINITY` when neither says).
+    pub fn speed_bound(&self) -> f32 {
+        self.max_speed.min(self.top_speed)
+    }
+}
+
+/// Whether a kind's contacts are swept: tested over the whole of each step's motion (the
+/// earliest time of impact), not only at its end, so that a fast body cannot pass through
+/// what it should hit between two steps. A pair is swept if either kind says `On`, or
+/// neither says `Off` and the rule of [`WorldSpec::sweeps`] finds that it needs it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Sweep {
+    /// Where the pair's speeds could carry it past a contact (a scene's default).
+    Auto,
+    /// Always (`swept = true`).
+    On,
+    /// Never (`swept = false`; the default of worlds made in code).
+    #[default]
+    Off,
+}
+
+/// Most contacts per thousand that a pair may miss between step ends before the automatic
+/// rule sweeps it (see [`miss_fraction`]).
+pub const SWEEP_ABOVE: f64 = 1.0e-3;
+
+/// A swept pair is followed up to this many times the two kinds' top speeds: kicks and
+/// pushes can carry a body past its speed for a step.
+pub const SWEEP_MARGIN: f32 = 2.0;
+
+/// The fraction of straight passes through a disk of radius `reach` (at a uniformly random
+/// offset from its centre) that a path sampled every `travel` units, at a random phase,
+/// crosses without any sample inside it: the contacts a test at step ends misses. A chord
+/// `c` is missed with probability `max(0, 1 − c / travel)`; integrated over the offsets.
+pub fn miss_fraction(travel: f64, reach: f64) -> f64 {
+    if travel <= 0.0 || reach <= 0.0 {
+        return 0.0;
+    }
+    if travel >= 2.0 * reach {
+        // Every chord is shorter than the step: 1 − (area / diameter) / travel.
+        return 1.0 - std::f64::consts::PI * reach / (2.0 * travel);
+    }
+    // Only chords shorter than the travel can be missed: offsets beyond `y0`.
+    let y0 = (reach * reach - travel * travel / 4.0).sqrt();
+    let chord_area = std::f64::consts::PI * reach * reach / 4.0
+        - (y0 * travel / 2.0 + reach * reach * (y0 / reach).asin()) / 2.0;
+    ((reach - y0) - 2.0 / travel * chord_area) / reach
+}
+
+/// Whether one colliding pair of kinds is swept, and why (see [`WorldSpec::sweeps`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PairSweep {
+    /// The two kinds (the first index is the smaller, or both the same).
+    pub kinds: (usize, usize),
+    /// Whether their contacts are swept.
+    pub swept: bool,
+    /// The rule that decided it, in words.
+    pub rule: String,
+    /// The most the pair closes in a (sub)step at the kinds' top speeds, units (0 where
+    /// neither speed is known).
+    pub travel: f32,
+    /// Their contact distance (the sum of their bounding circles' radii).
+    pub reach: f32,
+    /// The fraction of passes a test at step ends would miss at that travel
+    /// ([`miss_fraction`]).
+    pub misses: f64,
 }
 
 /// A whole world, before validation.
@@ -460,6 +539,15 @@ impl WorldSpec {
             }
             // inf: lives for ever.
             check_range(at("lifetime"), kind.lifetime, (0.0, false), f32::INFINITY)?;
+            // inf: unknown.
+            check_range(at("top_speed"), kind.top_speed, (0.0, false), f32::INFINITY)?;
+            if kind.sweep == Sweep::On && !kind.speed_bound().is_finite() {
+                return Err(error(
+                    at("swept"),
+                    "needs a speed limit (max_speed): a swept test reaches as far as the \
+                     kind can travel in a step",
+                ));
+            }
             slots += u64::from(kind.capacity).next_multiple_of(32);
         }
         if slots > u64::from(MAX_SLOTS) {
@@ -473,6 +561,76 @@ impl WorldSpec {
             ));
         }
         Ok(())
+    }
+
+    /// Every colliding pair of kinds, each once, and whether its contacts are swept: always
+    /// if either kind says [`Sweep::On`], never if either says [`Sweep::Off`], and otherwise
+    /// where a test at step ends would miss more than [`SWEEP_ABOVE`] of the pair's contacts
+    /// ([`miss_fraction`] of the distance the pair closes in a (sub)step at the kinds' top
+    /// speeds, against their contact distance; a kind whose speed is unknown counts as
+    /// still). Assumes a valid spec.
+    pub fn sweeps(&self) -> Vec<PairSweep> {
+        let masks = self.collision_masks();
+        let step = self.dt / self.physics.substeps as f32;
+        let bound = |k: &KindSpec| {
+            let b = k.speed_bound();
+            if b.is_finite() { b } else { 0.0 }
+        };
+        let mut pairs = Vec::new();
+        for (i, a) in self.kinds.iter().enumerate() {
+            for (j, b) in self.kinds.iter().enumerate().skip(i) {
+                if masks[i] & (1 << j) == 0 {
+                    continue;
+                }
+                let travel = (bound(a) + bound(b)) * step;
+                let reach = a.shape.reach() + b.shape.reach();
+                let misses = miss_fraction(f64::from(travel), f64::from(reach));
+                let names = |k: &KindSpec| excerpt(&k.name).to_string();
+                let (swept, rule) = match (a.sweep, b.sweep) {
+                    (Sweep::On, _) => (true, format!("swept = true for {}", names(a))),
+                    (_, Sweep::On) => (true, format!("swept = true for {}", names(b))),
+                    (Sweep::Off, _) => (false, format!("swept = false for {}", names(a))),
+                    (_, Sweep::Off) => (false, format!("swept = false for {}", names(b))),
+                    _ => (
+                        misses > SWEEP_ABOVE,
+                        format!(
+                            "auto: closes {} units a step against a contact of {}, \
+                             {:.2} per thousand passes missed at step ends",
+                            number(travel),
+                            number(reach),
+                            misses * 1000.0
+                        ),
+                    ),
+                };
+                pairs.push(PairSweep {
+                    kinds: (i, j),
+                    swept,
+                    rule,
+                    travel,
+                    reach,
+                    misses,
+                });
+            }
+        }
+        pairs
+    }
+
+    /// Each kind's mask of the kinds its contacts with are swept (symmetric; see
+    /// [`WorldSpec::sweeps`]).
+    pub fn sweep_masks(&self) -> Vec<u32> {
+        let mut masks = vec![0u32; self.kinds.len()];
+        for pair in self.sweeps().iter().filter(|p| p.swept) {
+            let (i, j) = pair.kinds;
+            masks[i] |= 1 << j;
+            masks[j] |= 1 << i;
+        }
+        masks
+    }
+
+    /// Whether the world keeps each body's last path: some pair is swept, or the physics
+    /// asks for it ([`Physics::trace_paths`]).
+    pub fn traces(&self) -> bool {
+        self.physics.trace_paths || self.sweeps().iter().any(|p| p.swept)
     }
 
     /// Index of the kind called `name`.

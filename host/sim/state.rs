@@ -59,18 +59,23 @@ pub(crate) fn made<T>(result: Result<T, Infallible>) -> T {
 
 /// Bytes of device memory the buffers of a world of this layout and grid take, the
 /// generators' set-up (seeds and parameter table) included, the renumbering's buffers if it
-/// `renumbers`, and its grid entries' velocities if its bodies are `moving` in the launch
-/// that queries the grid.
+/// `renumbers`, its grid entries' velocities if its bodies are `moving` in the launch
+/// that queries the grid, and the bodies' last paths if it `traces` them.
 pub fn bytes_needed(
     layout: &Layout,
     space: &Space,
     kinds: usize,
-    (renumbers, moving): (bool, bool),
+    Extras {
+        renumbers,
+        moving,
+        traces,
+    }: Extras,
 ) -> u64 {
     let (slots, buckets) = (layout.slots as usize, buckets(space, kinds));
+    let traced = per_slot(slots, traces);
     let mut sizes = Sizes::default();
     let s = &mut sizes;
-    made(Bodies::<Unmade>::build(s, slots));
+    made(Bodies::<Unmade>::build(s, slots, traced));
     made(KindTables::<Unmade>::build(s, kinds));
     made(FreeSlots::<Unmade>::build(s, slots, kinds));
     made(Contacts::<Unmade>::build(s, slots));
@@ -78,12 +83,13 @@ pub fn bytes_needed(
         s,
         slots,
         buckets,
-        moving_entries(slots, moving),
+        per_slot(slots, moving),
+        traced,
     ));
     let tiles = FreeMarks::tiles_for(layout.slots) as usize;
     made(FreeMarks::<Unmade>::build(s, slots, tiles));
     if renumbers {
-        made(Moved::<Unmade>::build(s, slots));
+        made(Moved::<Unmade>::build(s, slots, traced));
     }
     made(s.array::<u32>("seeds", slots));
     made(s.array::<Mt607Params>("table", rng::TABLE.len()));
@@ -101,7 +107,8 @@ impl WorldState {
         seed: u32,
     ) -> Result<Self, Error> {
         let (slots, kinds) = (layout.slots as usize, spec.kinds.len());
-        let mut bodies = Bodies::build(&mut device.zeroed(), slots)?;
+        let traced = per_slot(slots, spec.traces());
+        let mut bodies = Bodies::build(&mut device.zeroed(), slots, traced)?;
         let kind_of = layout.slot_kinds();
         let mass: Vec<f32> = kind_of
             .iter()
@@ -168,18 +175,33 @@ impl WorldState {
     }
 }
 
+/// The buffers a world needs beyond every world's (see [`bytes_needed`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Extras {
+    /// The renumbering's.
+    pub renumbers: bool,
+    /// The grid entries' velocities, where the bodies move in the launch that queries it.
+    pub moving: bool,
+    /// The bodies' last paths, and the grid entries' copies of them.
+    pub traces: bool,
+}
+
 impl Scratch {
-    /// Scratch for a world of this layout and grid with `kinds` kinds, with the
-    /// renumbering's buffers if it `renumbers`, and its grid entries' velocities if its
-    /// bodies are `moving` in the launch that queries the grid.
+    /// Scratch for a world of this layout and grid with `kinds` kinds and the `extras` it
+    /// needs.
     pub fn new(
         device: &Device,
         layout: &Layout,
         space: &Space,
         kinds: usize,
-        (renumbers, moving): (bool, bool),
+        Extras {
+            renumbers,
+            moving,
+            traces,
+        }: Extras,
     ) -> Result<Self, Error> {
         let slots = layout.slots as usize;
+        let traced = per_slot(slots, traces);
         let buckets = buckets(space, kinds);
         let tiles = FreeMarks::tiles_for(layout.slots) as usize;
         Ok(Scratch {
@@ -188,13 +210,14 @@ impl Scratch {
                 &mut device.zeroed(),
                 slots,
                 buckets,
-                moving_entries(slots, moving),
+                per_slot(slots, moving),
+                traced,
             )?,
             grid_scan: PrefixSum::new(device, buckets)?,
             marks: FreeMarks::build(&mut device.zeroed(), slots, tiles)?,
             marks_scan: PrefixSum::new(device, tiles)?,
             moved: match renumbers {
-                true => Some(Moved::build(&mut device.zeroed(), slots)?),
+                true => Some(Moved::build(&mut device.zeroed(), slots, traced)?),
                 false => None,
             },
             kinds: kinds as u32,
@@ -214,6 +237,7 @@ impl Scratch {
             slots: b.view(&self.grid.slots),
             pos: b.view(&self.grid.pos),
             vel: self.entry_velocities(b, moving),
+            prev: b.view(&self.grid.prev),
             start: b.view(&self.grid.start),
             kinds: self.kinds,
             cells: self.cells,
@@ -232,8 +256,7 @@ impl Scratch {
     }
 }
 
-/// Elements of the grid's entry velocities for `slots` slots: one a slot if the bodies are
-/// `moving` in the launch that queries the grid, else none.
-fn moving_entries(slots: usize, moving: bool) -> usize {
-    if moving { slots } else { 0 }
+/// Elements of an array a world has only if it needs it (`wanted`): one a slot, or none.
+fn per_slot(slots: usize, wanted: bool) -> usize {
+    if wanted { slots } else { 0 }
 }

@@ -5,7 +5,7 @@ use gpuwars::kernels::sim::contact::{contact, tie_break};
 use gpuwars::kernels::sim::narrow::{inverse_mass, respond};
 use gpuwars::kernels::sim::{KindInfo, Space};
 use gpuwars::sim::layout::kind_table;
-use gpuwars::sim::{Boundary, KindSpec, Shape, Snapshot, WorldSpec};
+use gpuwars::sim::{Boundary, KindSpec, Shape, Snapshot, Sweep, WorldSpec};
 
 /// A kind with everything but the name, shape and capacity set to plain defaults: mass 1,
 /// energy 100, no damage, restitution 0.5, no speed limit, no lifetime, no controller,
@@ -23,6 +23,8 @@ pub fn kind(name: &str, shape: Shape, capacity: u32, collides_with: &[&str]) -> 
         collides_with: collides_with.iter().map(|s| s.to_string()).collect(),
         lifetime: f32::INFINITY,
         controlled: false,
+        sweep: Sweep::Off,
+        top_speed: f32::INFINITY,
     }
 }
 

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::Device;
 use crate::pipeline::{Pipeline, Simulation};
-use crate::sim::{Boundary, Field, Integrator, KindSpec, Physics, Shape, WorldSpec};
+use crate::sim::{Boundary, Field, Integrator, KindSpec, Physics, Shape, Sweep, WorldSpec};
 
 /// One case under one integrator and time step.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -38,6 +38,8 @@ fn body(name: &str, radius: f32, mass: f32, restitution: f32, with: &[&str]) -> 
         collides_with: with.iter().map(|s| s.to_string()).collect(),
         lifetime: f32::INFINITY,
         controlled: false,
+        sweep: Sweep::Off,
+        top_speed: f32::INFINITY,
     }
 }
 

@@ -29,7 +29,7 @@ use crate::files::write_atomically;
 use crate::game::spec::Machine;
 use crate::game::{Game, Options, Scene};
 use crate::pipeline::{Pipeline, Profile, Simulation};
-use crate::sim::{Boundary, Field, Integrator, KindSpec, Physics, Shape, WorldSpec};
+use crate::sim::{Boundary, Field, Integrator, KindSpec, Physics, Shape, Sweep, WorldSpec};
 use crate::{Device, Error};
 use analytic::AnalyticRow;
 use reference::Reference;
@@ -262,6 +262,8 @@ pub fn crowd(bodies: u32, dt: f32, physics: Physics) -> WorldSpec {
             collides_with: vec!["ball".into()],
             lifetime: f32::INFINITY,
             controlled: false,
+            sweep: Sweep::Off,
+            top_speed: f32::INFINITY,
         }],
         physics,
         field: Field {

@@ -97,6 +97,8 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         slots: b.view(&g.slots),
         entry_pos: b.view(&g.pos),
         entry_vel: world.scratch.entry_velocities(&mut b, moving),
+        prev: b.view(&world.state.bodies.prev),
+        entry_prev: b.view(&g.prev),
         runs: b.view(&g.ranks),
         bounded: u32::from(bounded),
         reserved: 0,
@@ -132,6 +134,8 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
             slots: b.view(&g.slots),
             entry_pos: b.view(&g.pos),
             entry_vel: world.scratch.entry_velocities(&mut b, moving),
+            prev: b.view(&world.state.bodies.prev),
+            entry_prev: b.view(&g.prev),
             run: broad::RUN << pass,
             reserved: 0,
         };

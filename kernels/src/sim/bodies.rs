@@ -8,7 +8,7 @@ use crate::{DevSlice, device_data};
 device_data! {
     /// Every per-body array, one element per slot. Slots of dead bodies keep their kind, mass
     /// and generator; only [`Bodies::alive`] says whether the rest means anything.
-    pub struct Bodies(slots) {
+    pub struct Bodies(slots, traced) {
         /// Position.
         pos: [Vec2; slots],
         /// Velocity.
@@ -29,6 +29,12 @@ device_data! {
         state: [u32; slots],
         /// Steps lived since birth (bodies of kinds with a lifetime die when it is reached).
         age: [u32; slots],
+        /// Where the body's last (sub)step moved it from, once that step's contacts had
+        /// pushed it: its path since is the segment from here to [`Bodies::pos`] (where it
+        /// was born, until it first moves).
+        /// One element a slot in worlds that trace paths (a kind sweeps its contacts, or an
+        /// audit reads them: `traced` = slots), none elsewhere.
+        prev: [Vec2; traced],
         /// One element, non-zero once the world is frozen (the game is over): from then on
         /// the kernels that advance bodies leave every one as it is, so that steps the host
         /// queued before it learnt of the end change nothing.
@@ -50,6 +56,12 @@ impl Bodies {
     #[inline(always)]
     pub fn is_frozen(&self) -> bool {
         self.frozen.get(0) != 0
+    }
+
+    /// Whether the world keeps each body's last path (see [`Bodies::prev`]).
+    #[inline(always)]
+    pub fn traces(&self) -> bool {
+        !self.prev.is_empty()
     }
 
     /// Whether `slot` holds a live body.

@@ -31,7 +31,7 @@ use crate::{DevSlice, Thread, asked, device_data, kernel_args};
 
 device_data! {
     /// The grid's arrays: what the broad phase builds each step and [`CellIndex`] queries.
-    pub struct Grid(slots, buckets, moving) {
+    pub struct Grid(slots, buckets, moving, traced) {
         /// Each slot's bucket, or [`NO_BUCKET`].
         keys: [u32; slots],
         /// Each slot's arrival rank in its bucket; the merge passes' runs afterwards.
@@ -51,6 +51,9 @@ device_data! {
         /// Each entry's velocity, in worlds whose bodies move in the launch that queries
         /// the grid (`moving` = slots; else none): see [`CellIndex::vel`].
         vel: [Vec2; moving],
+        /// Each entry's last path's start ([`Bodies::prev`]), in worlds that trace paths
+        /// (`traced` = slots; else none): see [`CellIndex::prev`].
+        prev: [Vec2; traced],
     }
 }
 
@@ -150,6 +153,8 @@ kernel_args! {
         pub pos: DevSlice<Vec2>,
         /// The bodies' velocities (read only where `entry_vel` is not empty).
         pub vel: DevSlice<Vec2>,
+        /// The bodies' last paths' starts (read only where `entry_prev` is not empty).
+        pub prev: DevSlice<Vec2>,
         /// Each slot's bucket.
         pub keys: DevSlice<u32>,
         /// Each bucket's first entry; the last element is the number of live bodies.
@@ -163,6 +168,8 @@ kernel_args! {
         pub entry_pos: DevSlice<Vec2>,
         /// Output: each entry's velocity, or empty (see [`CellIndex::vel`]).
         pub entry_vel: DevSlice<Vec2>,
+        /// Output: each entry's last path's start, or empty (see [`CellIndex::prev`]).
+        pub entry_prev: DevSlice<Vec2>,
         /// Output when `bounded`: the entries of buckets larger than [`RUN`], each run of
         /// [`RUN`] entries in slot order, for [`merge_runs`] to merge.
         pub runs: DevSlice<u32>,
@@ -229,6 +236,9 @@ pub fn order_cells(t: Thread, args: &OrderArgs) {
     if keeps_vel {
         args.entry_vel.set(first + rank, vel);
     }
+    if !args.entry_prev.is_empty() {
+        args.entry_prev.set(first + rank, args.prev.get(slot));
+    }
 }
 
 kernel_args! {
@@ -238,6 +248,8 @@ kernel_args! {
         pub pos: DevSlice<Vec2>,
         /// The bodies' velocities (read only where `entry_vel` is not empty).
         pub vel: DevSlice<Vec2>,
+        /// The bodies' last paths' starts (read only where `entry_prev` is not empty).
+        pub prev: DevSlice<Vec2>,
         /// Each bucket's first entry; the last element is the number of live bodies.
         pub start: DevSlice<u32>,
         /// The large buckets' entries, in sorted runs of `run`.
@@ -251,6 +263,8 @@ kernel_args! {
         pub entry_pos: DevSlice<Vec2>,
         /// Output: each entry's velocity, or empty (see [`CellIndex::vel`]).
         pub entry_vel: DevSlice<Vec2>,
+        /// Output: each entry's last path's start, or empty (see [`CellIndex::prev`]).
+        pub entry_prev: DevSlice<Vec2>,
         /// Length of the sorted runs in `src`.
         pub run: u32,
         /// Keeps the struct free of implicit padding.
@@ -316,6 +330,9 @@ pub fn merge_runs(t: Thread, args: &MergeArgs) {
         if !args.entry_vel.is_empty() {
             args.entry_vel.set(at, args.vel.get(x));
         }
+        if !args.entry_prev.is_empty() {
+            args.entry_prev.set(at, args.prev.get(x));
+        }
         args.dst.set(at, DONE);
     } else {
         args.dst.set(at, x);
@@ -334,6 +351,10 @@ pub struct CellIndex {
     /// move in the launch that queries the grid (whose own velocities then change under the
     /// queries); empty elsewhere, where the bodies' own are read (see [`CellIndex::vel_at`]).
     pub vel: DevSlice<Vec2>,
+    /// Where each entry's body was when its last (sub)step moved it ([`Bodies::prev`]), in
+    /// worlds that trace paths; empty elsewhere. Read from the grid rather than the bodies,
+    /// since the launch that queries may move them.
+    pub prev: DevSlice<Vec2>,
     /// First entry of each bucket in `slots`, and one more element: the number of entries.
     /// Bucket `b` is `slots[start[b] .. start[b + 1]]`.
     pub start: DevSlice<u32>,

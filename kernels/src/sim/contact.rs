@@ -125,3 +125,133 @@ fn outward(x: f32, tie: f32) -> f32 {
         tie
     }
 }
+
+/// A contact that begins during a step's motion: the pair was apart when the motion began
+/// (a test at the motion's end alone misses it if the pair is apart again there, and
+/// resolves it the wrong way if the bodies passed each other's middles).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Swept {
+    /// When the bounds first touch, as a fraction of the motion, in `(0, 1)`.
+    pub time: f32,
+    /// Unit normal at that moment, pointing from `a` towards `b`.
+    pub normal: Vec2,
+}
+
+/// The first moment at which `a` and `b` overlap while the offset from `a` to `b` moves
+/// linearly from `d0` (where the motion began) to `d1` (where it ended), for a pair apart
+/// at `d0` (the caller tests it with [`contact`]). Grazing (touching without overlapping)
+/// is no contact, as in [`contact`]; any NaN gives `None`.
+///
+/// Like [`contact`] it is antisymmetric: swapping the bodies (negating both offsets) gives
+/// the same time, bit for bit, and the opposite normal, so both threads of a pair agree.
+#[inline(always)]
+pub fn sweep(a: Bound, b: Bound, d0: Vec2, d1: Vec2) -> Option<Swept> {
+    match (a, b) {
+        (Bound::Circle(ra), Bound::Circle(rb)) => disk_entry(d0, d1 - d0, ra + rb),
+        (Bound::Circle(r), Bound::Rect(half)) => circle_rect_sweep(r, half, d0, d1),
+        (Bound::Rect(half), Bound::Circle(r)) => {
+            circle_rect_sweep(r, half, -d0, -d1).map(|s| Swept {
+                time: s.time,
+                normal: -s.normal,
+            })
+        }
+        (Bound::Rect(ha), Bound::Rect(hb)) => box_entry(d0, d1 - d0, ha + hb),
+    }
+}
+
+/// A circle of radius `r` at the origin and a rectangle of half extents `half` whose centre
+/// moves from `d0` to `d1`. They overlap while the centre lies in the rectangle grown by
+/// `r` with rounded corners: the union of two boxes (the rectangle grown along one axis)
+/// and four disks (one on each corner), whose earliest entry is the earliest of the pieces'
+/// (the path starts outside all of them).
+#[inline(always)]
+fn circle_rect_sweep(r: f32, half: Vec2, d0: Vec2, d1: Vec2) -> Option<Swept> {
+    let v = d1 - d0;
+    let mut first = earliest(
+        box_entry(d0, v, Vec2::new(half.x + r, half.y)),
+        box_entry(d0, v, Vec2::new(half.x, half.y + r)),
+    );
+    for corner in [
+        Vec2::new(-half.x, -half.y),
+        Vec2::new(half.x, -half.y),
+        Vec2::new(-half.x, half.y),
+        half,
+    ] {
+        // The disk around the corner at `-corner` holds the centres whose rectangle has
+        // that corner within `r` of the circle: shift the path by the corner.
+        first = earliest(first, disk_entry(d0 + corner, v, r));
+    }
+    first
+}
+
+/// The earlier of two entries, `a` on a tie (a fixed order, whatever the schedule).
+#[inline(always)]
+fn earliest(a: Option<Swept>, b: Option<Swept>) -> Option<Swept> {
+    match (a, b) {
+        (Some(x), Some(y)) => Some(if y.time < x.time { y } else { x }),
+        (x, None) => x,
+        (None, y) => y,
+    }
+}
+
+/// When the point `p0 + v t` first enters the open disk of radius `reach` around the
+/// origin, for `t` in `(0, 1)`, with the outward normal there. Every term is a product of
+/// two of the inputs' components, so negating `p0` and `v` changes no bit of the time.
+#[inline(always)]
+fn disk_entry(p0: Vec2, v: Vec2, reach: f32) -> Option<Swept> {
+    let a = v.length_squared();
+    let b = p0.dot(v);
+    let c = p0.length_squared() - reach * reach;
+    let disc = b * b - a * c;
+    // Moving (a > 0), outside (c > 0), closing in (b < 0), and passing closer than the
+    // reach (disc > 0, so the path crosses the circle rather than touching it). NaN fails.
+    if !(a > 0.0 && c > 0.0 && b < 0.0 && disc > 0.0) {
+        return None;
+    }
+    let time = (-b - libm::sqrtf(disc)) / a;
+    if !(time > 0.0 && time < 1.0) {
+        return None;
+    }
+    let at = p0 + v * time;
+    let dist = libm::sqrtf(at.length_squared());
+    (dist > 0.0).then(|| Swept {
+        time,
+        normal: at / dist,
+    })
+}
+
+/// When the point `p0 + v t` first enters the open box `|x| < half` (per axis), for `t` in
+/// `(0, 1)`, with the normal of the face it crosses, pointing from the box's centre to the
+/// point. The slab times of each axis swap, not change, when `p0` and `v` are negated.
+#[inline(always)]
+fn box_entry(p0: Vec2, v: Vec2, half: Vec2) -> Option<Swept> {
+    let (enter_x, leave_x) = slab(p0.x, v.x, half.x);
+    let (enter_y, leave_y) = slab(p0.y, v.y, half.y);
+    let (time, normal) = if enter_y > enter_x {
+        (enter_y, Vec2::new(0.0, -sign(v.y)))
+    } else {
+        (enter_x, Vec2::new(-sign(v.x), 0.0))
+    };
+    // Written so that NaN fails.
+    (time < leave_x.min(leave_y) && time > 0.0 && time < 1.0).then_some(Swept { time, normal })
+}
+
+/// The times at which `p + v t` enters and leaves `|x| < half`: all time for a point that
+/// does not move and lies inside, none for one that lies outside.
+#[inline(always)]
+fn slab(p: f32, v: f32, half: f32) -> (f32, f32) {
+    if v == 0.0 {
+        return match p.abs() < half {
+            true => (f32::NEG_INFINITY, f32::INFINITY),
+            false => (f32::INFINITY, f32::NEG_INFINITY),
+        };
+    }
+    let (t1, t2) = ((-half - p) / v, (half - p) / v);
+    (t1.min(t2), t1.max(t2))
+}
+
+/// The sign of `x` as ±1 (`x` non-zero).
+#[inline(always)]
+fn sign(x: f32) -> f32 {
+    if x > 0.0 { 1.0 } else { -1.0 }
+}

@@ -207,6 +207,14 @@ pub fn integrate_slot(args: &IntegrateArgs, slot: u32) {
     };
     let (pos, vel) = args.space.confine(pos + push, vel);
     bodies.pos.set(slot, if moves { pos } else { old_pos });
+    if bodies.traces() {
+        // The path starts where the contacts' push left the body (for a swept contact,
+        // where it began): the push resolves what the step found, the path is what the body
+        // moved through afterwards.
+        bodies
+            .prev
+            .set(slot, if moves { old_pos + push } else { old_pos });
+    }
     bodies.vel.set(slot, if moves { vel } else { old_vel });
     if let Some(dir) = vel.try_normalize().filter(|_| moves) {
         bodies.dir.set(slot, dir);

@@ -50,8 +50,15 @@ pub struct KindInfo {
     pub controlled: u32,
     /// The farthest apart, along either axis, that a body of this kind and one of a kind it
     /// collides with can be and still touch: its [`KindInfo::radius`] plus the largest of
-    /// theirs (0 if it collides with nothing). The narrow phase's query reaches no farther.
+    /// theirs (0 if it collides with nothing), plus, for pairs that are swept, the farthest
+    /// both can travel in a (sub)step. The narrow phase's query reaches no farther.
     pub contact_reach: f32,
+    /// Bit `k` set: contacts with bodies of kind `k` are swept over each step's motion, so
+    /// that neither can pass through the other between two steps (symmetric; only in worlds
+    /// that trace paths, see [`crate::sim::Bodies::prev`]).
+    pub sweeps_with: u32,
+    /// Keeps the struct free of implicit padding.
+    pub reserved: u32,
 }
 
 impl KindInfo {
@@ -75,6 +82,12 @@ impl KindInfo {
     #[inline(always)]
     pub fn expired(&self, age: u32) -> bool {
         self.lifetime != 0 && age >= self.lifetime
+    }
+
+    /// Whether contacts with bodies of kind `other` are swept.
+    #[inline(always)]
+    pub fn sweeps(&self, other: u32) -> bool {
+        other < u32::BITS && self.sweeps_with & (1 << other) != 0
     }
 
     /// Whether bodies of this kind collide with bodies of kind `other`.

@@ -11,7 +11,7 @@ use glam::Vec2;
 
 use super::bodies::{Bodies, Contacts};
 use super::broad::{CellIndex, Near};
-use super::contact::{contact, tie_break};
+use super::contact::{contact, sweep, tie_break};
 use super::kinds::{Bound, KindInfo};
 use super::space::Space;
 use super::teams::Teams;
@@ -152,6 +152,25 @@ struct Touch {
     push: Vec2,
     kick: Vec2,
     damage: i32,
+    /// For a swept contact ([`super::contact::sweep`]), when it began as a fraction of the
+    /// motion (below 1); 1 for a contact at the motion's end.
+    time: f32,
+    /// The other body's slot.
+    other: u32,
+}
+
+impl Touch {
+    /// Whether this contact began during the motion rather than at its end.
+    #[inline(always)]
+    fn swept(&self) -> bool {
+        self.time < 1.0
+    }
+
+    /// Whether this swept contact comes before `than` in the fixed order: time, then slot.
+    #[inline(always)]
+    fn before(&self, than: &Touch) -> bool {
+        self.time < than.time || (self.time == than.time && self.other < than.other)
+    }
 }
 
 impl Handed for Touch {
@@ -162,6 +181,8 @@ impl Handed for Touch {
             push: self.push.shuffle_from(source, members),
             kick: self.kick.shuffle_from(source, members),
             damage: self.damage.shuffle_from(source, members),
+            time: self.time.shuffle_from(source, members),
+            other: self.other.shuffle_from(source, members),
         }
     }
 }
@@ -206,7 +227,17 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool>(
     let mut push = Vec2::ZERO;
     let mut kick = Vec2::ZERO;
     let mut count = 0u32;
+    let mut ended = 0u32;
     let mut damage = 0i32;
+    // The earliest swept contact, in the fixed order (time, then slot): the body goes back
+    // to where it was then, and only that contact kicks it.
+    let mut first = Touch {
+        time: 1.0,
+        ..Touch::default()
+    };
+    // Where the body's last (sub)step moved it from, in worlds that trace paths.
+    let traced = !args.grid.prev.is_empty();
+    let prev = if traced { bodies.prev.get(slot) } else { pos };
     if alive != 0 {
         let info = info_of(kind);
         let inv = inverse_mass(mass);
@@ -225,12 +256,32 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool>(
                     return None;
                 }
                 let other_info = args.kinds.get(other_kind);
+                let (a, b) = (bound::<RECTS>(&info), bound::<RECTS>(&other_info));
                 let d = args.space.offset(pos, at);
                 let tie = tie_break(slot, other);
-                let c = contact(bound::<RECTS>(&info), bound::<RECTS>(&other_info), d, tie)?;
+                // A contact at the motion's end; for a swept pair apart where the motion
+                // began (its start was the last step's end, whose contacts that step
+                // counted), the moment it began instead, whether or not the pair still
+                // overlaps at the end (it may have passed through, or past the middle).
+                let ended = contact(a, b, d, tie);
+                let began = match traced && info.sweeps(other_kind) {
+                    true => {
+                        let d0 = args.space.offset(prev, args.grid.prev.get(entry));
+                        match contact(a, b, d0, tie) {
+                            Some(_) => None,
+                            None => sweep(a, b, d0, d),
+                        }
+                    }
+                    false => None,
+                };
+                let (normal, depth, time) = match (began, ended) {
+                    (Some(s), _) => (s.normal, 0.0, s.time),
+                    (None, Some(c)) => (c.normal, c.depth, 1.0),
+                    (None, None) => return None,
+                };
                 let r = respond(
-                    c.normal,
-                    c.depth,
+                    normal,
+                    depth,
                     (inv, inverse_mass(bodies.mass.get(other))),
                     (vel, args.grid.vel_at::<MOVING>(entry, other, &bodies.vel)),
                     info.restitution.max(other_info.restitution),
@@ -239,13 +290,20 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool>(
                     push: r.push,
                     kick: r.kick,
                     damage: other_info.damage,
+                    time,
+                    other,
                 })
             },
             |touch| {
-                push += touch.push;
-                kick += touch.kick;
                 count += 1;
                 damage = damage.saturating_add(touch.damage);
+                if !touch.swept() {
+                    push += touch.push;
+                    kick += touch.kick;
+                    ended += 1;
+                } else if touch.before(&first) {
+                    first = touch;
+                }
             },
         );
     }
@@ -257,7 +315,13 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool>(
         let energy = bodies.energy.get(slot);
         bodies.energy.set(slot, energy.saturating_sub(damage));
     }
-    out.push.set(slot, args.relax.apply(push, count));
+    let mut push = args.relax.apply(push, ended);
+    if first.swept() {
+        // Back along the last motion to where the earliest swept contact began.
+        push -= args.space.offset(prev, pos) * (1.0 - first.time);
+        kick += first.kick;
+    }
+    out.push.set(slot, push);
     out.kick.set(slot, kick);
     if args.substep == 0 {
         out.count.set(slot, count);

@@ -13,7 +13,7 @@
 //!    slots.
 //!
 //! What moves is what a body carries from step to step: place, velocity, force, facing,
-//! energy, state, age. Kind and mass are those of the range;
+//! energy, state, age, and the last path's start where the world traces paths. Kind and mass are those of the range;
 //! each slot keeps its generator, so a body draws from the generator of the slot it holds,
 //! as a body born there would. The grid's buckets keep their order (a bucket's bodies get
 //! increasing slots in the order they were listed), so every query folds its neighbours in
@@ -27,7 +27,7 @@ use crate::{DevSlice, Thread, device_data, kernel_args};
 
 device_data! {
     /// The bodies' state on its way to their new slots, one element per (new) slot.
-    pub struct Moved(slots) {
+    pub struct Moved(slots, traced) {
         /// Position.
         pos: [Vec2; slots],
         /// Velocity.
@@ -42,6 +42,8 @@ device_data! {
         state: [u32; slots],
         /// Age.
         age: [u32; slots],
+        /// Where the last (sub)step moved it from, in worlds that trace paths.
+        prev: [Vec2; traced],
     }
 }
 
@@ -78,6 +80,9 @@ macro_rules! carry {
         dst.energy.set($to, src.energy.get($from));
         dst.state.set($to, src.state.get($from));
         dst.age.set($to, src.age.get($from));
+        if !dst.prev.is_empty() {
+            dst.prev.set($to, src.prev.get($from));
+        }
     }};
 }
 

@@ -70,6 +70,10 @@ pub fn random_place(b: &Bodies, slot: u32, space: &Space, speed: f32) -> Place {
 pub fn birth(b: &Bodies, space: &Space, slot: u32, place: Place, energy: i32) {
     let (pos, vel) = space.confine(place.pos, place.vel);
     b.pos.set(slot, pos);
+    if b.traces() {
+        // A newborn has not moved yet: its first path starts where it is born.
+        b.prev.set(slot, pos);
+    }
     b.vel.set(slot, vel);
     b.force.set(slot, Vec2::ZERO);
     b.dir.set(slot, vel.try_normalize().unwrap_or(place.facing));
