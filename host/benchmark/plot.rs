@@ -257,17 +257,106 @@ pub fn pareto(path: &Path, summary: &TradeoffSummary) -> anyhow::Result<()> {
             .map_err(|e| anyhow!("{e}"))?
             .label("Pareto frontier")
             .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], RED.stroke_width(2)));
-        for r in rows {
-            let colour = if r.pareto { RED } else { BLUE };
-            let p = (r.sim_seconds_per_s, error(r));
-            chart
-                .draw_series([
-                    Circle::new(p, 5, colour.filled()).into_dyn(),
-                    Text::new(r.choice.clone(), p, ("sans-serif", 13)).into_dyn(),
-                ])
-                .map_err(|e| anyhow!("{e}"))?;
-        }
+        let points: Vec<((f64, f64), bool)> = rows
+            .iter()
+            .map(|r| ((r.sim_seconds_per_s, error(r)), r.pareto))
+            .collect();
+        let names: Vec<String> = rows.iter().map(|r| r.choice.clone()).collect();
+        points_with_labels(area, &mut chart, &points, &names)?;
         legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         Ok(())
     })
+}
+
+/// Each point of `chart` (red where `on_frontier`, else blue), with its name beside it
+/// where the names do not overlap (see [`place_labels`]).
+fn points_with_labels<'a, X, Y>(
+    area: &DrawingArea<BitMapBackend<'a>, Shift>,
+    chart: &mut ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, Y>>,
+    points: &[((X::ValueType, Y::ValueType), bool)],
+    names: &[String],
+) -> anyhow::Result<()>
+where
+    X: Ranged,
+    Y: Ranged,
+    X::ValueType: Clone + 'static,
+    Y::ValueType: Clone + 'static,
+{
+    for (p, on_frontier) in points {
+        let colour = if *on_frontier { RED } else { BLUE };
+        chart
+            .draw_series([Circle::new(p.clone(), 5, colour.filled())])
+            .map_err(|e| anyhow!("{e}"))?;
+    }
+    let pixels: Vec<(i32, i32)> = points.iter().map(|(p, _)| chart.backend_coord(p)).collect();
+    let bounds = chart.plotting_area().get_pixel_range();
+    let bounds = (bounds.0.start, bounds.1.start, bounds.0.end, bounds.1.end);
+    for (at, name) in place_labels(&pixels, names, LABEL_SIZE, bounds)
+        .into_iter()
+        .zip(names)
+    {
+        area.draw(&Text::new(name.clone(), at, ("sans-serif", LABEL_SIZE)))
+            .map_err(|e| anyhow!("{e}"))?;
+    }
+    Ok(())
+}
+
+/// Height in pixels of the points' names.
+const LABEL_SIZE: u32 = 14;
+
+/// Where to write each of `labels` (its top-left corner, in pixels) beside its point of
+/// `points`, inside `bounds` (left, top, right, bottom): of eight places around the point,
+/// nearest first, the first that overlaps no label placed before and no point, else the
+/// one that overlaps least. Widths are estimated from the character count (a proportional
+/// font's average), so the check is conservative, not exact.
+pub fn place_labels(
+    points: &[(i32, i32)],
+    labels: &[String],
+    size: u32,
+    bounds: (i32, i32, i32, i32),
+) -> Vec<(i32, i32)> {
+    type Rect = (i32, i32, i32, i32);
+    let overlap = |a: Rect, b: Rect| {
+        let w = (a.2.min(b.2) - a.0.max(b.0)).max(0);
+        let h = (a.3.min(b.3) - a.1.max(b.1)).max(0);
+        i64::from(w) * i64::from(h)
+    };
+    let dots: Vec<Rect> = points
+        .iter()
+        .map(|&(x, y)| (x - 6, y - 6, x + 6, y + 6))
+        .collect();
+    let mut placed: Vec<Rect> = Vec::new();
+    points
+        .iter()
+        .zip(labels)
+        .map(|(&(x, y), label)| {
+            let h = size as i32;
+            let w = (label.chars().count() as f32 * size as f32 * 0.6).ceil() as i32;
+            let gap = 8;
+            let candidates = [
+                (x + gap, y - h / 2),
+                (x - gap - w, y - h / 2),
+                (x - w / 2, y - gap - h),
+                (x - w / 2, y + gap),
+                (x + gap, y - gap - h),
+                (x + gap, y + gap),
+                (x - gap - w, y - gap - h),
+                (x - gap - w, y + gap),
+            ];
+            let cost = |&(cx, cy): &(i32, i32)| {
+                let r = (cx, cy, cx + w, cy + h);
+                let outside = i64::from(w) * i64::from(h) - overlap(r, bounds);
+                let others: i64 = placed.iter().chain(&dots).map(|&o| overlap(r, o)).sum();
+                // Leaving the plot is worse than covering another label.
+                others + 4 * outside
+            };
+            let best = candidates
+                .iter()
+                .copied()
+                .min_by_key(cost)
+                .expect("eight candidates");
+            placed.push((best.0, best.1, best.0 + w, best.1 + h));
+            best
+        })
+        .collect()
 }

@@ -18,6 +18,7 @@ use crate::graphics::bodies::BodyRenderer;
 use crate::graphics::camera::Camera;
 use crate::graphics::headless::Headless;
 use crate::pipeline::{Frame, Profile};
+use crate::sim::WorldSpec;
 use crate::{BackendKind, Device, Error};
 
 /// What `gpuwars demo` and `gpuwars replay` print.
@@ -61,6 +62,9 @@ pub struct Report {
     pub game_over: bool,
     /// Why it ended: "too slow", "ship destroyed", or "" while playing.
     pub game_over_reason: &'static str,
+    /// Each colliding pair of kinds: whether its contacts are swept, and the rule that
+    /// decided it.
+    pub contacts: Vec<PairReport>,
     /// Per-stage times, with `--profile`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub profile: Option<ProfileReport>,
@@ -73,6 +77,32 @@ pub struct Report {
     /// The final frame, when one was drawn.
     #[serde(skip)]
     pub frame: Option<Frame>,
+}
+
+/// How one colliding pair of kinds has its contacts tested (see [`WorldSpec::sweeps`]).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PairReport {
+    /// The two kinds' names.
+    pub kinds: [String; 2],
+    /// Whether their contacts are swept over each step's motion.
+    pub swept: bool,
+    /// The rule that decided it, in words.
+    pub rule: String,
+}
+
+impl PairReport {
+    /// Every colliding pair of `world`'s kinds.
+    pub fn all(world: &WorldSpec) -> Vec<PairReport> {
+        world
+            .sweeps()
+            .into_iter()
+            .map(|p| PairReport {
+                kinds: [p.kinds.0, p.kinds.1].map(|k| world.kinds[k].name.clone()),
+                swept: p.swept,
+                rule: p.rule,
+            })
+            .collect()
+    }
 }
 
 /// The stage times of a profiled run, and the device's copy bandwidth and launch floor
@@ -128,6 +158,11 @@ impl Report {
             "no".to_string()
         };
         line("game_over:", over);
+        for pair in &self.contacts {
+            let [a, b] = &pair.kinds;
+            let how = if pair.swept { "swept" } else { "at step ends" };
+            line("contacts:", format!("{a}–{b} {how} ({})", pair.rule));
+        }
         if let (Some(frame), Some(hash)) = (&self.frame, &self.frame_hash) {
             line(
                 "frame:",
@@ -392,6 +427,7 @@ fn play(
             DESTROYED => "ship destroyed",
             _ => "",
         },
+        contacts: PairReport::all(&game.scene().world),
         profile,
         frame_hash: frame.as_ref().map(|f| format!("{:#018x}", f.hash())),
         renderer: painter.as_ref().map(Painter::describe),

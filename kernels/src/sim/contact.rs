@@ -155,33 +155,40 @@ pub fn sweep(a: Bound, b: Bound, d0: Vec2, d1: Vec2) -> Option<Swept> {
                 normal: -s.normal,
             })
         }
-        (Bound::Rect(ha), Bound::Rect(hb)) => box_entry(d0, d1 - d0, ha + hb),
+        (Bound::Rect(ha), Bound::Rect(hb)) => rect_rect_sweep(ha + hb, d0, d1),
     }
+}
+
+/// Rectangles whose half extents sum to `reach`: the offset entering the box of that reach.
+/// Not inlined, like [`circle_rect_sweep`]: the narrow phase's query stays small enough to
+/// be inlined whole, where the rare rectangle sweeps would otherwise spill its arguments.
+#[inline(never)]
+fn rect_rect_sweep(reach: Vec2, d0: Vec2, d1: Vec2) -> Option<Swept> {
+    box_entry(d0, d1 - d0, reach)
 }
 
 /// A circle of radius `r` at the origin and a rectangle of half extents `half` whose centre
 /// moves from `d0` to `d1`. They overlap while the centre lies in the rectangle grown by
 /// `r` with rounded corners: the union of two boxes (the rectangle grown along one axis)
 /// and four disks (one on each corner), whose earliest entry is the earliest of the pieces'
-/// (the path starts outside all of them).
-#[inline(always)]
+/// (the path starts outside all of them). Not inlined (see [`rect_rect_sweep`]).
+#[inline(never)]
 fn circle_rect_sweep(r: f32, half: Vec2, d0: Vec2, d1: Vec2) -> Option<Swept> {
     let v = d1 - d0;
-    let mut first = earliest(
+    // The disk around the corner at `-c` holds the centres whose rectangle has that corner
+    // within `r` of the circle: the path shifted by the corner. Written out, not looped
+    // over a list, so that the kernel keeps everything in registers.
+    let corner = |c: Vec2| disk_entry(d0 + c, v, r);
+    let faces = earliest(
         box_entry(d0, v, Vec2::new(half.x + r, half.y)),
         box_entry(d0, v, Vec2::new(half.x, half.y + r)),
     );
-    for corner in [
-        Vec2::new(-half.x, -half.y),
-        Vec2::new(half.x, -half.y),
-        Vec2::new(-half.x, half.y),
-        half,
-    ] {
-        // The disk around the corner at `-corner` holds the centres whose rectangle has
-        // that corner within `r` of the circle: shift the path by the corner.
-        first = earliest(first, disk_entry(d0 + corner, v, r));
-    }
-    first
+    let low = earliest(
+        corner(Vec2::new(-half.x, -half.y)),
+        corner(Vec2::new(half.x, -half.y)),
+    );
+    let high = earliest(corner(Vec2::new(-half.x, half.y)), corner(half));
+    earliest(faces, earliest(low, high))
 }
 
 /// The earlier of two entries, `a` on a tie (a fixed order, whatever the schedule).

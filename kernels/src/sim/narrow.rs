@@ -227,7 +227,7 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool>(
     let mut push = Vec2::ZERO;
     let mut kick = Vec2::ZERO;
     let mut count = 0u32;
-    let mut ended = 0u32;
+    let mut at_end = 0u32;
     let mut damage = 0i32;
     // The earliest swept contact, in the fixed order (time, then slot): the body goes back
     // to where it was then, and only that contact kicks it.
@@ -300,7 +300,7 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool>(
                 if !touch.swept() {
                     push += touch.push;
                     kick += touch.kick;
-                    ended += 1;
+                    at_end += 1;
                 } else if touch.before(&first) {
                     first = touch;
                 }
@@ -315,7 +315,7 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool>(
         let energy = bodies.energy.get(slot);
         bodies.energy.set(slot, energy.saturating_sub(damage));
     }
-    let mut push = args.relax.apply(push, ended);
+    let mut push = args.relax.apply(push, at_end);
     if first.swept() {
         // Back along the last motion to where the earliest swept contact began.
         push -= args.space.offset(prev, pos) * (1.0 - first.time);
