@@ -2,6 +2,7 @@
 //! layout and grid sizing, the device buffers of a world, snapshots and the state hash. The
 //! order of a step's launches is the pipeline's (`crate::pipeline`).
 
+pub mod audit;
 pub mod layout;
 pub mod rng;
 pub mod snapshot;
