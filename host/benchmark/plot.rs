@@ -257,24 +257,25 @@ pub fn pareto(path: &Path, summary: &TradeoffSummary) -> anyhow::Result<()> {
             .map_err(|e| anyhow!("{e}"))?
             .label("Pareto frontier")
             .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], RED.stroke_width(2)));
-        let points: Vec<((f64, f64), bool)> = rows
+        let points: Vec<(f64, f64)> = rows
             .iter()
-            .map(|r| ((r.sim_seconds_per_s, error(r)), r.pareto))
+            .map(|r| (r.sim_seconds_per_s, error(r)))
             .collect();
+        let frontier: Vec<bool> = rows.iter().map(|r| r.pareto).collect();
         let names: Vec<String> = rows.iter().map(|r| r.choice.clone()).collect();
-        points_with_labels(area, &mut chart, &points, &names)?;
+        points_with_labels(area, &mut chart, &points, (&frontier, &names))?;
         legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         Ok(())
     })
 }
 
-/// Each point of `chart` (red where `on_frontier`, else blue), with its name beside it
-/// where the names do not overlap (see [`place_labels`]).
+/// Each of `points` on `chart` (red where `frontier` says, else blue), with its name of
+/// `names` beside it where the names do not overlap (see [`place_labels`]).
 fn points_with_labels<'a, X, Y>(
     area: &DrawingArea<BitMapBackend<'a>, Shift>,
     chart: &mut ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, Y>>,
-    points: &[((X::ValueType, Y::ValueType), bool)],
-    names: &[String],
+    points: &[(X::ValueType, Y::ValueType)],
+    (frontier, names): (&[bool], &[String]),
 ) -> anyhow::Result<()>
 where
     X: Ranged,
@@ -282,13 +283,13 @@ where
     X::ValueType: Clone + 'static,
     Y::ValueType: Clone + 'static,
 {
-    for (p, on_frontier) in points {
+    for (p, on_frontier) in points.iter().zip(frontier) {
         let colour = if *on_frontier { RED } else { BLUE };
         chart
             .draw_series([Circle::new(p.clone(), 5, colour.filled())])
             .map_err(|e| anyhow!("{e}"))?;
     }
-    let pixels: Vec<(i32, i32)> = points.iter().map(|(p, _)| chart.backend_coord(p)).collect();
+    let pixels: Vec<(i32, i32)> = points.iter().map(|p| chart.backend_coord(p)).collect();
     let bounds = chart.plotting_area().get_pixel_range();
     let bounds = (bounds.0.start, bounds.1.start, bounds.0.end, bounds.1.end);
     for (at, name) in place_labels(&pixels, names, LABEL_SIZE, bounds)

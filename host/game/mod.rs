@@ -1,6 +1,7 @@
 //! The game on the host side: scenes (TOML), the per-step driver that launches the game's
 //! kernels in order, replays, and high scores.
 
+pub mod accuracy;
 pub mod demo;
 pub mod engine;
 pub mod highscore;

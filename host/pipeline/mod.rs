@@ -174,7 +174,7 @@ impl<'d> Pipeline<'d> {
 
     /// Whether the next step renumbers the bodies: every `renumber_every` steps from the
     /// first, counted on the host (the same count on every backend).
-    fn renumbers_next(&self) -> bool {
+    pub fn renumbers_next(&self) -> bool {
         let every = u64::from(self.world.config.renumber_every);
         every != 0 && self.steps.is_multiple_of(every)
     }

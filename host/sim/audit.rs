@@ -41,6 +41,9 @@ pub struct StepEnd<'a> {
     /// The contacts the kernels counted for each slot in this step's narrow phase, which
     /// tests the motion of the step before (see [`Accuracy::add_step`]).
     pub counted: &'a [u32],
+    /// Whether this step moved bodies to other slots (renumbering) before its narrow phase:
+    /// then no slot holds the body it held at the step before's end.
+    pub renumbered: bool,
 }
 
 impl StepEnd<'_> {
@@ -191,9 +194,10 @@ pub struct Accuracy {
     pub all: Tally,
     /// Steps audited.
     pub steps: u64,
-    /// Slots audited (body-steps): alive at both ends of a step and holding the same body.
+    /// Slots audited (body-steps): alive at the step's end and holding the same body at the
+    /// next step's narrow phase.
     pub slots_audited: u64,
-    /// Live slots left out because their body moved to another slot or died.
+    /// Live slots left out because the next step moved bodies to other slots.
     pub slots_skipped: u64,
     /// Pairs of an audited slot and a partner whose verdict the margin leaves undecided (left
     /// out of the expected and missed contacts).
@@ -211,7 +215,9 @@ impl Accuracy {
     /// Audits the motion of one step. `this` is its end (`prev`: where the bodies started,
     /// `pos`: where they ended) and `next` the end of the step after, whose `counted` are the
     /// kernels' counts for that motion. A slot is audited when it holds the same body at both
-    /// ends: alive in both, with `next.prev` equal to `this.pos` bit for bit. Its partners
+    /// ends: alive at `this`, and `next` did not renumber. A body that dies in `next` still
+    /// had its contacts counted there (it dies after the narrow phase, as a shot does on
+    /// the enemy it hits), and a body is born only into a slot that was free. Its partners
     /// are all the live bodies of `this`.
     ///
     /// # Panics
@@ -221,10 +227,7 @@ impl Accuracy {
     pub fn add_step(&mut self, spec: &WorldSpec, roles: &Roles, this: &StepEnd, next: &StepEnd) {
         let n = this.slots();
         assert_eq!(next.slots(), n, "two step ends of different worlds");
-        let same = |s: usize| {
-            let bits = |p: Vec2| p.to_array().map(f32::to_bits);
-            this.alive[s] != 0 && next.alive[s] != 0 && bits(next.prev[s]) == bits(this.pos[s])
-        };
+        let same = |s: usize| this.alive[s] != 0 && !next.renumbered;
         let audited: Vec<bool> = (0..n).map(same).collect();
         self.steps += 1;
 
@@ -593,6 +596,8 @@ mod tests {
             collides_with: with.iter().map(|s| s.to_string()).collect(),
             lifetime: f32::INFINITY,
             controlled: false,
+            sweep: super::super::spec::Sweep::Off,
+            top_speed: f32::INFINITY,
         }
     }
 
@@ -667,6 +672,7 @@ mod tests {
         vel: Vec<Vec2>,
         energy: Vec<i32>,
         counted: Vec<u32>,
+        renumbered: bool,
     }
 
     impl Arrays {
@@ -679,6 +685,7 @@ mod tests {
                 vel: &self.vel,
                 energy: &self.energy,
                 counted: &self.counted,
+                renumbered: self.renumbered,
             }
         }
     }
@@ -694,6 +701,7 @@ mod tests {
             vel: bodies.iter().map(|b| b.vel).collect(),
             energy: bodies.iter().map(|b| b.energy).collect(),
             counted: vec![0; bodies.len()],
+            renumbered: false,
         };
         let next = Arrays {
             prev: this.pos.clone(),
@@ -952,7 +960,7 @@ mod tests {
     }
 
     #[test]
-    fn slots_holding_another_body_are_skipped_but_remain_partners() {
+    fn bodies_that_die_after_counting_are_audited_and_renumbered_steps_skipped() {
         let spec = world(
             100.0,
             Boundary::Clamp,
@@ -967,21 +975,26 @@ mod tests {
             still(0, (0.0, 10.0)),
         ];
         let (this, mut next) = ends(&bodies, &[0; 5]);
-        // Another body in slot 1, slot 2's died, and a sign bit differs in slot 4.
-        next.prev[1].x += 0.5;
+        // Slot 2's body died in the next step, after its narrow phase counted its contacts.
         next.alive[2] = 0;
-        next.prev[4].x = -0.0;
         let mut accuracy = Accuracy::default();
         accuracy.add_step(&spec, &roles, &this.end(), &next.end());
-        assert_eq!((accuracy.slots_audited, accuracy.slots_skipped), (2, 3));
-        // Slot 0 touches slots 1, 2 and 3 (4, 4 and 5 away; the radii sum to 6), slot 3
-        // only slot 0.
-        assert_eq!(accuracy.all, tally(4, 4, 0, 0));
+        assert_eq!((accuracy.slots_audited, accuracy.slots_skipped), (5, 0));
+        // Slot 0 touches slots 1, 2 and 3 (4, 4 and 5 away; the radii sum to 6), each of
+        // those only slot 0, slot 4 nothing.
+        assert_eq!(accuracy.all, tally(6, 6, 0, 0));
         assert_eq!(accuracy.classes["rock→rock"], accuracy.all);
-        // Every pair's depth, audited or not: 2, 2 and 1.
+        // Every pair's depth: 2, 2 and 1.
         assert_eq!(accuracy.depth.count, 3);
         assert_eq!((accuracy.depth.sum, accuracy.depth.max), (5.0, 2.0));
         assert_eq!(accuracy.steps, 1);
+        // A step that renumbered: no slot holds its body of the step before.
+        next.alive[2] = 1;
+        next.renumbered = true;
+        let mut renumbered = Accuracy::default();
+        renumbered.add_step(&spec, &roles, &this.end(), &next.end());
+        assert_eq!((renumbered.slots_audited, renumbered.slots_skipped), (0, 5));
+        assert_eq!(renumbered.all, Tally::default());
     }
 
     #[test]

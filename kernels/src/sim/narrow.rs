@@ -267,6 +267,7 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool>(
                 let began = match traced && info.sweeps(other_kind) {
                     true => {
                         let d0 = args.space.offset(prev, args.grid.prev.get(entry));
+                        let d0 = args.space.image_near(d0, d);
                         match contact(a, b, d0, tie) {
                             Some(_) => None,
                             None => sweep(a, b, d0, d),

@@ -67,6 +67,19 @@ impl Space {
         }
     }
 
+    /// The offset `d` moved by whole periods to the one nearest `near`, on a wrapping world
+    /// (`d` itself elsewhere): two offsets of a pair taken apart (a step's start and end)
+    /// then describe one straight relative path, even where the pair lies about half the
+    /// world apart and each offset alone could be either way round.
+    #[inline(always)]
+    pub fn image_near(&self, d: Vec2, near: Vec2) -> Vec2 {
+        if self.wraps() {
+            near + self.offset(near, d)
+        } else {
+            d
+        }
+    }
+
     /// Brings a position back into the world by the boundary rule: wrapped around, or clamped
     /// to the edges with the velocity component that points out of the world removed.
     #[inline(always)]

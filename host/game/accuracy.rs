@@ -1,0 +1,77 @@
+//! The game's accuracy in game terms: a scene played by the autopilot, every step's contacts
+//! audited against an exact continuous-time check of the bodies' paths
+//! ([`crate::sim::audit`]). The machines make the game chaotic, so two runs that differ in
+//! anything drift apart: events are compared, not trajectories.
+
+use super::{Game, Options, Scene};
+use crate::Device;
+use crate::sim::Snapshot;
+use crate::sim::audit::{Accuracy, Roles, StepEnd};
+
+/// How long an audit plays: `warmup` steps unaudited (the field fills up), then `steps`
+/// audited ones.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AuditLength {
+    /// Steps played before the audit starts.
+    pub warmup: u32,
+    /// Steps whose motion is audited.
+    pub steps: u32,
+}
+
+/// `scene` played from `seed` by the autopilot on `device`, the contacts of `length.steps`
+/// steps audited after `length.warmup`. The world keeps its bodies' paths for the audit
+/// ([`crate::sim::Physics::trace_paths`]), which changes nothing it computes: the game is
+/// the one `scene` plays, bit for bit. It stops early if the game ends.
+pub fn audit_game(
+    device: &Device,
+    scene: &Scene,
+    seed: u32,
+    length: AuditLength,
+) -> anyhow::Result<Accuracy> {
+    let mut traced = scene.clone();
+    traced.world.physics.trace_paths = true;
+    let world = &traced.world;
+    let index = |name: &str| world.kind_index(name).map(|k| k as u32);
+    let roles = Roles::of(
+        world,
+        index(&traced.game.ship.kind),
+        index(&traced.game.ship.shot),
+    );
+    let mut game = Game::with_options(device, &traced, seed, Options::default())?;
+    for _ in 0..length.warmup {
+        game.submit(None)?;
+    }
+    let mut accuracy = Accuracy::default();
+    let mut this = game.snapshot()?;
+    for _ in 0..length.steps {
+        if game.status().is_over() {
+            break;
+        }
+        let renumbers = game.pipeline().renumbers_next();
+        game.step(None)?;
+        let next = game.snapshot()?;
+        accuracy.add_step(
+            world,
+            &roles,
+            &step_end(&this, false),
+            &step_end(&next, renumbers),
+        );
+        this = next;
+    }
+    Ok(accuracy)
+}
+
+/// A snapshot as the audit reads it; `renumbered` if its step moved bodies between slots.
+pub fn step_end(snapshot: &Snapshot, renumbered: bool) -> StepEnd<'_> {
+    let b = &snapshot.bodies;
+    StepEnd {
+        alive: &b.alive,
+        kind: &b.kind,
+        prev: &b.prev,
+        pos: &b.pos,
+        vel: &b.vel,
+        energy: &b.energy,
+        counted: &snapshot.contacts,
+        renumbered,
+    }
+}
