@@ -1089,11 +1089,11 @@ mod tests {
             body(30.0, (6.0, 8.1), 100),
             body(40.0, (0.0, 0.0), 101),
             body(50.0, (-20.0, 0.0), 102),
-            // Not audited.
+            // Not audited: dead at the step's end.
             body(60.0, (-20.0, 0.0), 102),
         ];
-        let (this, mut next) = ends(&bodies, &[0; 6]);
-        next.alive[5] = 0;
+        let (mut this, next) = ends(&bodies, &[0; 6]);
+        this.alive[5] = 0;
         let mut accuracy = Accuracy::default();
         accuracy.add_step(&spec, &roles, &this.end(), &next.end());
         assert_eq!(accuracy.slots_audited, 5);
