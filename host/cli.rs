@@ -155,8 +155,10 @@ impl Command {
                 scene: name, out, ..
             } => {
                 let files = RunFiles::new().reads("--scene", scene(name).as_deref());
-                let markdown = Outputs::at(&out.out, "tradeoff").markdown();
-                benchmark(files, out, "tradeoff").writes_into("--out", &markdown)
+                let outputs = Outputs::at(&out.out, "tradeoff");
+                benchmark(files, out, "tradeoff")
+                    .writes_into("--out", &outputs.markdown())
+                    .writes_into("--out", &outputs.game_png())
             }
             Command::Bench { which } => match which {
                 BenchCommand::Paper { out, .. } => benchmark(RunFiles::new(), out, "paper"),

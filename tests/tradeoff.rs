@@ -55,8 +55,21 @@ fn quick(backend: &str) -> TradeoffSummary {
             row.choice
         );
     }
-    let plot = image::open(file("png")).unwrap();
-    assert_eq!((plot.width(), plot.height()), (1280, 720));
+    // The game table prints each choice's accuracy columns.
+    assert!(markdown.contains("| choice | steps/s | simulated s/s | contacts | between ends |"));
+    for row in &printed.game {
+        assert!(markdown.contains(&format!("| {} | ", row.choice)));
+    }
+    for name in ["bench-tradeoff.png", "bench-tradeoff-game.png"] {
+        let path = dir.path().join(name);
+        let plot = image::open(&path).unwrap();
+        assert_eq!(
+            (plot.width(), plot.height()),
+            (1280, 720),
+            "{}",
+            path.display()
+        );
+    }
     printed
 }
 
@@ -127,6 +140,24 @@ fn check(summary: &TradeoffSummary) {
     }
     assert!(!summary.game.is_empty() && !summary.features.is_empty());
     assert!(summary.features.iter().all(|r| r.steps_per_s > 0.0));
+    // Every game choice is audited; the features are timed only.
+    assert!(summary.game.iter().all(|r| r.accuracy.is_some()));
+    assert!(summary.features.iter().all(|r| r.accuracy.is_none()));
+    for r in &summary.game {
+        let a = r.accuracy.as_ref().unwrap();
+        assert!(a.tunnelling <= a.expected, "{}", r.choice);
+        assert!((r.sim_seconds_per_s - r.steps_per_s * r.dt).abs() < 1e-9);
+    }
+    // The choices that turn sweeping off or on are offered for the scene's swept kinds.
+    let choices: Vec<&str> = summary.game.iter().map(|r| r.choice.as_str()).collect();
+    for choice in [
+        "nothing swept",
+        "shot not swept",
+        "ship not swept",
+        "every kind swept",
+    ] {
+        assert!(choices.contains(&choice), "{choice} in {choices:?}");
+    }
 }
 
 #[test]
@@ -224,4 +255,31 @@ fn the_reference_orbits_and_collides_as_the_closed_forms_say() {
         "{}",
         world.vel[1]
     );
+}
+
+#[test]
+fn labels_of_a_cluster_of_points_do_not_overlap() {
+    use gpuwars::benchmark::plot::place_labels;
+    // Six choices plotted on one spot, as the default's neighbours often are: each name
+    // goes to its own place around it, no two overlapping, all inside the plot.
+    let names: Vec<String> = [
+        "default", "explicit", "verlet", "averaged", "cap 32", "cell x2",
+    ]
+    .map(String::from)
+    .to_vec();
+    let size = 14;
+    let points = vec![(600, 300); names.len()];
+    let at = place_labels(&points, &names, size, (0, 0, 1280, 720));
+    let rect = |(x, y): (i32, i32), name: &String| {
+        let w = (name.chars().count() as f32 * size as f32 * 0.6).ceil() as i32;
+        (x, y, x + w, y + size as i32)
+    };
+    let rects: Vec<_> = at.iter().zip(&names).map(|(&p, n)| rect(p, n)).collect();
+    for (i, a) in rects.iter().enumerate() {
+        assert!(a.0 >= 0 && a.1 >= 0 && a.2 <= 1280 && a.3 <= 720);
+        for b in &rects[i + 1..] {
+            let apart = a.2 <= b.0 || b.2 <= a.0 || a.3 <= b.1 || b.3 <= a.1;
+            assert!(apart, "{a:?} and {b:?} overlap");
+        }
+    }
 }

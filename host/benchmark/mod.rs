@@ -11,7 +11,7 @@
 pub mod compare;
 pub mod floor;
 pub mod paper;
-mod plot;
+pub mod plot;
 pub mod scale;
 pub mod tradeoff;
 
@@ -123,6 +123,12 @@ impl Outputs {
     /// The tables in Markdown, beside the others (written by `tradeoff`).
     pub fn markdown(&self) -> PathBuf {
         self.png.with_extension("md")
+    }
+
+    /// A second plot, of the game scene, beside the first (written by `tradeoff`).
+    pub fn game_png(&self) -> PathBuf {
+        let stem = self.png.file_stem().unwrap_or_default().to_string_lossy();
+        self.png.with_file_name(format!("{stem}-game.png"))
     }
 }
 

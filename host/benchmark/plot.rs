@@ -305,10 +305,14 @@ where
 /// Height in pixels of the points' names.
 const LABEL_SIZE: u32 = 14;
 
+/// Rows of names stacked above and below a point's own beside it (see [`place_labels`]).
+const STACKED: i32 = 4;
+
 /// Where to write each of `labels` (its top-left corner, in pixels) beside its point of
-/// `points`, inside `bounds` (left, top, right, bottom): of eight places around the point,
-/// nearest first, the first that overlaps no label placed before and no point, else the
-/// one that overlaps least. Widths are estimated from the character count (a proportional
+/// `points`, inside `bounds` (left, top, right, bottom): of the places around the point
+/// (beside it, in rows stacked up to [`STACKED`] deep, or above or below it), nearest
+/// first, the first that overlaps no label placed before and no point, else the one that
+/// overlaps least. Widths are estimated from the character count (a proportional
 /// font's average), so the check is conservative, not exact.
 pub fn place_labels(
     points: &[(i32, i32)],
@@ -334,16 +338,16 @@ pub fn place_labels(
             let h = size as i32;
             let w = (label.chars().count() as f32 * size as f32 * 0.6).ceil() as i32;
             let gap = 8;
-            let candidates = [
-                (x + gap, y - h / 2),
-                (x - gap - w, y - h / 2),
-                (x - w / 2, y - gap - h),
-                (x - w / 2, y + gap),
-                (x + gap, y - gap - h),
-                (x + gap, y + gap),
-                (x - gap - w, y - gap - h),
-                (x - gap - w, y + gap),
-            ];
+            // Beside the point, left or right, in rows stacked up and down from its own
+            // height, nearest first; above and below it after the first rows.
+            let row = |k: i32| y - h / 2 + k * (h + 2);
+            let mut candidates = vec![(x + gap, row(0)), (x - gap - w, row(0))];
+            candidates.extend([(x - w / 2, y - gap - h), (x - w / 2, y + gap)]);
+            for k in 1..=STACKED {
+                for k in [-k, k] {
+                    candidates.extend([(x + gap, row(k)), (x - gap - w, row(k))]);
+                }
+            }
             let cost = |&(cx, cy): &(i32, i32)| {
                 let r = (cx, cy, cx + w, cy + h);
                 let outside = i64::from(w) * i64::from(h) - overlap(r, bounds);
@@ -355,9 +359,58 @@ pub fn place_labels(
                 .iter()
                 .copied()
                 .min_by_key(cost)
-                .expect("eight candidates");
+                .expect("a place to try");
             placed.push((best.0, best.1, best.0 + w, best.1 + h));
             best
         })
         .collect()
+}
+
+/// The game scene's trade: contacts missed per thousand (its audit) against simulated
+/// seconds per wall second, a point per choice of the game table, the Pareto frontier in
+/// red.
+pub fn game_pareto(path: &Path, summary: &TradeoffSummary) -> anyhow::Result<()> {
+    png(path, |area| {
+        let rows: Vec<_> = (summary.game.iter())
+            .filter_map(|r| Some((r, r.accuracy.as_ref()?.missed?)))
+            .collect();
+        let x = log_range(rows.iter().map(|(r, _)| r.sim_seconds_per_s), &[]);
+        let top = rows.iter().map(|&(_, m)| m).fold(1.0, f64::max) * 1.15;
+        let title = format!(
+            "{}: contacts missed against speed ({}, {})",
+            summary.scene, summary.machine.device, summary.machine.backend
+        );
+        let mut chart = ChartBuilder::on(area)
+            .caption(title, ("sans-serif", 22))
+            .margin(16)
+            .x_label_area_size(48)
+            .y_label_area_size(80)
+            .build_cartesian_2d(x.log_scale(), -0.04 * top..top)
+            .map_err(|e| anyhow!("{e}"))?;
+        chart
+            .configure_mesh()
+            .x_desc("simulated seconds per wall second (log)")
+            .y_desc("contacts missed per thousand (audit)")
+            .label_style(("sans-serif", 16))
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+        let mut frontier: Vec<(f64, f64)> = (rows.iter())
+            .filter(|(r, _)| r.pareto)
+            .map(|&(r, m)| (r.sim_seconds_per_s, m))
+            .collect();
+        frontier.sort_by(|a, b| a.0.total_cmp(&b.0));
+        chart
+            .draw_series(LineSeries::new(frontier, RED.stroke_width(2)))
+            .map_err(|e| anyhow!("{e}"))?
+            .label("Pareto frontier")
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], RED.stroke_width(2)));
+        let points: Vec<(f64, f64)> = (rows.iter())
+            .map(|&(r, m)| (r.sim_seconds_per_s, m))
+            .collect();
+        let on: Vec<bool> = rows.iter().map(|(r, _)| r.pareto).collect();
+        let names: Vec<String> = rows.iter().map(|(r, _)| r.choice.clone()).collect();
+        points_with_labels(area, &mut chart, &points, (&on, &names))?;
+        legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+        Ok(())
+    })
 }

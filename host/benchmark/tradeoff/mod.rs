@@ -26,9 +26,11 @@ use serde::{Deserialize, Serialize};
 
 use super::{Outputs, Provenance, plot, progress, write_csv, write_json};
 use crate::files::write_atomically;
+use crate::game::accuracy::{AuditLength, audit_game};
 use crate::game::spec::Machine;
 use crate::game::{Game, Options, Scene};
 use crate::pipeline::{Pipeline, Profile, Simulation};
+use crate::sim::audit::{Accuracy, BODY_WALL, ENEMY_SHIP, SHOT_ENEMY};
 use crate::sim::{Boundary, Field, Integrator, KindSpec, Physics, Shape, Sweep, WorldSpec};
 use crate::{Device, Error};
 use analytic::AnalyticRow;
@@ -76,6 +78,8 @@ pub struct Sizes {
     pub game_warmup: u32,
     /// Steps of the game profiled stage by stage (their mean is reported).
     pub profiled_steps: u32,
+    /// Steps of the game whose contacts are audited, after the warm-up.
+    pub audit_steps: u32,
     /// The analytic cases' time steps.
     pub analytic_dts: [f32; 2],
     /// Bodies of the crowded-cell worlds.
@@ -94,6 +98,7 @@ impl Sizes {
                 speed_seconds: 0.05,
                 game_warmup: 20,
                 profiled_steps: 3,
+                audit_steps: 40,
                 analytic_dts: [1.0 / 30.0, 1.0 / 60.0],
                 crowded: [256, 1024],
             },
@@ -105,6 +110,7 @@ impl Sizes {
                 speed_seconds: 3.0,
                 game_warmup: 600,
                 profiled_steps: 30,
+                audit_steps: 1200,
                 analytic_dts: [1.0 / 60.0, 1.0 / 240.0],
                 crowded: [4096, 32_768],
             },
@@ -115,6 +121,7 @@ impl Sizes {
                 speed_seconds: 1.0,
                 game_warmup: 600,
                 profiled_steps: 30,
+                audit_steps: 1200,
                 analytic_dts: [1.0 / 60.0, 1.0 / 240.0],
                 crowded: [4096, 32_768],
             },
@@ -158,14 +165,67 @@ pub struct PhysicsRow {
 pub struct GameRow {
     /// The choice or the feature turned off.
     pub choice: String,
+    /// Time step (s).
+    pub dt: f64,
     /// Steps per second, the step replayed as a graph.
     pub steps_per_s: f64,
+    /// Simulated seconds per wall second (steps/s × dt).
+    pub sim_seconds_per_s: f64,
+    /// What the choice costs the game, from an audit of its contacts (the game table's
+    /// rows; none for the feature table's).
+    pub accuracy: Option<GameAccuracy>,
+    /// Whether no other row of the game table misses fewer contacts and runs faster.
+    pub pareto: bool,
     /// Time per step over profiled steps (µs).
     pub step_us: f64,
     /// Each stage's µs, `stage=µs` joined by spaces.
     pub stages: String,
     /// Enemies alive when measured.
     pub alive: u32,
+}
+
+/// The game's accuracy under one choice: its contacts over the audited steps against an
+/// exact continuous-time check of the bodies' paths (see [`crate::game::accuracy`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GameAccuracy {
+    /// Steps audited.
+    pub steps: u64,
+    /// Contacts the check found, each from both bodies' sides.
+    pub expected: u64,
+    /// Of those, how many began and ended between two step ends.
+    pub tunnelling: u64,
+    /// Contacts missed per thousand found (`None`: none found).
+    pub missed: Option<f64>,
+    /// Shots' contacts with enemies missed per thousand.
+    pub shot_enemy: Option<f64>,
+    /// The ship's contacts with enemies missed per thousand.
+    pub enemy_ship: Option<f64>,
+    /// Movable bodies' contacts with immovable ones missed per thousand.
+    pub body_wall: Option<f64>,
+    /// Mean penetration of the contacts overlapping at a step's end (units).
+    pub depth_mean: Option<f64>,
+    /// The deepest (units).
+    pub depth_max: f64,
+    /// Body-steps over their kind's speed limit or birth energy.
+    pub limit_violations: u64,
+}
+
+impl GameAccuracy {
+    /// The summary of an audit.
+    fn of(a: &Accuracy) -> Self {
+        GameAccuracy {
+            steps: a.steps,
+            expected: a.all.expected,
+            tunnelling: a.all.tunnelling,
+            missed: a.total_missed_per_thousand(),
+            shot_enemy: a.missed_per_thousand(SHOT_ENEMY),
+            enemy_ship: a.missed_per_thousand(ENEMY_SHIP),
+            body_wall: a.missed_per_thousand(BODY_WALL),
+            depth_mean: a.depth.mean(),
+            depth_max: a.depth.max,
+            limit_violations: a.speed_violations + a.energy_violations,
+        }
+    }
 }
 
 /// A step of a world whose bodies all start on one spot.
@@ -403,32 +463,76 @@ fn mark_pareto(rows: &mut [PhysicsRow]) {
     }
 }
 
-/// `scene` with its physics replaced by `physics`.
-fn with_physics(scene: &Scene, physics: Physics) -> Scene {
-    let mut scene = scene.clone();
-    scene.world.physics = physics;
-    scene
+/// Marks the game rows no other audited row beats on both contacts missed and simulated
+/// seconds per second (rows whose audit found no contact are left off).
+fn mark_game_pareto(rows: &mut [GameRow]) {
+    let point = |r: &GameRow| {
+        let missed = r.accuracy.as_ref().and_then(|a| a.missed)?;
+        Some((missed, r.sim_seconds_per_s))
+    };
+    let points: Vec<Option<(f64, f64)>> = rows.iter().map(point).collect();
+    for (row, p) in rows.iter_mut().zip(&points) {
+        row.pareto = p.is_some_and(|(m, s)| {
+            !points
+                .iter()
+                .flatten()
+                .any(|&(m2, s2)| m2 <= m && s2 >= s && (m2 < m || s2 > s))
+        });
+    }
 }
 
-/// The game's choices: those that apply to a game.
-fn game_choices(base: Physics) -> Vec<Physics> {
-    let with = |f: &dyn Fn(&mut Physics)| {
-        let mut p = base;
-        f(&mut p);
-        p
+/// The game's choices, each a changed copy of `scene`: the physics choices that apply to a
+/// game, a coarser and a finer time step, and its swept contacts off (every kind's, the
+/// ship's, the shots'; and at the coarser step) or on for every kind of known speed.
+fn game_choices(scene: &Scene) -> Vec<(String, Scene)> {
+    let changed = |label: Option<String>, f: &dyn Fn(&mut WorldSpec)| {
+        let mut s = scene.clone();
+        f(&mut s.world);
+        (label.unwrap_or_else(|| s.world.physics.label()), s)
     };
-    vec![
-        base,
-        with(&|p| p.integrator = Integrator::ExplicitEuler),
-        with(&|p| p.integrator = Integrator::VelocityVerlet),
-        with(&|p| p.substeps = 2),
-        with(&|p| p.substeps = 4),
-        with(&|p| p.averaged = true),
-        with(&|p| p.cell_scale = 2.0),
-        with(&|p| p.neighbour_cap = 32),
-        with(&|p| p.neighbour_cap = 8),
-        with(&|p| p.vision_scale = 0.5),
-    ]
+    let physics = |f: &dyn Fn(&mut Physics)| changed(None, &|w| f(&mut w.physics));
+    let coarse = |w: &mut WorldSpec| w.dt *= 2.0;
+    let dt_label = |factor: f32| format!("dt 1/{:.0}", 1.0 / (scene.world.dt * factor));
+    let unswept = |w: &mut WorldSpec| w.kinds.iter_mut().for_each(|k| k.sweep = Sweep::Off);
+    let mut out = vec![
+        ("default".to_owned(), scene.clone()),
+        physics(&|p| p.integrator = Integrator::ExplicitEuler),
+        physics(&|p| p.integrator = Integrator::VelocityVerlet),
+        changed(Some(dt_label(2.0)), &coarse),
+        changed(Some(dt_label(0.5)), &|w| w.dt *= 0.5),
+        physics(&|p| p.substeps = 2),
+        physics(&|p| p.substeps = 4),
+        physics(&|p| p.averaged = true),
+        physics(&|p| p.cell_scale = 2.0),
+        physics(&|p| p.neighbour_cap = 32),
+        physics(&|p| p.neighbour_cap = 8),
+        physics(&|p| p.vision_scale = 0.5),
+    ];
+    if scene.world.sweeps().iter().any(|p| p.swept) {
+        out.push(changed(Some("nothing swept".into()), &unswept));
+        out.push(changed(
+            Some(format!("{}, nothing swept", dt_label(2.0))),
+            &|w| {
+                coarse(w);
+                unswept(w);
+            },
+        ));
+        let ship = &scene.game.ship;
+        for name in [&ship.kind, &ship.shot] {
+            let Some(k) = scene.world.kind_index(name) else {
+                continue;
+            };
+            out.push(changed(Some(format!("{name} not swept")), &|w| {
+                w.kinds[k].sweep = Sweep::Off;
+            }));
+        }
+    }
+    out.push(changed(Some("every kind swept".into()), &|w| {
+        for kind in w.kinds.iter_mut().filter(|k| k.speed_bound().is_finite()) {
+            kind.sweep = Sweep::On;
+        }
+    }));
+    out
 }
 
 /// The scene with one feature off, for each feature the scene has: `(name, scene)`.
@@ -467,13 +571,15 @@ fn feature_choices(scene: &Scene) -> Vec<(String, Scene)> {
 }
 
 /// Steps per second, stage times and enemies alive of `scene`, the autopilot playing,
-/// after `warmup` steps; an error if the game is over by then.
+/// after `warmup` steps, and if `audited` its contacts' audit over as many steps again (a
+/// game of its own, the same bit for bit); an error if the game is over before it is
+/// measured.
 fn game_row(
     device: &Device,
-    choice: String,
-    scene: &Scene,
+    (choice, scene): (String, &Scene),
     seed: u32,
     sizes: &Sizes,
+    audited: bool,
 ) -> anyhow::Result<GameRow> {
     let mut game = Game::with_options(device, scene, seed, Options::default())?;
     // The autopilot flies.
@@ -497,9 +603,24 @@ fn game_row(
         anyhow::bail!("the game ended while it was measured (a frozen world is cheap)");
     }
     let stages = profile.stage_line(1e-6, 1);
+    let accuracy = match audited {
+        true => {
+            let length = AuditLength {
+                warmup: sizes.game_warmup,
+                steps: sizes.audit_steps,
+            };
+            Some(GameAccuracy::of(&audit_game(device, scene, seed, length)?))
+        }
+        false => None,
+    };
+    let dt = f64::from(scene.world.dt);
     Ok(GameRow {
         choice,
+        dt,
         steps_per_s,
+        sim_seconds_per_s: steps_per_s * dt,
+        accuracy,
+        pareto: false,
         step_us: profile.step_seconds() * 1e6,
         stages,
         alive,
@@ -512,7 +633,7 @@ pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<Tradeof
     let machine = Provenance::now(device);
     let sizes = Sizes::new(device, options.quick);
     let choices = crowd_choices();
-    let games = game_choices(options.scene.world.physics);
+    let games = game_choices(&options.scene);
     let features = feature_choices(&options.scene);
     let bar = progress(
         (choices.len() + games.len() + features.len() + 1) as u64,
@@ -576,21 +697,20 @@ pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<Tradeof
     bar.inc(1);
 
     let mut game = Vec::new();
-    for p in games {
-        let label = p.label();
+    for (label, scene) in games {
         bar.set_message(format!("{}: {label}", options.scene.name));
-        let scene = with_physics(&options.scene, p);
         game.push(
-            game_row(device, label.clone(), &scene, seed, &sizes)
+            game_row(device, (label.clone(), &scene), seed, &sizes, true)
                 .with_context(|| format!("{} under {label}", options.scene.name))?,
         );
         bar.inc(1);
     }
+    mark_game_pareto(&mut game);
     let mut feature_rows = Vec::new();
     for (name, scene) in features {
         bar.set_message(format!("{}: {name}", options.scene.name));
         feature_rows.push(
-            game_row(device, name.clone(), &scene, seed, &sizes)
+            game_row(device, (name.clone(), &scene), seed, &sizes, false)
                 .with_context(|| format!("{} with {name}", options.scene.name))?,
         );
         bar.inc(1);
@@ -621,6 +741,9 @@ pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<Tradeof
     write_atomically(&outputs.markdown(), summary.to_markdown().as_bytes())?;
     plot::pareto(&outputs.png, &summary)
         .with_context(|| format!("plotting {}", outputs.png.display()))?;
+    let game_png = outputs.game_png();
+    plot::game_pareto(&game_png, &summary)
+        .with_context(|| format!("plotting {}", game_png.display()))?;
     Ok(summary)
 }
 
@@ -664,9 +787,42 @@ impl TradeoffSummary {
                 r.case, r.measure, r.integrator, r.dt, r.error
             );
         }
+        out += &format!(
+            "\n### Game: `{}` under each choice\n\nAfter {} steps of play: steps per second, \
+             then the contacts of {} steps audited against an exact continuous-time check of \
+             the bodies' paths (f64, every pair): contacts found (each from both sides), how \
+             many passed between two step ends, and missed per thousand, in all and by class; \
+             penetration at a step's end, mean and deepest; body-steps over a limit. ✓: on \
+             the Pareto frontier of missed against simulated seconds per second. –: no such \
+             contact in the audit.\n\n| choice | steps/s | simulated s/s | contacts | \
+             between ends | missed ‰ | shot→enemy ‰ | enemy→ship ‰ | body→wall ‰ | depth \
+             mean / max | over a limit | frontier |\n|---|---:|---:|---:|---:|---:|---:|---:|\
+             ---:|---:|---:|:---:|\n",
+            self.scene, s.game_warmup, s.audit_steps
+        );
+        let per_thousand = |v: Option<f64>| v.map_or("–".to_owned(), |v| format!("{v:.1}"));
+        for r in &self.game {
+            let Some(a) = &r.accuracy else { continue };
+            out += &format!(
+                "| {} | {:.0} | {:.2} | {} | {} | {} | {} | {} | {} | {} / {:.2} | {} | {} |\n",
+                r.choice,
+                r.steps_per_s,
+                r.sim_seconds_per_s,
+                a.expected,
+                a.tunnelling,
+                per_thousand(a.missed),
+                per_thousand(a.shot_enemy),
+                per_thousand(a.enemy_ship),
+                per_thousand(a.body_wall),
+                a.depth_mean.map_or("–".to_owned(), |d| format!("{d:.2}")),
+                a.depth_max,
+                a.limit_violations,
+                if r.pareto { "✓" } else { "" }
+            );
+        }
         for (title, rows) in [
             (
-                format!("Game: `{}` under each choice", self.scene),
+                format!("Game: `{}` under each choice, stage by stage", self.scene),
                 &self.game,
             ),
             (
