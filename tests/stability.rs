@@ -1,7 +1,8 @@
 //! Stability at the extremes: time steps from 10⁻⁵ s to the largest allowed, bodies fast
 //! enough to cross a thin wall or several cells in a step, every body in one cell, bodies on
 //! cell borders and world edges, worlds where f32 spacing matters, bodies on one spot,
-//! extreme masses, kinds at capacity, random worlds under random physics choices, and an
+//! extreme masses, kinds at capacity, random worlds under random physics choices, swept
+//! contacts at the extremes (counted against an exact continuous-time audit), and an
 //! opt-in hour of `paper` (`GPUWARS_SOAK=1`). `docs/stability.md` says what each
 //! test checks.
 //!
@@ -24,8 +25,10 @@ use common::sim::{circle, kind, rect, world};
 use glam::{DVec2, Vec2};
 use gpuwars::Device;
 use gpuwars::backend::Schedule;
+use gpuwars::game::accuracy::step_end;
 use gpuwars::game::{Game, Scene};
 use gpuwars::pipeline::Simulation;
+use gpuwars::sim::audit::{Accuracy, Roles};
 use gpuwars::sim::layout::{Layout, space};
 use gpuwars::sim::spec::{MAX_MASS, MAX_SIDE, MIN_MASS};
 use gpuwars::sim::{Boundary, Field, Integrator, KindSpec, Shape, Snapshot, Sweep, WorldSpec};
@@ -459,6 +462,227 @@ fn bodies_crossing_many_cells_a_step_lose_no_contact(device: &Device) {
             assert!(found > 0, "{boundary:?}: no contact to find");
             sim.state_hash().unwrap()
         });
+    }
+}
+
+/// The kinds of the swept scenarios: shots (radius 2, swept, at most `shot_speed`) and
+/// enemies (radius 5) that collide with them and with walls (rectangles of half extents 1
+/// by 50, immovable), in a clamped 2000 × 2000 world with time step `dt`, paths traced.
+fn swept_world(shot_speed: f32, dt: f32) -> WorldSpec {
+    let mut shot = kind("shot", circle(2.0), 64, &["enemy", "wall"]);
+    shot.max_speed = shot_speed;
+    shot.sweep = Sweep::On;
+    shot.restitution = 1.0;
+    let mut enemy = kind("enemy", circle(5.0), 64, &["wall"]);
+    enemy.max_speed = 100.0;
+    let mut wall = kind("wall", rect(1.0, 50.0), 8, &[]);
+    wall.mass = f32::INFINITY;
+    let mut spec = world(
+        Vec2::splat(2000.0),
+        Boundary::Clamp,
+        vec![shot, enemy, wall],
+    );
+    spec.dt = dt;
+    spec
+}
+
+/// `spec`'s world with `bodies` placed (kind, position, velocity, each kind's slots in
+/// order), stepped `steps` times, each step's contacts audited against the exact check of
+/// `gpuwars::sim::audit` (independent of the kernels); the audit and the final digest.
+fn audited(
+    device: &Device,
+    spec: &WorldSpec,
+    bodies: &[(usize, Vec2, Vec2)],
+    steps: u32,
+) -> (Accuracy, (u64, u64)) {
+    let mut sim = Simulation::new(device, spec, 1).unwrap();
+    let mut next_slot = sim
+        .layout()
+        .ranges
+        .iter()
+        .map(|r| r.start)
+        .collect::<Vec<_>>();
+    let placed: Vec<(u32, Vec2, Vec2)> = bodies
+        .iter()
+        .map(|&(k, pos, vel)| {
+            next_slot[k] += 1;
+            (next_slot[k] - 1, pos, vel)
+        })
+        .collect();
+    sim.place(&placed).unwrap();
+    // Kind 0 shoots at kind 1; kind 2 is the walls (where there is one).
+    let roles = Roles {
+        ship: None,
+        shot: Some(0),
+        enemies: 1 << 1,
+        walls: 1 << 2,
+    };
+    let mut accuracy = Accuracy::default();
+    let mut this = sim.snapshot().unwrap();
+    for _ in 0..steps {
+        let renumbers = sim.renumbers_next();
+        sim.step().unwrap();
+        let next = sim.snapshot().unwrap();
+        assert_invariants(spec, &next);
+        accuracy.add_step(
+            spec,
+            &roles,
+            &step_end(&this, false),
+            &step_end(&next, renumbers),
+        );
+        this = next;
+    }
+    (accuracy, digest(&this))
+}
+
+/// Every contact the exact check is sure of was counted, and nothing was counted that it
+/// is sure did not happen: the kernels' count is the audit's, give or take the grazing
+/// pairs f32 cannot decide.
+fn assert_exact(case: &str, a: &Accuracy) {
+    assert_eq!(a.all.missed, 0, "{case}: missed contacts ({:?})", a.all);
+    assert!(
+        a.all.extra <= a.uncertain,
+        "{case}: counted contacts that did not happen ({:?}, {} uncertain)",
+        a.all,
+        a.uncertain
+    );
+}
+
+/// Swept shots at the extremes, each case's contacts counted exactly as the audit finds
+/// them (and its expected count worked out here where the geometry is plain):
+/// - grazing passes: shots at 3,000 units/s (50 a step) crossing enemies at lateral offsets
+///   on both sides of the contact distance 7 (6.9, 6.99, 6.999; 7; 7.001, 7.01, 7.1): the
+///   first three are contacts (sure ones), 7 touches without overlapping, the rest miss;
+/// - a shot exactly on a wall's face, at rest and sliding along it: touching, no contact;
+///   half a unit into it: a contact, which pushes it out to touching;
+/// - zero relative speed: a shot and an enemy moving together at 90 units/s, overlapping
+///   (a contact every step) or 7.5 apart (none);
+/// - a shot born inside an enemy: a contact at once;
+/// - the largest time step (1 s), shots at 500 units a step through enemies;
+/// - shots at exactly their speed limit.
+///
+/// The same digests everywhere.
+fn swept_contacts_at_the_extremes_are_counted_exactly(device: &Device) {
+    let fast = Vec2::new(3000.0, 0.0);
+    same_everywhere(device, |device| {
+        let mut digests = Vec::new();
+        // Grazing passes: seven lanes 100 apart, each a shot starting 25 left of its enemy.
+        let spec = swept_world(3000.0, 1.0 / 60.0);
+        let offsets = [6.9f32, 6.99, 6.999, 7.0, 7.001, 7.01, 7.1];
+        let mut bodies = Vec::new();
+        for (i, &dy) in offsets.iter().enumerate() {
+            let y = 200.0 + 100.0 * i as f32;
+            bodies.push((0, Vec2::new(475.0, y + dy), fast));
+            bodies.push((1, Vec2::new(500.0, y), Vec2::ZERO));
+        }
+        let (a, d) = audited(device, &spec, &bodies, 3);
+        assert_exact("grazing", &a);
+        assert_eq!(a.classes["shot→enemy"].expected, 3, "grazing: {a:?}");
+        assert_eq!(a.classes["shot→enemy"].tunnelling, 3, "grazing: {a:?}");
+        digests.push(d);
+
+        // On a wall's face (the wall at x = 1000, faces at 999 and 1001; a shot of radius
+        // 2 touches the face from 997): at rest, sliding along, and half a unit in.
+        let spec = swept_world(100.0, 1.0 / 60.0);
+        let bodies = [
+            (2, Vec2::new(1000.0, 1000.0), Vec2::ZERO),
+            (0, Vec2::new(997.0, 980.0), Vec2::ZERO),
+            (0, Vec2::new(997.0, 1000.0), Vec2::new(0.0, 60.0)),
+            (0, Vec2::new(1002.5, 1010.0), Vec2::ZERO),
+        ];
+        let (a, d) = audited(device, &spec, &bodies, 4);
+        assert_exact("on a wall", &a);
+        assert!(a.classes["body→wall"].expected >= 1, "on a wall: {a:?}");
+        digests.push(d);
+
+        // Zero relative speed.
+        let with = Vec2::new(90.0, 0.0);
+        let bodies = [
+            (0, Vec2::new(100.0, 100.0), with),
+            (1, Vec2::new(106.0, 100.0), with),
+            (0, Vec2::new(100.0, 300.0), with),
+            (1, Vec2::new(107.5, 300.0), with),
+        ];
+        let (a, d) = audited(device, &spec, &bodies, 4);
+        assert_exact("moving together", &a);
+        assert!(
+            a.classes["shot→enemy"].expected >= 1,
+            "moving together: {a:?}"
+        );
+        assert_eq!(
+            a.classes["shot→enemy"].tunnelling, 0,
+            "moving together: {a:?}"
+        );
+        digests.push(d);
+
+        // Born inside an enemy.
+        let bodies = [
+            (1, Vec2::new(700.0, 700.0), Vec2::ZERO),
+            (0, Vec2::new(701.0, 700.0), Vec2::new(100.0, 0.0)),
+        ];
+        let (a, d) = audited(device, &spec, &bodies, 2);
+        assert_exact("born inside", &a);
+        assert!(a.classes["shot→enemy"].expected >= 1, "born inside: {a:?}");
+        digests.push(d);
+
+        // The largest time step, and shots at their speed limit.
+        for (dt, speed) in [(1.0, 500.0), (1.0 / 60.0, 3000.0)] {
+            let spec = swept_world(speed, dt);
+            let bodies: Vec<_> = (0..20)
+                .flat_map(|i| {
+                    let y = 100.0 + 90.0 * i as f32;
+                    let lane = (i % 7) as f32;
+                    [
+                        (0, Vec2::new(300.0, y + lane), Vec2::new(speed, 0.0)),
+                        (
+                            1,
+                            Vec2::new(300.0 + speed * dt * 0.5 + 3.0 * lane, y),
+                            Vec2::ZERO,
+                        ),
+                    ]
+                })
+                .collect();
+            let (a, d) = audited(device, &spec, &bodies, 3);
+            assert_exact(&format!("dt {dt}, {speed} units/s"), &a);
+            assert!(a.classes["shot→enemy"].tunnelling >= 10, "dt {dt}: {a:?}");
+            digests.push(d);
+        }
+        digests
+    });
+}
+
+/// A million still bodies (radius 1, on a grid 3 apart) crossed by 256 swept shots at
+/// 3,000 units/s in a wrapping world: every contact the exact check finds is counted, on
+/// the CPU and the GPU alike.
+fn a_million_bodies_under_swept_shots_are_counted_exactly(device: &Device) {
+    let side = 1024u32;
+    let mut shot = kind("shot", circle(1.0), 256, &["dust"]);
+    shot.max_speed = 3000.0;
+    shot.sweep = Sweep::On;
+    let dust = kind("dust", circle(1.0), side * side, &[]);
+    let mut spec = world(
+        Vec2::splat(3.0 * side as f32),
+        Boundary::Wrap,
+        vec![shot, dust],
+    );
+    // Bodies stay in their slots, so that every step is audited.
+    spec.physics.renumber_every = Some(0);
+    let mut bodies: Vec<(usize, Vec2, Vec2)> = (0..side * side)
+        .map(|i| {
+            let (x, y) = ((i % side) as f32, (i / side) as f32);
+            (1, Vec2::new(3.0 * x + 1.5, 3.0 * y + 1.5), Vec2::ZERO)
+        })
+        .collect();
+    for i in 0..256 {
+        let y = 12.0 * i as f32 + 1.5 + 0.37 * (i % 5) as f32;
+        bodies.push((0, Vec2::new(5.0, y), Vec2::new(3000.0, 40.0)));
+    }
+    let run = |device: &Device| audited(device, &spec, &bodies, 2);
+    let (a, d) = run(device);
+    assert_exact("a million bodies", &a);
+    assert!(a.all.tunnelling > 1000, "{:?}", a.all);
+    if device.cpu_threads().is_none() {
+        assert_eq!(run(common::cpu()), (a, d), "the GPU's counts are the CPU's");
     }
 }
 
@@ -1145,6 +1369,8 @@ on_both_backends!(
     every_time_step_keeps_a_colliding_world_finite_inside_and_bounded,
     tunnelling_through_a_thin_wall_stops_at_the_predicted_substeps,
     a_swept_ball_never_tunnels_through_a_thin_wall,
+    swept_contacts_at_the_extremes_are_counted_exactly,
+    a_million_bodies_under_swept_shots_are_counted_exactly,
     bodies_crossing_many_cells_a_step_lose_no_contact,
     a_crowded_cell_is_bounded_by_the_cap,
     contacts_on_cell_borders_and_world_edges_match_brute_force,
