@@ -594,10 +594,8 @@ impl WorldSpec {
                     _ => (
                         misses > SWEEP_ABOVE,
                         format!(
-                            "auto: closes {} units a step against a contact of {}, \
-                             {:.2} per thousand passes missed at step ends",
-                            number(travel),
-                            number(reach),
+                            "auto: closes {travel:.2} units a step against a contact of \
+                             {reach:.2}, {:.2} per thousand passes missed at step ends",
                             misses * 1000.0
                         ),
                     ),
