@@ -60,15 +60,27 @@ fn a_scene_launches_only_the_stages_it_uses() {
     let thinks = |counts: &std::collections::BTreeMap<&str, u64>| {
         count(counts, registry::THINK.name) + count(counts, registry::THINK_IN_TEAMS.name)
     };
-    // Kamikazes only, circles only, one wave at the start (then one every 5 s).
+    // Kamikazes only, circles only, one wave at the start (then one every 5 s); the shots
+    // are swept.
     let k = launches(&scene("kamikaze"), 10, true);
     assert_eq!(thinks(&k), 10);
-    assert_eq!(count(&k, registry::COLLIDE_CIRCLES.name), 10);
-    assert_eq!(
-        count(&k, registry::COLLIDE.name),
-        0,
-        "no rectangles, no rectangle tests"
-    );
+    assert_eq!(count(&k, registry::COLLIDE_CIRCLES_SWEPT.name), 10);
+    for kernel in [registry::COLLIDE, registry::COLLIDE_SWEPT] {
+        assert_eq!(
+            count(&k, kernel.name),
+            0,
+            "no rectangles, no rectangle tests"
+        );
+    }
+    // Nothing swept: the narrow phase without swept code, and no more launches.
+    let mut unswept = scene("kamikaze");
+    for kind in &mut unswept.world.kinds {
+        kind.sweep = gpuwars::sim::Sweep::Off;
+    }
+    let u = launches(&unswept, 10, true);
+    assert_eq!(count(&u, registry::COLLIDE_CIRCLES.name), 10);
+    assert_eq!(count(&u, registry::COLLIDE_CIRCLES_SWEPT.name), 0);
+    assert_eq!(u.values().sum::<u64>(), k.values().sum::<u64>());
     // Every step launches the same sequence: births and the autopilot decide on the device
     // whether there is anything to do.
     for kernel in [
@@ -86,8 +98,8 @@ fn a_scene_launches_only_the_stages_it_uses() {
     assert_eq!(still, k);
     // Rectangles: the full narrow phase.
     let a = launches(&scene("arena"), 4, true);
-    assert_eq!(count(&a, registry::COLLIDE.name), 4);
-    assert_eq!(count(&a, registry::COLLIDE_CIRCLES.name), 0);
+    assert_eq!(count(&a, registry::COLLIDE_SWEPT.name), 4);
+    assert_eq!(count(&a, registry::COLLIDE_CIRCLES_SWEPT.name), 0);
     // The paper's seven kinds: their machines in one launch per step.
     let p = launches(&scene("paper"), 2, true);
     assert_eq!(thinks(&p), 2);

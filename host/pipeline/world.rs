@@ -33,6 +33,8 @@ use crate::{Device, Error};
 pub(crate) struct Config {
     /// The narrow phase's kernel, if anything collides.
     pub collide: Option<Kernel<CollideArgs>>,
+    /// Whether a pair of kinds is swept, so that the narrow phase runs its swept kernels.
+    pub swept: bool,
     /// Whether the grid is built (something collides, looks around, or the autopilot may fly).
     pub grid: bool,
     /// The narrow phase's threads per body of each kind.
@@ -240,13 +242,17 @@ impl World {
         let moving = moves_in_one_launch(spec, &layout, game.is_some());
         let narrow_teams = teams::narrow(lanes, resident, spec, &layout, &space);
         let one_launch = moving && think_teams.is_some_and(|teams| !teams.single());
+        // Only worlds with a swept pair run the swept narrow phase.
+        let swept = spec.sweeps().iter().any(|p| p.swept);
         let config = Config {
-            collide: collides.then_some(if spec.has_rects() {
-                registry::COLLIDE
-            } else {
-                // No rectangles: the narrow phase without the rectangle tests.
-                registry::COLLIDE_CIRCLES
+            // No rectangles: the narrow phase without the rectangle tests.
+            collide: collides.then_some(match (spec.has_rects(), swept) {
+                (true, false) => registry::COLLIDE,
+                (false, false) => registry::COLLIDE_CIRCLES,
+                (true, true) => registry::COLLIDE_SWEPT,
+                (false, true) => registry::COLLIDE_CIRCLES_SWEPT,
             }),
+            swept,
             // A game's autopilot looks through the grid whenever it flies.
             grid: builds_grid(spec, game.is_some()),
             narrow_teams,

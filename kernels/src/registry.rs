@@ -102,6 +102,10 @@ kernels! {
     COLLIDE = collide(narrow::CollideArgs) => narrow::collide;
     /// The narrow phase for worlds of circles only (no rectangle tests).
     COLLIDE_CIRCLES = collide_circles(narrow::CollideArgs) => narrow::collide_circles;
+    /// The narrow phase for worlds with swept pairs (contacts found over each motion).
+    COLLIDE_SWEPT = collide_swept(narrow::CollideArgs) => narrow::collide_swept;
+    /// The narrow phase for worlds of circles only with swept pairs.
+    COLLIDE_CIRCLES_SWEPT = collide_circles_swept(narrow::CollideArgs) => narrow::collide_circles_swept;
     /// Euler integration, the boundary rule, and deaths.
     INTEGRATE = integrate(integrate::IntegrateArgs) => integrate::integrate;
     /// Flags the free usable slots (first step of rebuilding the free lists).
@@ -139,6 +143,9 @@ kernels! {
     /// launch, with teams of threads (worlds small enough for teams). It finds its slot
     /// before it waits for the launch before it.
     COLLIDE_THINK_INTEGRATE = collide_think_integrate(ai::BodyStepArgs) => ai::collide_think_integrate, waits;
+    /// [`COLLIDE_THINK_INTEGRATE`] for worlds with swept pairs. It finds its slot before it
+    /// waits for the launch before it.
+    COLLIDE_THINK_INTEGRATE_SWEPT = collide_think_integrate_swept(ai::BodyStepArgs) => ai::collide_think_integrate_swept, waits;
     /// Sets up every slot's generator from its seed and the parameter table.
     SEED_STREAMS = seed_streams(streams::SeedArgs) => streams::seed_streams;
     /// Points the camera: the frame's view from the ship's position (one thread).

@@ -49,7 +49,10 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         // The narrow phase's bytes, the machines' and the integrator's.
         unsafe {
             threads(
-                registry::COLLIDE_THINK_INTEGRATE,
+                match world.config.swept {
+                    true => registry::COLLIDE_THINK_INTEGRATE_SWEPT,
+                    false => registry::COLLIDE_THINK_INTEGRATE,
+                },
                 threads_needed,
                 args,
                 b,

@@ -481,6 +481,19 @@ kernel_args! {
 /// built), never the places and velocities that their own teams change meanwhile.
 #[inline(always)]
 pub fn collide_think_integrate(t: Thread, args: &BodyStepArgs) {
+    body_step::<false>(t, args);
+}
+
+/// [`collide_think_integrate`] for worlds with swept pairs (see
+/// [`crate::sim::KindInfo::sweeps_with`]).
+#[inline(always)]
+pub fn collide_think_integrate_swept(t: Thread, args: &BodyStepArgs) {
+    body_step::<true>(t, args);
+}
+
+/// [`collide_think_integrate`], its narrow phase with swept pairs if `SWEPT`.
+#[inline(always)]
+fn body_step<const SWEPT: bool>(t: Thread, args: &BodyStepArgs) {
     let think = &args.think;
     // The thread's slot and its kind's tables are the world's: read while the grid's last
     // launch ends.
@@ -502,7 +515,7 @@ pub fn collide_think_integrate(t: Thread, args: &BodyStepArgs) {
         substep: 0,
         reserved: 0,
     };
-    collide_slot::<false, true>(&collide, slot, team, |_| known.kind.info);
+    collide_slot::<false, true, SWEPT>(&collide, slot, team, |_| known.kind.info);
     think_slot::<true, true>(think, slot, team, Some(known));
     if team.leads() && slot < think.bodies.slots() {
         let integrate = IntegrateArgs {

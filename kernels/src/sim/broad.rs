@@ -212,6 +212,12 @@ pub fn order_cells(t: Thread, args: &OrderArgs) {
     } else {
         Vec2::ZERO
     });
+    let keeps_prev = !args.entry_prev.is_empty();
+    let prev = asked(if keeps_prev {
+        args.prev.get(slot)
+    } else {
+        Vec2::ZERO
+    });
     let (first, end) = (args.start.get(key), args.start.get(key + 1));
     if args.bounded != 0 {
         if end - first > RUN {
@@ -236,8 +242,8 @@ pub fn order_cells(t: Thread, args: &OrderArgs) {
     if keeps_vel {
         args.entry_vel.set(first + rank, vel);
     }
-    if !args.entry_prev.is_empty() {
-        args.entry_prev.set(first + rank, args.prev.get(slot));
+    if keeps_prev {
+        args.entry_prev.set(first + rank, prev);
     }
 }
 

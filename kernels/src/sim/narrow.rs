@@ -126,13 +126,26 @@ pub fn respond(
 /// only. Any mix of circles and rectangles.
 #[inline(always)]
 pub fn collide(t: Thread, args: &CollideArgs) {
-    collide_bounds::<true>(t, args);
+    collide_bounds::<true, false>(t, args);
 }
 
 /// [`collide`] for worlds without rectangles: the rectangle tests are compiled out.
 #[inline(always)]
 pub fn collide_circles(t: Thread, args: &CollideArgs) {
-    collide_bounds::<false>(t, args);
+    collide_bounds::<false, false>(t, args);
+}
+
+/// [`collide`] for worlds with swept pairs (see [`KindInfo::sweeps_with`]): a world without
+/// any runs the kernels above, which have no swept code at all.
+#[inline(always)]
+pub fn collide_swept(t: Thread, args: &CollideArgs) {
+    collide_bounds::<true, true>(t, args);
+}
+
+/// [`collide_circles`] for worlds with swept pairs.
+#[inline(always)]
+pub fn collide_circles_swept(t: Thread, args: &CollideArgs) {
+    collide_bounds::<false, true>(t, args);
 }
 
 /// The bound of a kind; with `RECTS` false every kind is taken as its circle, which is exact
@@ -146,9 +159,11 @@ fn bound<const RECTS: bool>(info: &KindInfo) -> Bound {
     }
 }
 
-/// One contact's share of a body's response, as the lane that found it hands it on.
+/// One contact's share of a body's response, as the lane that found it hands it on; the
+/// swept contact's time and partner are handed on only where `SWEPT` (elsewhere they are
+/// constants, and the lanes exchange no more than before swept contacts existed).
 #[derive(Clone, Copy, Default)]
-struct Touch {
+struct Touch<const SWEPT: bool> {
     push: Vec2,
     kick: Vec2,
     damage: i32,
@@ -159,38 +174,45 @@ struct Touch {
     other: u32,
 }
 
-impl Touch {
+impl<const SWEPT: bool> Touch<SWEPT> {
     /// Whether this contact began during the motion rather than at its end.
     #[inline(always)]
     fn swept(&self) -> bool {
-        self.time < 1.0
+        SWEPT && self.time < 1.0
     }
 
     /// Whether this swept contact comes before `than` in the fixed order: time, then slot.
     #[inline(always)]
-    fn before(&self, than: &Touch) -> bool {
+    fn before(&self, than: &Self) -> bool {
         self.time < than.time || (self.time == than.time && self.other < than.other)
     }
 }
 
-impl Handed for Touch {
+impl<const SWEPT: bool> Handed for Touch<SWEPT> {
     #[cfg(target_arch = "nvptx64")]
     #[inline(always)]
     fn shuffle_from(self, source: u32, members: u32) -> Self {
+        let (time, other) = match SWEPT {
+            true => (
+                self.time.shuffle_from(source, members),
+                self.other.shuffle_from(source, members),
+            ),
+            false => (self.time, self.other),
+        };
         Touch {
             push: self.push.shuffle_from(source, members),
             kick: self.kick.shuffle_from(source, members),
             damage: self.damage.shuffle_from(source, members),
-            time: self.time.shuffle_from(source, members),
-            other: self.other.shuffle_from(source, members),
+            time,
+            other,
         }
     }
 }
 
 #[inline(always)]
-fn collide_bounds<const RECTS: bool>(t: Thread, args: &CollideArgs) {
+fn collide_bounds<const RECTS: bool, const SWEPT: bool>(t: Thread, args: &CollideArgs) {
     if let Some((slot, team)) = args.teams.member(t, &args.warps) {
-        collide_slot::<RECTS, false>(args, slot, team, |kind| args.kinds.get(kind));
+        collide_slot::<RECTS, false, SWEPT>(args, slot, team, |kind| args.kinds.get(kind));
     }
 }
 
@@ -198,9 +220,10 @@ fn collide_bounds<const RECTS: bool>(t: Thread, args: &CollideArgs) {
 /// the team sums the slot's responses to
 /// the bodies it overlaps, and its first lane writes them and the slot's energy loss (with
 /// `RECTS` false, every kind taken as its circle; with `MOVING`, the others' velocities
-/// read from the grid's entries: see [`CellIndex::vel_at`]).
+/// read from the grid's entries: see [`CellIndex::vel_at`]; with `SWEPT`, the swept pairs'
+/// contacts found over the last motion, where the world traces paths).
 #[inline(always)]
-pub fn collide_slot<const RECTS: bool, const MOVING: bool>(
+pub fn collide_slot<const RECTS: bool, const MOVING: bool, const SWEPT: bool>(
     args: &CollideArgs,
     slot: u32,
     team: Team,
@@ -219,7 +242,17 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool>(
         bodies.alive.get(slot),
         bodies.kind.get(slot),
     ]);
-    let [pos, vel] = asked([bodies.pos.get(slot), bodies.vel.get(slot)]);
+    // Where the body's last (sub)step moved it from, in worlds that trace paths.
+    let traced = SWEPT && !args.grid.prev.is_empty();
+    let [pos, vel, prev] = asked([
+        bodies.pos.get(slot),
+        bodies.vel.get(slot),
+        if traced {
+            bodies.prev.get(slot)
+        } else {
+            Vec2::ZERO
+        },
+    ]);
     let mass = asked(bodies.mass.get(slot));
     if frozen != 0 {
         return;
@@ -231,13 +264,10 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool>(
     let mut damage = 0i32;
     // The earliest swept contact, in the fixed order (time, then slot): the body goes back
     // to where it was then, and only that contact kicks it.
-    let mut first = Touch {
+    let mut first = Touch::<SWEPT> {
         time: 1.0,
         ..Touch::default()
     };
-    // Where the body's last (sub)step moved it from, in worlds that trace paths.
-    let traced = !args.grid.prev.is_empty();
-    let prev = if traced { bodies.prev.get(slot) } else { pos };
     if alive != 0 {
         let info = info_of(kind);
         let inv = inverse_mass(mass);
@@ -255,6 +285,12 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool>(
                 if other == slot {
                     return None;
                 }
+                let swept = traced && info.sweeps(other_kind);
+                // Asked for first, so that its wait overlaps the test at the motion's end.
+                let other_prev = asked(match swept {
+                    true => args.grid.prev.get(entry),
+                    false => Vec2::ZERO,
+                });
                 let other_info = args.kinds.get(other_kind);
                 let (a, b) = (bound::<RECTS>(&info), bound::<RECTS>(&other_info));
                 let d = args.space.offset(pos, at);
@@ -264,9 +300,9 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool>(
                 // counted), the moment it began instead, whether or not the pair still
                 // overlaps at the end (it may have passed through, or past the middle).
                 let ended = contact(a, b, d, tie);
-                let began = match traced && info.sweeps(other_kind) {
+                let began = match swept {
                     true => {
-                        let d0 = args.space.offset(prev, args.grid.prev.get(entry));
+                        let d0 = args.space.offset(prev, other_prev);
                         let d0 = args.space.image_near(d0, d);
                         match contact(a, b, d0, tie) {
                             Some(_) => None,
@@ -287,7 +323,7 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool>(
                     (vel, args.grid.vel_at::<MOVING>(entry, other, &bodies.vel)),
                     info.restitution.max(other_info.restitution),
                 );
-                Some(Touch {
+                Some(Touch::<SWEPT> {
                     push: r.push,
                     kick: r.kick,
                     damage: other_info.damage,
