@@ -140,10 +140,16 @@ fn build_ptx(root: &Path, out_dir: &Path, module: &Module) -> String {
 /// gathers wait on memory at millions of bodies, hides more of that wait with more warps:
 /// 80 → 56 registers (6 → 9 blocks a multiprocessor) took it from 197 to 168 µs a step at
 /// 1M enemies and from 2.60 to 2.12 ms at 16.76M on an H100 (64 gave 170 and 2.18), the
-/// same at 8K. `collide_think_integrate` runs `think_in_teams`'s machines, capped alike.
+/// same at 8K. `collide_think_integrate` runs `think_in_teams`'s machines, capped alike, and
+/// so does its swept twin, which uncapped took 160 registers (one block a multiprocessor:
+/// `paper`'s step 68 µs instead of 62 on an H200). The swept narrow phases took 96 and 142
+/// registers against their plain twins' 76 and 84.
 const REGISTER_CAPS: &[(&str, u32)] = &[
     ("think_in_teams", 80),
     ("collide_think_integrate", 80),
+    ("collide_think_integrate_swept", 80),
+    ("collide_circles_swept", 80),
+    ("collide_swept", 96),
     ("think", 56),
 ];
 

@@ -99,7 +99,7 @@ pub fn kind_table(spec: &WorldSpec) -> Vec<KindInfo> {
                 controlled: u32::from(kind.controlled),
                 contact_reach: partner.map_or(0.0, |partner| reach + partner),
                 sweeps_with: sweeps[i],
-                reserved: 0,
+                travel: travel[i],
             }
         })
         .collect()

@@ -327,9 +327,10 @@ pub enum Sweep {
 /// rule sweeps it (see [`miss_fraction`]).
 pub const SWEEP_ABOVE: f64 = 1.0e-3;
 
-/// A swept pair is followed up to this many times the two kinds' top speeds: kicks and
-/// pushes can carry a body past its speed for a step.
-pub const SWEEP_MARGIN: f32 = 2.0;
+/// A swept pair is followed up to this many times the two kinds' top speeds: a kick can
+/// carry a body a little past its speed for a step. Each body's own travel is followed as
+/// far as it went; the margin bounds its partners', and the reach of its query.
+pub const SWEEP_MARGIN: f32 = 1.25;
 
 /// The fraction of straight passes through a disk of radius `reach` (at a uniformly random
 /// offset from its centre) that a path sampled every `travel` units, at a random phase,

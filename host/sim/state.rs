@@ -84,7 +84,7 @@ pub fn bytes_needed(
         slots,
         buckets,
         per_slot(slots, moving),
-        traced,
+        per_slot(slots, moving && traces),
     ));
     let tiles = FreeMarks::tiles_for(layout.slots) as usize;
     made(FreeMarks::<Unmade>::build(s, slots, tiles));
@@ -182,7 +182,7 @@ pub struct Extras {
     pub renumbers: bool,
     /// The grid entries' velocities, where the bodies move in the launch that queries it.
     pub moving: bool,
-    /// The bodies' last paths, and the grid entries' copies of them.
+    /// The bodies' last paths (and the grid entries' copies of them, where `moving`).
     pub traces: bool,
 }
 
@@ -211,7 +211,7 @@ impl Scratch {
                 slots,
                 buckets,
                 per_slot(slots, moving),
-                traced,
+                per_slot(slots, moving && traces),
             )?,
             grid_scan: PrefixSum::new(device, buckets)?,
             marks: FreeMarks::build(&mut device.zeroed(), slots, tiles)?,

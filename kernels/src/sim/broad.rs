@@ -51,8 +51,9 @@ device_data! {
         /// Each entry's velocity, in worlds whose bodies move in the launch that queries
         /// the grid (`moving` = slots; else none): see [`CellIndex::vel`].
         vel: [Vec2; moving],
-        /// Each entry's last path's start ([`Bodies::prev`]), in worlds that trace paths
-        /// (`traced` = slots; else none): see [`CellIndex::prev`].
+        /// Each entry's last path's start ([`Bodies::prev`]), in worlds that trace paths and
+        /// whose bodies move in the launch that queries the grid (`traced` = slots; else
+        /// none): see [`CellIndex::prev_at`].
         prev: [Vec2; traced],
     }
 }
@@ -358,8 +359,8 @@ pub struct CellIndex {
     /// queries); empty elsewhere, where the bodies' own are read (see [`CellIndex::vel_at`]).
     pub vel: DevSlice<Vec2>,
     /// Where each entry's body was when its last (sub)step moved it ([`Bodies::prev`]), in
-    /// worlds that trace paths; empty elsewhere. Read from the grid rather than the bodies,
-    /// since the launch that queries may move them.
+    /// worlds that trace paths and whose bodies move in the launch that queries the grid;
+    /// empty elsewhere, where the bodies' own are read (see [`CellIndex::prev_at`]).
     pub prev: DevSlice<Vec2>,
     /// First entry of each bucket in `slots`, and one more element: the number of entries.
     /// Bucket `b` is `slots[start[b] .. start[b + 1]]`.
@@ -399,6 +400,23 @@ impl CellIndex {
             self.vel.get(entry)
         } else {
             vel.get(slot)
+        }
+    }
+
+    /// Where the body at entry `entry` (slot `slot`) was when its last (sub)step moved it:
+    /// with `MOVING`, the grid's copy, else the body's own, `prev[slot]`, which has not
+    /// changed since the grid was built.
+    #[inline(always)]
+    pub fn prev_at<const MOVING: bool>(
+        &self,
+        entry: u32,
+        slot: u32,
+        prev: &DevSlice<Vec2>,
+    ) -> Vec2 {
+        if MOVING {
+            self.prev.get(entry)
+        } else {
+            prev.get(slot)
         }
     }
 

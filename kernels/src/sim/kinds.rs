@@ -57,8 +57,11 @@ pub struct KindInfo {
     /// that neither can pass through the other between two steps (symmetric; only in worlds
     /// that trace paths, see [`crate::sim::Bodies::prev`]).
     pub sweeps_with: u32,
-    /// Keeps the struct free of implicit padding.
-    pub reserved: u32,
+    /// The farthest a swept test follows a body of this kind in a (sub)step: a little more
+    /// than its top speed times the (sub)step (0 where the speed is unknown). A swept pair
+    /// farther apart at the motion's end than their circles and both travels cannot have
+    /// met.
+    pub travel: f32,
 }
 
 impl KindInfo {
