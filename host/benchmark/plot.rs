@@ -310,7 +310,7 @@ const STACKED: i32 = 4;
 
 /// Where to write each of `labels` (its top-left corner, in pixels) beside its point of
 /// `points`, inside `bounds` (left, top, right, bottom): of the places around the point
-/// (beside it, in rows stacked up to [`STACKED`] deep, or above or below it), nearest
+/// (beside it, in rows stacked a few deep, or above or below it), nearest
 /// first, the first that overlaps no label placed before and no point, else the one that
 /// overlaps least. Widths are estimated from the character count (a proportional
 /// font's average), so the check is conservative, not exact.

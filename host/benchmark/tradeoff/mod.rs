@@ -561,9 +561,14 @@ fn feature_choices(scene: &Scene) -> Vec<(String, Scene)> {
         out.push(("no rectangles (circles of the same reach)".into(), s));
     }
     let mut s = scene.clone();
-    // One shot in a thousand seconds: none in the run.
+    // One shot in a thousand seconds: none in the run. A ship that cannot shoot its way
+    // out would be worn down before it is measured: it gets all the energy it can hold, so
+    // that the enemies' hits barely move its meter.
     s.game.ship.fire_rate = 1.0e-3;
-    out.push(("no shots".into(), s));
+    if let Some(ship) = scene.world.kind_index(&scene.game.ship.kind) {
+        s.world.kinds[ship].energy = i32::MAX / 2;
+    }
+    out.push(("no shots (and a ship that does not wear down)".into(), s));
     let mut s = scene.clone();
     s.world.physics.vision_scale = 1.0e-3;
     out.push(("no vision (radius ×0.001)".into(), s));
