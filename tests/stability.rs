@@ -25,7 +25,7 @@ use common::sim::{circle, kind, rect, world};
 use glam::{DVec2, Vec2};
 use gpuwars::Device;
 use gpuwars::backend::Schedule;
-use gpuwars::game::accuracy::step_end;
+use gpuwars::game::accuracy::audit_steps;
 use gpuwars::game::{Game, Scene};
 use gpuwars::pipeline::Simulation;
 use gpuwars::sim::audit::{Accuracy, Roles};
@@ -517,22 +517,18 @@ fn audited(
         enemies: 1 << 1,
         walls: 1 << 2,
     };
-    let mut accuracy = Accuracy::default();
-    let mut this = sim.snapshot().unwrap();
-    for _ in 0..steps {
+    let start = sim.snapshot().unwrap();
+    let mut last = digest(&start);
+    let accuracy = audit_steps(spec, &roles, start, steps, || {
         let renumbers = sim.renumbers_next();
-        sim.step().unwrap();
-        let next = sim.snapshot().unwrap();
+        sim.step()?;
+        let next = sim.snapshot()?;
         assert_invariants(spec, &next);
-        accuracy.add_step(
-            spec,
-            &roles,
-            &step_end(&this, false),
-            &step_end(&next, renumbers),
-        );
-        this = next;
-    }
-    (accuracy, digest(&this))
+        last = digest(&next);
+        Ok::<_, gpuwars::Error>(Some((next, renumbers)))
+    })
+    .unwrap();
+    (accuracy, last)
 }
 
 /// Every contact the exact check is sure of was counted, and nothing was counted that it

@@ -5,8 +5,8 @@
 
 use super::{Game, Options, Scene};
 use crate::Device;
-use crate::sim::Snapshot;
 use crate::sim::audit::{Accuracy, Roles, StepEnd};
+use crate::sim::{Snapshot, WorldSpec};
 
 /// How long an audit plays: `warmup` steps unaudited (the field fills up), then `steps`
 /// audited ones.
@@ -41,20 +41,37 @@ pub fn audit_game(
     for _ in 0..length.warmup {
         game.submit(None)?;
     }
-    let mut accuracy = Accuracy::default();
-    let mut this = game.snapshot()?;
-    for _ in 0..length.steps {
+    let start = game.snapshot()?;
+    audit_steps(world, &roles, start, length.steps, || {
         if game.status().is_over() {
-            break;
+            return Ok(None);
         }
         let renumbers = game.pipeline().renumbers_next();
         game.step(None)?;
-        let next = game.snapshot()?;
+        Ok(Some((game.snapshot()?, renumbers)))
+    })
+}
+
+/// The audit of up to `steps` steps from the step end `start`: `step` plays one and gives
+/// its end and whether it renumbered the bodies, or `None` to stop early.
+pub fn audit_steps<E>(
+    spec: &WorldSpec,
+    roles: &Roles,
+    start: Snapshot,
+    steps: u32,
+    mut step: impl FnMut() -> Result<Option<(Snapshot, bool)>, E>,
+) -> Result<Accuracy, E> {
+    let mut accuracy = Accuracy::default();
+    let mut this = start;
+    for _ in 0..steps {
+        let Some((next, renumbered)) = step()? else {
+            break;
+        };
         accuracy.add_step(
-            world,
-            &roles,
+            spec,
+            roles,
             &step_end(&this, false),
-            &step_end(&next, renumbers),
+            &step_end(&next, renumbered),
         );
         this = next;
     }

@@ -13,9 +13,9 @@
 //!    slots.
 //!
 //! What moves is what a body carries from step to step: place, velocity, force, facing,
-//! energy, state, age, and the last path's start where the world traces paths. Kind and mass are those of the range;
-//! each slot keeps its generator, so a body draws from the generator of the slot it holds,
-//! as a body born there would. The grid's buckets keep their order (a bucket's bodies get
+//! energy, state, age, and the last path's start where the world traces paths. Kind and
+//! mass are those of the range; each slot keeps its generator, so a body draws from the
+//! generator of the slot it holds, as a body born there would. The grid's buckets keep their order (a bucket's bodies get
 //! increasing slots in the order they were listed), so every query folds its neighbours in
 //! the same order as before.
 
