@@ -243,7 +243,7 @@ impl World {
         let narrow_teams = teams::narrow(lanes, resident, spec, &layout, &space);
         let one_launch = moving && think_teams.is_some_and(|teams| !teams.single());
         // Only worlds with a swept pair run the swept narrow phase.
-        let swept = spec.sweeps().iter().any(|p| p.swept);
+        let swept = spec.has_swept_pairs();
         let config = Config {
             // No rectangles: the narrow phase without the rectangle tests.
             collide: collides.then_some(match (spec.has_rects(), swept) {

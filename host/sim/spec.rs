@@ -626,10 +626,15 @@ impl WorldSpec {
         masks
     }
 
+    /// Whether some pair of kinds is swept (see [`WorldSpec::sweeps`]).
+    pub fn has_swept_pairs(&self) -> bool {
+        self.sweeps().iter().any(|p| p.swept)
+    }
+
     /// Whether the world keeps each body's last path: some pair is swept, or the physics
     /// asks for it ([`Physics::trace_paths`]).
     pub fn traces(&self) -> bool {
-        self.physics.trace_paths || self.sweeps().iter().any(|p| p.swept)
+        self.physics.trace_paths || self.has_swept_pairs()
     }
 
     /// Index of the kind called `name`.

@@ -508,7 +508,7 @@ fn game_choices(scene: &Scene) -> Vec<(String, Scene)> {
         physics(&|p| p.neighbour_cap = 8),
         physics(&|p| p.vision_scale = 0.5),
     ];
-    if scene.world.sweeps().iter().any(|p| p.swept) {
+    if scene.world.has_swept_pairs() {
         out.push(changed(Some("nothing swept".into()), &unswept));
         out.push(changed(
             Some(format!("{}, nothing swept", dt_label(2.0))),
