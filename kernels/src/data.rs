@@ -9,9 +9,10 @@
 //! every array of a store from its name and length, `convert` turns one store into another
 //! array by array: the host never lists a group's fields by hand.
 //!
-//! A kernel's argument struct is declared with [`kernel_args!`](crate::kernel_args), which adds the layout
-//! (`#[repr(C)]`), the padding check (`bytemuck::NoUninit`) and the one `unsafe impl` of
-//! [`KernelArgs`](crate::KernelArgs) in the crate, with the reason it holds.
+//! A kernel's argument struct is declared with [`kernel_args!`](crate::kernel_args), which
+//! adds the layout (`#[repr(C)]`), the padding check (its size against its fields', each
+//! `bytemuck::NoUninit`) and the crate's only `unsafe impl` of
+//! [`KernelArgs`](crate::KernelArgs), with the reason it holds.
 
 use crate::DevSlice;
 
@@ -96,6 +97,31 @@ impl Build<Unmade> for Sizes {
 /// }
 /// ```
 /// Each length is an expression of the group's parameters (element counts).
+///
+/// A nested group must be plain data itself (`bytemuck::NoUninit`): a group of this macro,
+/// or one that proves it. A hand-written group with a hole inside is refused, since the
+/// hole's bytes would go to the device with the outer group's:
+/// ```compile_fail,E0277
+#[doc = include_str!("../doc/hand_written_group.rs")]
+/// struct Hand<S: Store = View> {
+///     flag: u8, // three bytes of padding follow
+///     count: u32,
+///     store: PhantomData<S>,
+/// }
+/// device_data! { pub struct Outer(n) { xs: [u32; n], } nested { hand: Hand(), } }
+/// ```
+/// The same group without the hole is taken:
+/// ```
+#[doc = include_str!("../doc/hand_written_group.rs")]
+/// struct Hand<S: Store = View> {
+///     flag: u32,
+///     count: u32,
+///     store: PhantomData<S>,
+/// }
+/// // SAFETY: two `u32`s and a zero-sized marker, `repr(C)`: no padding.
+/// unsafe impl gpuwars_kernels::__private::bytemuck::NoUninit for Hand<View> {}
+/// device_data! { pub struct Outer(n) { xs: [u32; n], } nested { hand: Hand(), } }
+/// ```
 #[macro_export]
 macro_rules! device_data {
     (
@@ -181,14 +207,21 @@ macro_rules! device_data {
                 == 0 $( + size_of::<$crate::DevSlice<$elem>>() )*
                     $($( + size_of::<$gty<$crate::data::View>>() )*)?
         );
-        // SAFETY: `repr(C)` fields that are all `NoUninit` (views, and groups of views
-        // checked the same way), with no padding between them (asserted above).
-        unsafe impl bytemuck::NoUninit for $name<$crate::data::View> {}
+        // Every nested group is plain data itself: one `device_data!` made, or one whose
+        // own `NoUninit` proves it (a group with a hole inside has none, and is refused).
+        const _: fn() = || {
+            fn plain<T: $crate::__private::bytemuck::NoUninit>() {}
+            $($( plain::<$gty<$crate::data::View>>(); )*)?
+        };
+        // SAFETY: `repr(C)` fields that are all `NoUninit` (views, and nested groups,
+        // checked above), with no padding between them (asserted above).
+        unsafe impl $crate::__private::bytemuck::NoUninit for $name<$crate::data::View> {}
     };
 }
 
-/// Declares a kernel's argument struct: `#[repr(C)]`, plain data, no padding (checked by
-/// `bytemuck::NoUninit`'s derive), and [`KernelArgs`](crate::KernelArgs).
+/// Declares a kernel's argument struct: `#[repr(C)]`, plain data, no padding (its size
+/// checked against its fields', each `bytemuck::NoUninit`), and
+/// [`KernelArgs`](crate::KernelArgs).
 #[macro_export]
 macro_rules! kernel_args {
     (
@@ -199,14 +232,23 @@ macro_rules! kernel_args {
     ) => {
         $(#[$meta])*
         #[repr(C)]
-        #[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
+        #[derive(Clone, Copy, Debug)]
         pub struct $name {
             $( $(#[$fmeta])* pub $field: $ty, )*
         }
-        // SAFETY: the derive above proves the struct `repr(C)` plain data without padding;
-        // its fields are numbers, plain `repr(C)` structs and device views (`DevSlice`: an
-        // address and a length), never references or host pointers, and any bit pattern
-        // of them is a value.
+        // No padding: the size is the sum of the fields'.
+        const _: () = assert!(size_of::<$name>() == 0 $( + size_of::<$ty>() )*);
+        // Every field is plain data.
+        const _: fn() = || {
+            fn plain<T: $crate::__private::bytemuck::NoUninit>() {}
+            $( plain::<$ty>(); )*
+        };
+        // SAFETY: `repr(C)` fields that are all `NoUninit` (checked above), with no padding
+        // between or after them (asserted above).
+        unsafe impl $crate::__private::bytemuck::NoUninit for $name {}
+        // SAFETY: plain data without padding (above); its fields are numbers, plain
+        // `repr(C)` structs and device views (`DevSlice`: an address and a length), never
+        // references or host pointers, and any bit pattern of them is a value.
         unsafe impl $crate::KernelArgs for $name {}
     };
 }

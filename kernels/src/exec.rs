@@ -404,10 +404,11 @@ impl<T: Copy> DevSlice<T> {
     /// Folds `f` over the runs of `N` elements from `first`, `first + stride`, … below `end`,
     /// in that order, with a single bounds check: [`RUNS_IN_FLIGHT`] runs at a time, whose
     /// loads the GPU keeps in flight together (where [`DevSlice::fold_every`] keeps four
-    /// elements). `first`, `end` and `stride` are multiples of `N`, so that a run starting
-    /// below `end` ends by it, and `stride` is not zero. In place of the runs past the end,
-    /// the last run is read and folded again, and the result dropped, so `f` must be a
-    /// function of its arguments alone.
+    /// elements). `first`, `end` and `stride` must be multiples of `N` (checked, like the
+    /// bounds: a kernel fault otherwise), so that a run starting below `end` ends by it; a
+    /// zero `stride` counts as `N`. In place of the runs past the end, the last run is read
+    /// and folded again, and the result dropped, so `f` must be a function of its arguments
+    /// alone.
     #[inline(always)]
     pub fn fold_runs<const N: usize, A: Copy>(
         &self,
@@ -418,10 +419,15 @@ impl<T: Copy> DevSlice<T> {
     where
         T: bytemuck::Pod,
     {
-        let Some((base, end, stride)) = self.strided((first, end, stride)) else {
+        let n = N as u32;
+        if first % n != 0 || end % n != 0 || stride % n != 0 {
+            // A run could cross `end`, or (with `end` below `N`) the view's end.
+            misaligned_runs(n, (first, end, stride));
+        }
+        let Some((base, end, stride)) = self.strided((first, end, stride.max(n))) else {
             return init;
         };
-        let last = end.saturating_sub(N as u64);
+        let last = end - N as u64;
         // SAFETY: every run read ends by `end`, at most the length (checked).
         let read = |i: u64| unsafe { base.wrapping_add(i as usize).cast::<[T; N]>().read() };
         let (mut acc, mut i) = (init, u64::from(first));
@@ -489,4 +495,17 @@ fn out_of_bounds(index: u32, len: u32) -> ! {
     }
     #[cfg(not(target_arch = "nvptx64"))]
     panic!("device index {index} out of bounds for a buffer of {len} elements")
+}
+
+#[cold]
+#[inline(never)]
+fn misaligned_runs(n: u32, (first, end, stride): (u32, u32, u32)) -> ! {
+    #[cfg(target_arch = "nvptx64")]
+    {
+        let _ = (n, first, end, stride);
+        // SAFETY: `trap` aborts the kernel; it has no preconditions.
+        unsafe { core::arch::nvptx::trap() }
+    }
+    #[cfg(not(target_arch = "nvptx64"))]
+    panic!("runs of {n} elements from {first} by {stride} below {end}: not multiples of {n}")
 }

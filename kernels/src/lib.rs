@@ -28,6 +28,13 @@ pub mod warp;
 
 pub use exec::{DevSlice, Kernel, KernelArgs, KernelInfo, Thread, asked};
 
+/// What the exported macros name, through `$crate`, so that a crate using them need not
+/// depend on these crates itself under these names.
+#[doc(hidden)]
+pub mod __private {
+    pub use bytemuck;
+}
+
 /// On the GPU a panic (only reachable through a failed bounds check) traps the kernel; the host
 /// sees the launch fail.
 #[cfg(target_arch = "nvptx64")]

@@ -61,3 +61,20 @@ fn folds_every_strided_run_in_order_once() {
         }
     }
 }
+
+/// A walk whose runs could cross its end is refused, never read past the view: the two
+/// elements of a view of two (past them, other memory) are not runs of four.
+#[test]
+fn refuses_runs_that_are_not_multiples_of_their_length() {
+    let data: Vec<u32> = vec![1, 2, 0xdead_beef, 0xcafe_f00d];
+    // SAFETY: `data` outlives every use of the view, and nothing writes it meanwhile.
+    let view = unsafe { DevSlice::from_raw_parts(data.as_ptr() as u64, 2) };
+    for walk in [(0, 2, 4), (0, 4, 4), (2, 4, 4), (0, 4, 2)] {
+        let read = std::panic::catch_unwind(|| {
+            view.fold_runs::<4, _>(walk, 17u64, |acc, run: [u32; 4]| {
+                run.into_iter().fold(acc, mix)
+            })
+        });
+        assert!(read.is_err(), "{walk:?} read {read:?}");
+    }
+}
