@@ -209,10 +209,12 @@ macro_rules! device_data {
         );
         // Every nested group is plain data itself: one `device_data!` made, or one whose
         // own `NoUninit` proves it (a group with a hole inside has none, and is refused).
-        const _: fn() = || {
-            fn plain<T: $crate::__private::bytemuck::NoUninit>() {}
-            $($( plain::<$gty<$crate::data::View>>(); )*)?
-        };
+        $($(
+            const _: fn() = || {
+                fn plain<T: $crate::__private::bytemuck::NoUninit>() {}
+                plain::<$gty<$crate::data::View>>();
+            };
+        )*)?
         // SAFETY: `repr(C)` fields that are all `NoUninit` (views, and nested groups,
         // checked above), with no padding between them (asserted above).
         unsafe impl $crate::__private::bytemuck::NoUninit for $name<$crate::data::View> {}
