@@ -1,8 +1,9 @@
 //! The CPU emulation: runs the kernel bodies of `gpuwars-kernels`, compiled natively.
 //!
 //! Blocks run in parallel on a rayon pool and the threads of a block run one after another,
-//! in order (or, under [`Schedule::Shuffled`], both in a shuffled order). Since kernels are barrier-free, this is exactly the GPU's semantics; atomics are
-//! real atomics. A launch returns when the whole grid has run.
+//! in order (or, under [`Schedule::Shuffled`], both in a shuffled order, and the ops beside
+//! the others on threads of their own). Since kernels are barrier-free, this is exactly the
+//! GPU's semantics; atomics are real atomics. A launch returns when the whole grid has run.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr::NonNull;
@@ -25,8 +26,10 @@ pub enum Schedule {
     #[default]
     InOrder,
     /// Every launch runs its blocks, and each block its threads, in an order shuffled from
-    /// this seed (and the launch's count): a result that depends on scheduling changes
-    /// under it, so the determinism tests catch it on the CPU rather than on the GPU.
+    /// this seed (and the launch's count), and every op beside the others
+    /// ([`super::Op::beside`]) on a thread of its own, started where it forks or where its
+    /// branch joins: a result that depends on scheduling changes under it, so the
+    /// determinism tests catch it on the CPU rather than on the GPU.
     Shuffled {
         /// Seed of the shuffles.
         seed: u64,
@@ -39,6 +42,8 @@ pub(super) struct Emulator {
     schedule: Schedule,
     /// Launches so far, so that each shuffled launch gets its own order.
     launches: AtomicU64,
+    /// Plans run so far, so that each shuffled run starts its branches its own way.
+    runs: AtomicU64,
     /// Held by whatever touches the device's memory (a plan's run, a copy, a read-back), so
     /// that they happen one after another, as on the GPU's stream.
     order: Mutex<()>,
@@ -55,6 +60,7 @@ impl Emulator {
             pool,
             schedule,
             launches: AtomicU64::new(0),
+            runs: AtomicU64::new(0),
             order: Mutex::new(()),
         })
     }
@@ -74,6 +80,21 @@ impl Emulator {
     /// goes: the emulator's stream order.
     pub(super) fn in_order(&self) -> MutexGuard<'_, ()> {
         self.order.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Under [`Schedule::Shuffled`], where a plan's run starts each op beside the others
+    /// (drawn from it: where it forks, or where it joins), a source of its own for every
+    /// run; `None` in order, where every op runs in the plan's order.
+    pub(super) fn branch_starts(&self) -> Option<StdRng> {
+        match self.schedule {
+            Schedule::InOrder => None,
+            Schedule::Shuffled { seed } => {
+                let run = self.runs.fetch_add(1, Ordering::Relaxed);
+                Some(StdRng::seed_from_u64(
+                    seed ^ run.wrapping_mul(0xd1b5_4a32_d192_ed03) ^ 0x6272_616e_6368,
+                ))
+            }
+        }
     }
 
     /// Runs every thread of `launch` and returns when all are done (the caller holds the

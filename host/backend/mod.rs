@@ -126,8 +126,40 @@ pub enum BackendRequest {
     Cpu,
 }
 
+/// Which [`Device`] made a buffer, an op, a plan or a ring: each device opened in the
+/// process has its own, so work never meets memory of another device unnoticed (two CPU
+/// emulators are two devices, with two orders).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct DeviceId(u64);
+
+impl fmt::Display for DeviceId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "device #{}", self.0)
+    }
+}
+
+impl DeviceId {
+    /// An id no device had before.
+    fn next() -> DeviceId {
+        static NEXT: AtomicU64 = AtomicU64::new(1);
+        DeviceId(NEXT.fetch_add(1, Ordering::Relaxed))
+    }
+
+    /// `Ok` if `what`, of this device, is used on device `on`; else the error that says so.
+    pub(crate) fn check(self, on: DeviceId, what: &str) -> Result<(), Error> {
+        match self == on {
+            true => Ok(()),
+            false => Err(Error::Invalid(format!(
+                "{what} of {self} used on {on}: buffers, ops, plans and rings work only on \
+                 the device that made them"
+            ))),
+        }
+    }
+}
+
 /// An open backend: where buffers live and kernels run.
 pub struct Device {
+    id: DeviceId,
     imp: Imp,
     reason: String,
     /// Launches per kernel, counted only while [`Device::count_launches`] is on.
@@ -160,6 +192,9 @@ enum Imp {
 /// ```
 pub struct Buffer<T: Element> {
     imp: Arc<BufferImp<T>>,
+    device: DeviceId,
+    /// Its array's name in its group, or its element type, for errors.
+    name: &'static str,
 }
 
 /// A share in a buffer's memory that keeps it allocated and gives no access to it: what an
@@ -221,6 +256,28 @@ impl<T: Element> Buffer<T> {
         self.len() == 0
     }
 
+    /// The device whose memory holds it.
+    pub fn device(&self) -> DeviceId {
+        self.device
+    }
+
+    /// The same buffer, called `name` where errors speak of it (its element type until
+    /// named; a group's arrays are named for their fields).
+    pub fn named(self, name: &'static str) -> Buffer<T> {
+        Buffer { name, ..self }
+    }
+
+    /// What errors call it.
+    pub fn name(&self) -> &'static str {
+        self.name
+    }
+
+    /// Which allocation this is, for telling two buffers apart (an op's holds keep it
+    /// allocated, so no other buffer has it meanwhile).
+    fn key(&self) -> usize {
+        Arc::as_ptr(&self.imp) as *const () as usize
+    }
+
     /// A share in the buffer's memory, keeping it allocated for as long as it lives.
     pub fn hold(&self) -> Hold {
         Hold {
@@ -272,8 +329,8 @@ pub struct Zeroed<'d>(&'d Device);
 
 impl Build<Buffers> for Zeroed<'_> {
     type Error = Error;
-    fn array<T: Element>(&mut self, _: &'static str, len: usize) -> Result<Buffer<T>, Error> {
-        self.0.alloc_zeroed(len)
+    fn array<T: Element>(&mut self, name: &'static str, len: usize) -> Result<Buffer<T>, Error> {
+        Ok(self.0.alloc_zeroed(len)?.named(name))
     }
 }
 
@@ -321,6 +378,7 @@ impl Device {
         reason: &str,
     ) -> Result<Device, Error> {
         Ok(Device {
+            id: DeviceId::next(),
             imp: Imp::Cpu(cpu::Emulator::new(threads, schedule)?),
             reason: reason.to_string(),
             launches: None,
@@ -331,11 +389,17 @@ impl Device {
     /// The first CUDA device, with the kernels' PTX loaded.
     pub fn cuda(reason: &str) -> Result<Device, Error> {
         Ok(Device {
+            id: DeviceId::next(),
             imp: Imp::Cuda(Box::new(cuda::Gpu::open()?)),
             reason: reason.to_string(),
             launches: None,
             allocated: AtomicU64::new(0),
         })
+    }
+
+    /// This device's id, which its buffers, ops, plans and rings carry.
+    pub fn id(&self) -> DeviceId {
+        self.id
     }
 
     /// Which backend this is.
@@ -405,7 +469,11 @@ impl Device {
             Imp::Cpu(_) => BufferImp::Cpu(cpu::HostBuffer::zeroed(len)),
             Imp::Cuda(gpu) => BufferImp::cuda(gpu.alloc_zeroed(len * size_of::<T>())?),
         };
-        Ok(Buffer { imp: Arc::new(imp) })
+        Ok(Buffer {
+            imp: Arc::new(imp),
+            device: self.id,
+            name: std::any::type_name::<T>(),
+        })
     }
 
     /// A buffer of `len` zeroed elements that the host and the kernels share without copies:
@@ -424,7 +492,11 @@ impl Device {
                 _element: PhantomData,
             },
         };
-        Ok(Buffer { imp: Arc::new(imp) })
+        Ok(Buffer {
+            imp: Arc::new(imp),
+            device: self.id,
+            name: std::any::type_name::<T>(),
+        })
     }
 
     /// A buffer holding a copy of `data`.
@@ -435,7 +507,11 @@ impl Device {
             Imp::Cpu(_) => BufferImp::Cpu(cpu::HostBuffer::from_slice(data)),
             Imp::Cuda(gpu) => BufferImp::cuda(gpu.upload(data)?),
         };
-        Ok(Buffer { imp: Arc::new(imp) })
+        Ok(Buffer {
+            imp: Arc::new(imp),
+            device: self.id,
+            name: std::any::type_name::<T>(),
+        })
     }
 
     /// Overwrites the start of `buffer` with `data`.
@@ -447,6 +523,7 @@ impl Device {
                 buffer.len()
             )));
         }
+        buffer.device.check(self.id, "a buffer")?;
         match (&self.imp, &*buffer.imp) {
             (Imp::Cpu(emu), BufferImp::Cpu(b)) => {
                 let _order = emu.in_order();
@@ -467,12 +544,13 @@ impl Device {
                 }
                 Ok(())
             }
-            _ => Err(foreign_buffer()),
+            _ => unreachable!("a buffer of this device is of its backend"),
         }
     }
 
     /// Copies the whole buffer back to the host (waits for the work queued before).
     pub fn download<T: Element>(&self, buffer: &Buffer<T>) -> Result<Vec<T>, Error> {
+        buffer.device.check(self.id, "a buffer")?;
         match (&self.imp, &*buffer.imp) {
             (Imp::Cpu(emu), BufferImp::Cpu(b)) => {
                 let _order = emu.in_order();
@@ -485,12 +563,13 @@ impl Device {
                 // SAFETY: no kernel runs (waited for above); `len` elements of plain bytes.
                 Ok(unsafe { std::slice::from_raw_parts(memory.ptr.cast::<T>(), *len) }.to_vec())
             }
-            _ => Err(foreign_buffer()),
+            _ => unreachable!("a buffer of this device is of its backend"),
         }
     }
 
     /// Sets every element of `buffer` to zero.
     pub fn zero<T: Element>(&self, buffer: &mut Buffer<T>) -> Result<(), Error> {
+        buffer.device.check(self.id, "a buffer")?;
         match (&self.imp, &*buffer.imp) {
             (Imp::Cpu(emu), BufferImp::Cpu(b)) => {
                 let _order = emu.in_order();
@@ -505,7 +584,7 @@ impl Device {
                 unsafe { std::ptr::write_bytes(memory.ptr.cast::<T>(), 0, *len) };
                 Ok(())
             }
-            _ => Err(foreign_buffer()),
+            _ => unreachable!("a buffer of this device is of its backend"),
         }
     }
 
@@ -518,6 +597,8 @@ impl Device {
                 dst.len()
             )));
         }
+        src.device.check(self.id, "a buffer")?;
+        dst.device.check(self.id, "a buffer")?;
         match (&self.imp, &*src.imp, &*dst.imp) {
             (Imp::Cpu(emu), BufferImp::Cpu(s), BufferImp::Cpu(d)) => {
                 let _order = emu.in_order();
@@ -534,7 +615,7 @@ impl Device {
             | (Imp::Cuda(_), _, BufferImp::Mapped { .. }) => Err(Error::Invalid(
                 "a device copy to or from shared memory (download or write it instead)".into(),
             )),
-            _ => Err(foreign_buffer()),
+            _ => unreachable!("a buffer of this device is of its backend"),
         }
     }
 
@@ -714,6 +795,3 @@ fn host_memory() -> Option<(u64, u64)> {
     Some((field("MemAvailable:")?, field("MemTotal:")?))
 }
 
-fn foreign_buffer() -> Error {
-    Error::Invalid("a buffer of another backend was passed to this device".into())
-}

@@ -4,12 +4,16 @@
 //!
 //! An op owns a share ([`Hold`]) of every buffer its arguments view, taken by the [`Binder`]
 //! that made the views, so a plan keeps its buffers allocated for as long as it exists,
-//! whatever happened to the handles it was made from. What keeps the memory a launch uses
+//! whatever happened to the handles it was made from. The binder also notes the device of
+//! every buffer it views and how the kernel uses it ([`Access`]): a plan refuses an op of
+//! another device, and an op run beside the others ([`Op::beside`]) that touches what the
+//! ops it runs beside write, or writes what they touch. What keeps the memory a launch uses
 //! from being freed *while it runs* is the device's order: every launch, copy, clear and
 //! free of a device happens in one order, on the GPU that of its one stream (cudarc frees a
 //! buffer on the stream it was allocated on, after the work queued before), on the CPU under
 //! the emulator's order lock, each operation done before the next begins.
 
+use std::fmt;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -18,7 +22,7 @@ use gpuwars_kernels::data::{Convert, View};
 use gpuwars_kernels::{DevSlice, Kernel, KernelArgs};
 
 use super::cuda::Fence;
-use super::{Buffer, Buffers, Device, Element, Error, Hold, Imp};
+use super::{Buffer, Buffers, Device, DeviceId, Element, Error, Hold, Imp};
 
 /// One kernel launch: the kernel, `grid` blocks of `block` threads, and its arguments.
 #[derive(Clone, Copy, Debug)]
@@ -46,6 +50,58 @@ pub struct Launch<A> {
 /// ```
 pub struct Binder {
     holds: Vec<Hold>,
+    touches: Vec<Touch>,
+    /// The device of the first buffer viewed, and of a second one if any was another's.
+    device: Option<DeviceId>,
+    foreign: Option<DeviceId>,
+    /// How the views made now are used (see [`Binder::reading`]).
+    mode: Mode,
+    /// The names [`Binder::writing`] and [`Binder::ignoring`] were given that no view
+    /// made meanwhile had: a slip the plan refuses.
+    unmatched: Vec<&'static str>,
+}
+
+/// How a binder's views are used.
+#[derive(Clone, Default)]
+struct Mode {
+    /// Every view read only but those of `written`.
+    reading: bool,
+    /// The buffers written, by name, where views are read only.
+    written: Vec<&'static str>,
+    /// The buffers not used at all, by name.
+    ignored: Vec<&'static str>,
+}
+
+/// How an op's kernel uses a buffer it views.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Access {
+    /// Not at all (an array of a group it views whole).
+    None,
+    /// It only reads it.
+    Read,
+    /// It writes it (and may read it).
+    Write,
+}
+
+/// One buffer an op views, and how.
+#[derive(Clone, Debug)]
+struct Touch {
+    /// The buffer's allocation (see `Buffer::key`).
+    key: usize,
+    access: Access,
+    /// The buffer's name (see `Buffer::named`).
+    name: &'static str,
+}
+
+impl fmt::Display for Touch {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let verb = match self.access {
+            Access::None => "views",
+            Access::Read => "reads",
+            Access::Write => "writes",
+        };
+        write!(f, "{verb} `{}`", self.name)
+    }
 }
 
 impl Binder {
@@ -57,16 +113,102 @@ impl Binder {
     /// host must not touch (device memory on the GPU, memory a kernel may be writing on the
     /// CPU), and outside its op nothing holds its buffer.
     pub unsafe fn new() -> Binder {
-        Binder { holds: Vec::new() }
+        Binder {
+            holds: Vec::new(),
+            touches: Vec::new(),
+            device: None,
+            foreign: None,
+            mode: Mode::default(),
+            unmatched: Vec::new(),
+        }
     }
 
-    /// The whole of `buffer`.
+    /// The whole of `buffer`, which the kernel writes (and may read); read only inside
+    /// [`Binder::reading`] or [`Binder::writing`] (unless named there), not used inside
+    /// [`Binder::ignoring`] where named there.
     pub fn view<T: Element>(&mut self, buffer: &Buffer<T>) -> DevSlice<T> {
         self.view_prefix(buffer, u32::MAX)
     }
 
-    /// The first `len` elements of `buffer` (clamped to its length).
+    /// The first `len` elements of `buffer` (clamped to its length), as [`Binder::view`].
     pub fn view_prefix<T: Element>(&mut self, buffer: &Buffer<T>, len: u32) -> DevSlice<T> {
+        self.bind(buffer, len)
+    }
+
+    /// The whole of `buffer`, which the kernel only reads (the op's maker promises it: see
+    /// [`Op::launch`]).
+    pub fn read<T: Element>(&mut self, buffer: &Buffer<T>) -> DevSlice<T> {
+        self.reading(|b| b.view(buffer))
+    }
+
+    /// What `views` returns, every view it makes with this binder read only (a group the
+    /// kernel only reads: `b.reading(|b| group.convert(b))`).
+    pub fn reading<R>(&mut self, views: impl FnOnce(&mut Binder) -> R) -> R {
+        self.writing(&[], views)
+    }
+
+    /// What `views` returns, every view it makes with this binder read only but those of
+    /// the buffers named in `written` (by [`Buffer::named`]: `Group.field` for a group's
+    /// arrays), which the kernel writes. Each name must be one of a buffer viewed there.
+    pub fn writing<R>(
+        &mut self,
+        written: &[&'static str],
+        views: impl FnOnce(&mut Binder) -> R,
+    ) -> R {
+        let mode = Mode {
+            reading: true,
+            written: written.to_vec(),
+            ignored: self.mode.ignored.clone(),
+        };
+        self.within(mode, written, views)
+    }
+
+    /// What `views` returns, the kernel using none of the views it makes with this binder
+    /// of the buffers named in `ignored` (a group's arrays that the kernel leaves alone).
+    /// Each name must be one of a buffer viewed there.
+    pub fn ignoring<R>(
+        &mut self,
+        ignored: &[&'static str],
+        views: impl FnOnce(&mut Binder) -> R,
+    ) -> R {
+        let mut mode = self.mode.clone();
+        mode.ignored.extend_from_slice(ignored);
+        self.within(mode, ignored, views)
+    }
+
+    /// `views` made in `mode`; notes the `names` no view had.
+    fn within<R>(
+        &mut self,
+        mode: Mode,
+        names: &[&'static str],
+        views: impl FnOnce(&mut Binder) -> R,
+    ) -> R {
+        let before = self.touches.len();
+        let was = std::mem::replace(&mut self.mode, mode);
+        let made = views(self);
+        self.mode = was;
+        let viewed = &self.touches[before..];
+        let missing = names.iter().filter(|n| !viewed.iter().any(|t| t.name == **n));
+        self.unmatched.extend(missing);
+        made
+    }
+
+    fn bind<T: Element>(&mut self, buffer: &Buffer<T>, len: u32) -> DevSlice<T> {
+        let device = *self.device.get_or_insert(buffer.device());
+        if buffer.device() != device {
+            self.foreign = Some(buffer.device());
+        }
+        let name = buffer.name();
+        let access = match &self.mode {
+            m if m.ignored.contains(&name) => Access::None,
+            m if m.reading && !m.written.contains(&name) => Access::Read,
+            _ => Access::Write,
+        };
+        self.touches.push(Touch {
+            key: buffer.key(),
+            access,
+            name,
+        });
         self.holds.push(buffer.hold());
         // SAFETY: the view goes only into this binder's ops (`new`'s contract), which hold
         // the buffer (pushed above).
@@ -83,6 +225,18 @@ impl Convert<Buffers, View> for Binder {
     ) -> Result<DevSlice<T>, Self::Error> {
         Ok(self.view(array))
     }
+}
+
+/// Where an op's buffers are, and whether its binder's declarations held: checked when a
+/// plan is made.
+#[derive(Clone, Debug)]
+struct Home {
+    /// The device of its first view (none if it views nothing).
+    device: Option<DeviceId>,
+    /// Another device, if a view was of another's buffer.
+    foreign: Option<DeviceId>,
+    /// Names declared written or ignored that no view had.
+    unmatched: Arc<[&'static str]>,
 }
 
 /// What an [`Op`] does.
@@ -111,6 +265,19 @@ pub struct Op {
     joins: bool,
     /// The buffers the arguments view.
     _holds: Arc<[Hold]>,
+    /// How the kernel uses each.
+    touches: Arc<[Touch]>,
+    home: Home,
+}
+
+/// An op's holds, touches and home, taken from the binder that made its views.
+fn bound(binder: Binder) -> (Arc<[Hold]>, Arc<[Touch]>, Home) {
+    let home = Home {
+        device: binder.device,
+        foreign: binder.foreign,
+        unmatched: binder.unmatched.into(),
+    };
+    (binder.holds.into(), binder.touches.into(), home)
 }
 
 impl Op {
@@ -118,14 +285,17 @@ impl Op {
     /// the profile); its views come from `binder`, whose holds the op keeps.
     ///
     /// # Safety
-    /// Every [`DevSlice`] in the arguments was made by `binder` from a buffer of the device
-    /// that will run the op, or views memory of that device that no buffer owns (an OpenGL
-    /// buffer mapped for CUDA) and that stays valid, and untouched by the host, for every
-    /// run of the op; their sizes, and which of them may be the same buffer, are
+    /// Every [`DevSlice`] in the arguments was made by `binder` (from a buffer of any
+    /// device: a plan of another device refuses the op), or views memory of the device that
+    /// will run the op that no buffer owns (an OpenGL buffer mapped for CUDA) and that stays
+    /// valid, untouched by the host and by the ops beside it, for every run of the op;
+    /// the kernel writes none of the views `binder` made read only ([`Binder::read`]);
+    /// their sizes, and which of them may be the same buffer, are
     /// those the kernel's documentation asks for (its promise that no two threads write
     /// one element holds only then; its bounds checks turn a wrong size into
     /// [`Error::KernelFault`]).
     pub unsafe fn launch<A: KernelArgs>(launch: Launch<A>, binder: Binder, bytes: u64) -> Op {
+        let (holds, touches, home) = bound(binder);
         Op {
             name: launch.kernel.name,
             kind: OpKind::Launch,
@@ -133,7 +303,9 @@ impl Op {
             bytes,
             beside: false,
             joins: false,
-            _holds: binder.holds.into(),
+            _holds: holds,
+            touches,
+            home,
             // SAFETY: the caller's promise covers every run of the op, and the op holds the
             // buffers its views are of.
             issue: Arc::new(move |device| unsafe { device.issue(&launch) }),
@@ -143,8 +315,9 @@ impl Op {
     /// Zeroes every element of `view`.
     ///
     /// # Safety
-    /// `view` was made by `binder` from a buffer of the device that will run the op.
+    /// `view` was made by `binder`, not read only.
     pub unsafe fn clear<T: Element>(view: DevSlice<T>, binder: Binder) -> Op {
+        let (holds, touches, home) = bound(binder);
         Op {
             name: "clear",
             kind: OpKind::Clear,
@@ -152,22 +325,22 @@ impl Op {
             bytes: u64::from(view.len()) * size_of::<T>() as u64,
             beside: false,
             joins: false,
-            _holds: binder.holds.into(),
+            _holds: holds,
+            touches,
+            home,
             // SAFETY: as in `launch`.
             issue: Arc::new(move |device| unsafe { device.clear(view) }),
         }
     }
 
-    /// The same op, run beside the ops after it in its plan: on the GPU on a stream of its
-    /// own (another op beside the others gets another), which the plan joins back at its
-    /// end (a graph branch), so that it costs the step nothing while they run longer; in
-    /// order on the CPU.
-    ///
-    /// # Safety
-    /// It reads nothing that the ops after it in its plan write, and writes nothing that
-    /// they read or write, up to the first after it made [`Op::after_branches`]: on the
-    /// GPU they run at the same time.
-    pub unsafe fn beside(self) -> Op {
+    /// The same op, run beside the ops after it in its plan, up to the first made
+    /// [`Op::after_branches`]: on the GPU on a stream of its own (another op beside the
+    /// others gets another), which the plan joins back there or at its end (a graph
+    /// branch), so that it costs the step nothing while they run longer; on the CPU in
+    /// order, or on a thread of its own under [`super::Schedule::Shuffled`]. Making the
+    /// plan checks that it reads nothing that those ops write, and writes nothing that they
+    /// read or write (by its binder's views and theirs, see [`Access`]).
+    pub fn beside(self) -> Op {
         Op {
             beside: true,
             ..self
@@ -199,6 +372,69 @@ impl Op {
     pub fn bytes(&self) -> u64 {
         self.bytes
     }
+
+    /// `Ok` if every buffer the op views is of device `on`.
+    fn check_home(&self, on: DeviceId) -> Result<(), Error> {
+        if let Some(name) = self.home.unmatched.first() {
+            return Err(Error::Invalid(format!(
+                "op `{}` declares how it uses `{name}`, which it does not view",
+                self.name
+            )));
+        }
+        let what = format!("op `{}`, made with a buffer", self.name);
+        match self.home {
+            Home {
+                foreign: Some(other),
+                device: Some(first),
+                ..
+            } => Err(Error::Invalid(format!(
+                "{what} of {first} and one of {other}: an op's buffers are one device's"
+            ))),
+            Home {
+                device: Some(device),
+                ..
+            } => device.check(on, &what),
+            Home { device: None, .. } => Ok(()),
+        }
+    }
+
+    /// `Ok` unless this op, run beside `other`, touches a buffer that one of the two writes.
+    fn check_beside(&self, other: &Op) -> Result<(), Error> {
+        for mine in self.touches.iter() {
+            for theirs in other.touches.iter().filter(|t| t.key == mine.key) {
+                let used = mine.access != Access::None && theirs.access != Access::None;
+                if used && (mine.access == Access::Write || theirs.access == Access::Write) {
+                    return Err(Error::Invalid(format!(
+                        "op `{}` runs beside op `{}` (after it in the plan, before the \
+                         branches join) and {mine}, which `{}` {}: one of them must wait \
+                         for the other (Op::after_branches), or not run beside",
+                        self.name,
+                        other.name,
+                        other.name,
+                        match theirs.access {
+                            Access::Write => "writes",
+                            _ => "reads",
+                        }
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// `Ok` if every op of `ops` is of device `on` and no op beside the others touches what
+/// the ops it runs beside write, or writes what they touch.
+fn check_plan(ops: &[Op], on: DeviceId) -> Result<(), Error> {
+    for op in ops {
+        op.check_home(on)?;
+    }
+    for (i, op) in ops.iter().enumerate().filter(|(_, op)| op.beside) {
+        for other in ops[i + 1..].iter().take_while(|other| !other.joins) {
+            op.check_beside(other)?;
+        }
+    }
+    Ok(())
 }
 
 /// Ops issued in order; on the GPU, optionally captured once as a CUDA graph and replayed.
@@ -207,6 +443,8 @@ pub struct Plan {
     /// buffers the ops hold: declared first, so that it goes before they may.
     graph: Option<CudaGraph>,
     ops: Vec<Op>,
+    /// The device that made it, the only one that runs it.
+    device: DeviceId,
 }
 
 impl Plan {
@@ -263,13 +501,18 @@ impl Device {
     /// every run replays; otherwise each run issues them one by one (the CPU emulation
     /// always does).
     pub fn plan(&self, ops: Vec<Op>, graph: bool) -> Result<Plan, Error> {
+        check_plan(&ops, self.id)?;
         let graph = match &self.imp {
             Imp::Cuda(gpu) if graph && !ops.is_empty() => {
                 Some(gpu.capture(|| self.issue_all(&ops))?)
             }
             _ => None,
         };
-        Ok(Plan { graph, ops })
+        Ok(Plan {
+            graph,
+            ops,
+            device: self.id,
+        })
     }
 
     /// Issues `ops` in order, each marked [`Op::beside`] on a side stream of its own (a
@@ -299,6 +542,7 @@ impl Device {
 
     /// Queues one run of `plan`.
     pub fn run(&self, plan: &Plan) -> Result<(), Error> {
+        plan.device.check(self.id, "a plan")?;
         self.count(plan.launched());
         match (&self.imp, &plan.graph) {
             (Imp::Cuda(gpu), Some(graph)) => gpu.replay(graph, plan.launched()),
@@ -307,9 +551,35 @@ impl Device {
             (Imp::Cpu(emu), _) => {
                 let _order = emu.in_order();
                 let ops = &plan.ops;
-                emu.run(|| ops.iter().try_for_each(|op| (op.issue)(self)))
+                match emu.branch_starts() {
+                    None => emu.run(|| ops.iter().try_for_each(|op| (op.issue)(self))),
+                    Some(mut starts) => emu.run(|| self.issue_branching(ops, &mut starts)),
+                }
             }
         }
+    }
+
+    /// Issues `ops` on the CPU emulation with each op beside the others on a thread of its
+    /// own, truly beside the ops after it: started where it forks, or (as `starts` picks)
+    /// only where its branch joins, once the ops it runs beside are done. A result that
+    /// depends on the order of an op and the ops beside it (an access its binder did not
+    /// declare) then changes from run to run, on the CPU as it would on the GPU.
+    fn issue_branching(&self, ops: &[Op], starts: &mut impl rand::Rng) -> Result<(), Error> {
+        std::thread::scope(|scope| {
+            let mut running = Vec::new();
+            let mut waiting = Vec::new();
+            for op in ops {
+                if op.joins {
+                    join_branches(scope, self, &mut running, &mut waiting)?;
+                }
+                match (op.beside, starts.random::<bool>()) {
+                    (true, true) => running.push(scope.spawn(move || (op.issue)(self))),
+                    (true, false) => waiting.push(op),
+                    (false, _) => (op.issue)(self)?,
+                }
+            }
+            join_branches(scope, self, &mut running, &mut waiting)
+        })
     }
 
     /// A mark after the work queued so far.
@@ -324,4 +594,25 @@ impl Device {
         };
         Ok(Mark { imp })
     }
+}
+
+/// Starts the ops `waiting` for their branches' join on threads of `scope`, and waits for
+/// them and those `running`: a join of the CPU emulation's branches.
+fn join_branches<'scope, 'env>(
+    scope: &'scope std::thread::Scope<'scope, 'env>,
+    device: &'env Device,
+    running: &mut Vec<std::thread::ScopedJoinHandle<'scope, Result<(), Error>>>,
+    waiting: &mut Vec<&'env Op>,
+) -> Result<(), Error> {
+    for op in waiting.drain(..) {
+        running.push(scope.spawn(move || (op.issue)(device)));
+    }
+    let mut result = Ok(());
+    for branch in running.drain(..) {
+        let done = branch.join().unwrap_or_else(|_| {
+            Err(Error::Invalid("an op beside the others panicked".into()))
+        });
+        result = result.and(done);
+    }
+    result
 }

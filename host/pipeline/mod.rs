@@ -30,6 +30,7 @@
 //! step's plans, whose ops hold the buffers they view. Each stage's ops are made in its own
 //! file under `stages/`.
 
+mod access;
 pub mod draw;
 mod handmade;
 mod profile;

@@ -302,8 +302,8 @@ impl World {
                     ));
                 }
                 Some(GameState {
-                    commands: device.alloc_shared(config.in_flight)?,
-                    statuses: device.alloc_shared(config.in_flight)?,
+                    commands: device.alloc_shared(config.in_flight)?.named("Mailbox.commands"),
+                    statuses: device.alloc_shared(config.in_flight)?.named("Mailbox.statuses"),
                     config,
                     data,
                     effects,

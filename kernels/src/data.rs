@@ -43,7 +43,7 @@ impl Store for Unmade {
     type Array<T: Element> = ();
 }
 
-/// Makes each array of a group in store `S` from its name and element count.
+/// Makes each array of a group in store `S` from its name (`Group.field`) and element count.
 pub trait Build<S: Store> {
     /// What can go wrong.
     type Error;
@@ -147,7 +147,10 @@ macro_rules! device_data {
                 $($param: usize),*
             ) -> Result<Self, B::Error> {
                 Ok($name {
-                    $( $field: build.array::<$elem>(stringify!($field), $len)?, )*
+                    $( $field: build.array::<$elem>(
+                        concat!(stringify!($name), ".", stringify!($field)),
+                        $len,
+                    )?, )*
                     $($( $group: <$gty<S>>::build(build, $($garg),*)?, )*)?
                 })
             }
@@ -158,7 +161,10 @@ macro_rules! device_data {
                 convert: &mut C,
             ) -> Result<$name<B>, C::Error> {
                 Ok($name {
-                    $( $field: convert.array::<$elem>(stringify!($field), &self.$field)?, )*
+                    $( $field: convert.array::<$elem>(
+                        concat!(stringify!($name), ".", stringify!($field)),
+                        &self.$field,
+                    )?, )*
                     $($( $group: self.$group.convert(convert)?, )*)?
                 })
             }

@@ -6,6 +6,7 @@ use gpuwars_kernels::registry;
 
 use crate::Op;
 use crate::backend::Binder;
+use crate::pipeline::access;
 use crate::pipeline::world::World;
 use crate::primitives::threads;
 use crate::sim::state::made;
@@ -20,13 +21,15 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     };
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
-    let args = EffectsArgs {
-        bodies: world.state.bodies(&mut b),
-        brains: b.view(&game.data.brains),
-        deaths: b.view(&game.data.slot_deaths),
-        particles: made(particles.convert(&mut b)),
-        burst: *burst,
-    };
+    let args = b.writing(access::EFFECTS, |b| {
+        b.ignoring(access::FROZEN_UNREAD, |b| EffectsArgs {
+            bodies: world.state.bodies(b),
+            brains: b.view(&game.data.brains),
+            deaths: b.view(&game.data.slot_deaths),
+            particles: made(particles.convert(b)),
+            burst: *burst,
+        })
+    });
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
     let op = unsafe {
         threads(
@@ -37,9 +40,5 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
             28 * u64::from(burst.particles()),
         )
     };
-    // SAFETY: the stages after it (the tally, the free lists) write the status, the
-    // mailbox, the kinds' deaths, the frozen flag and the free lists, none of which the
-    // explosions read (the bodies' kinds, places and velocities, the brains and the slots'
-    // deaths), and read or write no particle.
-    vec![unsafe { op.beside() }]
+    vec![op.beside()]
 }

@@ -7,6 +7,7 @@ use gpuwars_kernels::sim::free_list::{FreeMarks, GatherArgs, MarkArgs, MarkGathe
 
 use crate::Op;
 use crate::backend::Binder;
+use crate::pipeline::access;
 use crate::pipeline::world::World;
 use crate::primitives::{LIGHT_BLOCK, threads, threads_in};
 
@@ -17,13 +18,13 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     if world.config.free_in_one_launch {
         // SAFETY: the views go into the op made with the binder.
         let mut b = unsafe { Binder::new() };
-        let args = MarkGatherArgs {
-            bodies: state.bodies(&mut b),
+        let args = declared(&mut b, access::MARK_AND_GATHER_FREE, |b| MarkGatherArgs {
+            bodies: state.bodies(b),
             ranges: b.view(&state.tables.ranges),
             flags: b.view(&marks.flags),
             list: b.view(&state.free.list),
             count: b.view(&state.free.count),
-        };
+        });
         // SAFETY: the world's buffers, sized as the kernel asks (see `World`); the config
         // holds it only where every range is small enough.
         let op = unsafe {
@@ -39,12 +40,12 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     }
     // SAFETY (both binders): the views go into the op made with each.
     let mut b = unsafe { Binder::new() };
-    let mark = MarkArgs {
-        bodies: state.bodies(&mut b),
+    let mark = declared(&mut b, access::MARK_FREE, |b| MarkArgs {
+        bodies: state.bodies(b),
         ranges: b.view(&state.tables.ranges),
         flags: b.view(&marks.flags),
         tiles: b.view(&marks.tiles),
-    };
+    });
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
     let mut ops = vec![unsafe {
         threads_in(
@@ -65,14 +66,14 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
             .expect("the scan was made for the tiles"),
     );
     let mut b = unsafe { Binder::new() };
-    let gather = GatherArgs {
+    let gather = b.writing(access::GATHER_FREE, |b| GatherArgs {
         kind: b.view(&state.bodies.kind),
         ranges: b.view(&state.tables.ranges),
         flags: b.view(&marks.flags),
         tiles: b.view(&marks.tiles),
         list: b.view(&state.free.list),
         count: b.view(&state.free.count),
-    };
+    });
     // SAFETY: as above.
     ops.push(unsafe {
         threads_in(
@@ -85,4 +86,10 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         )
     });
     ops
+}
+
+/// The views `views` makes with `b`, writing only the buffers named in `written`, and
+/// leaving the bodies' frozen flag alone (the tally beside the free lists writes it).
+fn declared<R>(b: &mut Binder, written: &[&'static str], views: impl FnOnce(&mut Binder) -> R) -> R {
+    b.writing(written, |b| b.ignoring(access::FROZEN_UNREAD, views))
 }

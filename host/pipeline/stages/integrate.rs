@@ -5,6 +5,7 @@ use gpuwars_kernels::sim::integrate::IntegrateArgs;
 
 use crate::Op;
 use crate::backend::Binder;
+use crate::pipeline::access;
 use crate::pipeline::world::World;
 use crate::primitives::threads;
 
@@ -17,18 +18,19 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
     let (spec, physics) = (&world.spec, &world.spec.physics);
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
-    let args = IntegrateArgs {
-        bodies: world.state.bodies(&mut b),
+    let written = access::with_deaths(world.game.is_some(), &[access::INTEGRATE]);
+    let args = b.writing(&written, |b| IntegrateArgs {
+        bodies: world.state.bodies(b),
         kinds: b.view(&world.state.tables.info),
-        contacts: world.scratch.contacts(&mut b),
+        contacts: world.scratch.contacts(b),
         space: world.space,
         field: spec.field,
         dt: step_dt(world),
         integrator: physics.integrator.code(),
-        deaths: world.deaths(&mut b),
+        deaths: world.deaths(b),
         substep,
         reserved: 0,
-    };
+    });
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
     let op = unsafe {
         threads(

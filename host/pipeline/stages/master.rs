@@ -15,15 +15,26 @@ const BYTES: u64 = 128 * warp::WARP as u64;
 
 /// The master on one warp, in games.
 pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
-    on_one_warp(world, registry::MASTER)
+    on_one_warp(world, registry::MASTER, None)
 }
 
 /// `kernel` (the master before or after the physics) on one warp with the master's
-/// arguments, in games.
-pub(super) fn on_one_warp(world: &World, kernel: Kernel<MasterArgs>) -> Vec<Op> {
+/// arguments, in games; where `declared`, writing only the buffers it names first and
+/// leaving alone those it names second (see `Binder::writing`), else writing all.
+pub(super) fn on_one_warp(
+    world: &World,
+    kernel: Kernel<MasterArgs>,
+    declared: Option<(&[&'static str], &[&'static str])>,
+) -> Vec<Op> {
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
-    let Some(args) = world.master_args(&mut b) else {
+    let args = match declared {
+        Some((written, ignored)) => {
+            b.writing(written, |b| b.ignoring(ignored, |b| world.master_args(b)))
+        }
+        None => world.master_args(&mut b),
+    };
+    let Some(args) = args else {
         return Vec::new();
     };
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).

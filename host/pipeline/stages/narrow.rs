@@ -4,6 +4,7 @@ use gpuwars_kernels::sim::narrow::{CollideArgs, Relaxation};
 
 use crate::Op;
 use crate::backend::Binder;
+use crate::pipeline::access;
 use crate::pipeline::world::{TeamWarps, World};
 use crate::primitives::threads;
 
@@ -19,18 +20,18 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
     }
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
-    let args = CollideArgs {
-        bodies: world.state.bodies(&mut b),
+    let args = b.writing(access::NARROW, |b| CollideArgs {
+        bodies: world.state.bodies(b),
         kinds: b.view(&world.state.tables.info),
-        warps: TeamWarps::view(&mut b, &world.warps.narrow),
+        warps: TeamWarps::view(b, &world.warps.narrow),
         teams: world.config.narrow_teams,
         space: world.space,
-        grid: world.cells(&mut b),
-        contacts: world.scratch.contacts(&mut b),
+        grid: world.cells(b),
+        contacts: world.scratch.contacts(b),
         relax: relaxation(world),
         substep,
         reserved: 0,
-    };
+    });
     let threads_needed = u32::try_from(args.teams.threads(&world.layout.ranges))
         .expect("at most 32 threads a slot of at most 2^24 slots");
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).

@@ -2,10 +2,11 @@
 //! beside the rest of the step where that leaves what it reads alone.
 
 use gpuwars_kernels::game::autopilot::AutopilotArgs;
-use gpuwars_kernels::{registry, warp};
+use gpuwars_kernels::{DevSlice, registry, warp};
 
 use crate::Op;
 use crate::backend::Binder;
+use crate::pipeline::access;
 use crate::pipeline::world::World;
 use crate::primitives::threads;
 
@@ -19,17 +20,23 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     };
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
-    let grid = world.cells(&mut b);
-    let args = AutopilotArgs {
-        vel: b.view(&world.state.bodies.vel),
-        keys: b.view(&world.scratch.grid.keys),
-        kinds: b.view(&world.state.tables.info),
-        space: world.space,
-        grid,
-        steered: b.view(&game.data.steered),
-        rules: game.config.rules,
-        reserved: 0,
-    };
+    let args = b.writing(access::PILOT, |b| {
+        let grid = world.cells(b);
+        AutopilotArgs {
+            // Read only where the grid keeps no velocities of its own.
+            vel: match grid.vel.is_empty() {
+                true => b.view(&world.state.bodies.vel),
+                false => DevSlice::EMPTY,
+            },
+            keys: b.view(&world.scratch.grid.keys),
+            kinds: b.view(&world.state.tables.info),
+            space: world.space,
+            grid,
+            steered: b.view(&game.data.steered),
+            rules: game.config.rules,
+            reserved: 0,
+        }
+    });
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
     let op = unsafe {
         threads(
@@ -40,18 +47,10 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
             64 * u64::from(warp::WARP),
         )
     };
-    let to_the_end = !grid.vel.is_empty();
+    let to_the_end = !args.grid.vel.is_empty();
     if to_the_end && world.spec.physics.substeps > 1 {
         // The next substep's grid would replace the one it reads.
         return vec![op];
     }
-    // SAFETY: the stages after it (the physics, free lists, effects, tally; where the grid
-    // keeps no velocities, up to the integrator, which joins it) write the bodies'
-    // contacts, forces, machines, energies and liveness, the free lists, particles, the
-    // status, the mailbox and the frozen flag, none of which the autopilot reads (the
-    // grid's keys, entries, places and velocities, and the kinds: written by the broad
-    // phase and the renumbering, before it, or made with the world; the bodies'
-    // velocities only where the integrator joins it before it changes them), and none of
-    // them touches the input it writes, which the next step's master reads.
-    vec![unsafe { op.beside() }]
+    vec![op.beside()]
 }

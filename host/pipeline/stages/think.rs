@@ -8,6 +8,7 @@ use super::integrate::step_dt;
 use super::narrow::relaxation;
 use crate::Op;
 use crate::backend::Binder;
+use crate::pipeline::access;
 use crate::pipeline::world::{TeamWarps, World};
 use crate::primitives::threads;
 
@@ -21,20 +22,25 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     let slots = u64::from(teams.end_slot - teams.first_slot);
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
-    let args = ThinkArgs {
-        bodies: world.state.bodies(&mut b),
+    // In one launch the narrow phase, the machines and the integrator write theirs.
+    let written = match world.config.one_launch {
+        true => access::with_deaths(true, &[access::NARROW, access::THINK, access::INTEGRATE]),
+        false => access::with_deaths(true, &[access::THINK]),
+    };
+    let args = b.writing(&written, |b| ThinkArgs {
+        bodies: world.state.bodies(b),
         kinds: b.view(&world.state.tables.info),
         space: world.space,
-        grid: world.cells(&mut b),
-        contacts: world.scratch.contacts(&mut b),
+        grid: world.cells(b),
+        contacts: world.scratch.contacts(b),
         brains: b.view(&game.data.brains),
-        warps: TeamWarps::view(&mut b, &world.warps.think),
+        warps: TeamWarps::view(b, &world.warps.think),
         teams,
         status: b.view(&game.data.status),
         ship: game.config.rules.ship.start,
         shot_kind: game.config.rules.shot_kind,
-        deaths: world.deaths(&mut b),
-    };
+        deaths: world.deaths(b),
+    });
     let threads_needed = u32::try_from(teams.threads(&world.layout.ranges))
         .expect("at most 32 threads a slot of at most 2^24 slots");
     // SAFETY (each op below): the world's buffers, sized as the kernels ask (see `World`).
