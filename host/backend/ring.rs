@@ -10,7 +10,7 @@ use std::collections::VecDeque;
 use std::sync::Arc;
 
 use super::cuda::Fence;
-use super::{Buffer, BufferImp, Device, Element, Error, Imp};
+use super::{Buffer, BufferImp, Device, DeviceId, Element, Error, Imp};
 
 /// A ring of steps in flight, each with one input `I` and one output `O`.
 pub struct Ring<I: Element, O: Element> {
@@ -25,6 +25,8 @@ pub struct Ring<I: Element, O: Element> {
     in_flight: VecDeque<usize>,
     /// Steps queued so far.
     queued: u64,
+    /// The device whose steps it holds.
+    device: DeviceId,
     /// The outputs as read back, by slot.
     outputs_read: Vec<O>,
 }
@@ -39,6 +41,8 @@ impl Device {
         inputs: &Buffer<I>,
         outputs: &Buffer<O>,
     ) -> Result<Ring<I, O>, Error> {
+        inputs.device().check(self.id, "a ring's buffer")?;
+        outputs.device().check(self.id, "a ring's buffer")?;
         let depth = inputs.len();
         if depth == 0 || outputs.len() != depth {
             return Err(Error::Invalid(format!(
@@ -64,6 +68,7 @@ impl Device {
             fences,
             in_flight: VecDeque::with_capacity(depth),
             queued: 0,
+            device: self.id,
             outputs_read: vec![O::zeroed(); depth],
         })
     }
@@ -151,11 +156,9 @@ impl<I: Element, O: Element> Ring<I, O> {
         Ok(Some(self.outputs_read[slot]))
     }
 
-    /// Checks that `device` is the ring's backend and that a step has room.
+    /// Checks that `device` is the ring's and that a step has room.
     fn check(&self, device: &Device) -> Result<(), Error> {
-        if matches!(device.imp, Imp::Cuda(_)) == self.fences.is_empty() {
-            return Err(Error::Invalid("a ring of another backend".into()));
-        }
+        self.device.check(device.id, "a ring")?;
         if self.in_flight.len() >= self.depth() {
             return Err(Error::Invalid(format!(
                 "{} steps in flight in a ring of depth {}: reserve first",

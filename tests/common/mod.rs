@@ -120,7 +120,7 @@ pub fn histogram_op(
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
     let args = HistogramArgs {
-        keys: b.view(keys),
+        keys: b.read(keys),
         counts: b.view(counts),
         n,
         reserved: 0,

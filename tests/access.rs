@@ -1,0 +1,188 @@
+//! Work meets only memory of its own device, and ops beside each other only what neither
+//! writes: a buffer, op, plan or ring of one device is refused on another with an error in
+//! words, a plan refuses an op beside the others that meets what the ops it runs beside
+//! write, and a race the declarations hide (written on purpose, against `Op::launch`'s
+//! contract) changes the results of the CPU emulation's shuffled schedule.
+
+mod common;
+
+use common::{histogram, histogram_op};
+use gpuwars::backend::{Binder, Launch, Schedule};
+use gpuwars::kernels::primitives::touch::TouchArgs;
+use gpuwars::kernels::registry;
+use gpuwars::primitives::PrefixSum;
+use gpuwars::{Buffer, Device, Error, Op};
+
+/// A second CPU emulation: another device, with its own order.
+fn other_cpu() -> Device {
+    Device::cpu(Some(2), "tests: another device").unwrap()
+}
+
+/// `err` is the refusal of work of one device on another.
+fn refused(err: Error) {
+    assert!(matches!(err, Error::Invalid(_)), "{err}");
+    assert!(err.to_string().contains("used on device #"), "{err}");
+}
+
+/// The program that raced before devices had identities: a prefix sum made with one
+/// device's buffers, run on another, is refused when its plan is made, and so is every
+/// host transfer of one device's buffer through another.
+fn a_prefix_sum_of_one_device_is_refused_on_another(device: &Device) {
+    let other = other_cpu();
+    let data = device.upload(&[1u32; 64]).unwrap();
+    let scan = PrefixSum::new(device, 64).unwrap();
+    let ops = scan.ops(&data, &data, 64).unwrap();
+    refused(other.plan(ops.clone(), false).err().expect("another device"));
+    refused(other.download(&data).err().expect("another device"));
+    let mut mine = other.alloc_zeroed::<u32>(64).unwrap();
+    refused(other.copy(&data, &mut mine).err().expect("another device"));
+    refused(device.copy(&data, &mut mine).err().expect("another device"));
+    refused(device.write(&mut mine, &[1]).err().expect("another device"));
+    refused(device.zero(&mut mine).err().expect("another device"));
+    // Its own device runs it.
+    let plan = device.plan(ops, false).unwrap();
+    device.run(&plan).unwrap();
+    let expected: Vec<u32> = (0..64).collect();
+    assert_eq!(device.download(&data).unwrap(), expected);
+    refused(other.run(&plan).err().expect("another device"));
+}
+
+/// An op whose views are of two devices' buffers is refused, naming both.
+fn an_op_of_two_devices_is_refused(device: &Device) {
+    let other = other_cpu();
+    let keys = device.upload(&[0u32; 32]).unwrap();
+    let counts = other.alloc_zeroed::<u32>(1).unwrap();
+    for on in [device, &other] {
+        let err = on
+            .plan(vec![histogram_op(&keys, &counts, 32, 1, 32)], false)
+            .err()
+            .expect("two devices");
+        assert!(err.to_string().contains("one device's"), "{err}");
+    }
+}
+
+/// A ring is its device's: made over another's buffers, or used on another, it refuses.
+fn a_ring_is_its_devices(device: &Device) {
+    let other = other_cpu();
+    let inputs = device.alloc_shared::<u32>(2).unwrap();
+    let outputs = device.alloc_shared::<u32>(2).unwrap();
+    refused(other.ring(&inputs, &outputs).err().expect("another device"));
+    let mut ring = device.ring(&inputs, &outputs).unwrap();
+    refused(ring.send(&other, 7).err().expect("another device"));
+    ring.send(device, 7).unwrap();
+}
+
+/// One read-modify-write of each of `data`'s elements, beside the ops after it; `data`
+/// viewed as written, or (`lie`) as read only, against `Op::launch`'s contract.
+fn touch_beside(data: &Buffer<u32>, lie: bool) -> Op {
+    // SAFETY: the view goes into this op only.
+    let mut b = unsafe { Binder::new() };
+    let args = TouchArgs {
+        data: match lie {
+            true => b.read(data),
+            false => b.view(data),
+        },
+    };
+    let launch = Launch {
+        kernel: registry::TOUCH,
+        grid: (data.len() as u32).div_ceil(64),
+        block: 64,
+        args,
+    };
+    // SAFETY: a buffer of the binder, a thread an element; with `lie` the kernel writes a
+    // view declared read only: a race this test makes on purpose, on the CPU only.
+    unsafe { Op::launch(launch, b, 0) }.beside()
+}
+
+/// A plan refuses an op beside the others that writes what an op it runs beside reads,
+/// with an error that names both ops and the buffer, and takes it where the reader waits
+/// for the branch (`after_branches`).
+fn a_branch_that_writes_what_the_chain_reads_is_refused(device: &Device) {
+    let keys = device.upload(&[1u32; 256]).unwrap().named("keys");
+    let counts = device.alloc_zeroed::<u32>(4).unwrap();
+    let racing = vec![
+        touch_beside(&keys, false),
+        histogram_op(&keys, &counts, 256, 2, 128),
+    ];
+    let err = device.plan(racing, false).err().expect("a race");
+    let text = err.to_string();
+    for word in ["`touch`", "`histogram`", "writes `keys`"] {
+        assert!(text.contains(word), "{text}");
+    }
+    // The same ops, the histogram waiting for the branch: taken, and the keys touched first.
+    let waiting = vec![
+        touch_beside(&keys, false),
+        histogram_op(&keys, &counts, 256, 2, 128).after_branches(),
+    ];
+    device.run(&device.plan(waiting, false).unwrap()).unwrap();
+    assert_eq!(device.download(&counts).unwrap(), [0, 0, 256, 0]);
+    // Beside an op that touches none of its buffers, an op runs beside: taken.
+    let elsewhere = device.upload(&[3u32; 64]).unwrap();
+    let apart = vec![
+        touch_beside(&elsewhere, false),
+        histogram_op(&keys, &counts, 256, 2, 128),
+    ];
+    device.plan(apart, false).unwrap();
+}
+
+/// A name an op declares it writes that none of its views has is a slip, refused.
+#[test]
+fn a_declared_name_no_view_has_is_refused() {
+    let device = common::cpu();
+    let data = device.upload(&[0u32; 32]).unwrap();
+    // SAFETY: the view goes into this op only.
+    let mut b = unsafe { Binder::new() };
+    let args = b.writing(&["Bodies.pos"], |b| TouchArgs { data: b.view(&data) });
+    let launch = Launch {
+        kernel: registry::TOUCH,
+        grid: 1,
+        block: 32,
+        args,
+    };
+    // SAFETY: a buffer of the binder, a thread an element (the declaration is refused).
+    let op = unsafe { Op::launch(launch, b, 0) };
+    let err = device.plan(vec![op], false).err().expect("a slip");
+    assert!(err.to_string().contains("`Bodies.pos`"), "{err}");
+}
+
+/// A race the declarations hide: the touch writes the keys it says it only reads, beside a
+/// histogram of them. The plan takes it (nothing declared meets), and the CPU emulation in
+/// order gives the touched keys' histogram; its shuffled schedule, which starts each branch
+/// where it forks (beside the histogram, on another thread) or where it joins (after it),
+/// gives another for some seeds: the determinism tests, which compare the two schedules,
+/// fail on CI rather than on a GPU.
+#[test]
+fn a_hidden_race_changes_the_shuffled_schedules_results() {
+    let n = 4096u32;
+    let run = |device: &Device| {
+        let keys = device.upload(&vec![1u32; n as usize]).unwrap();
+        let counts = device.alloc_zeroed::<u32>(4).unwrap();
+        let plan = device
+            .plan(
+                vec![
+                    touch_beside(&keys, true),
+                    histogram_op(&keys, &counts, n, n / 128, 128),
+                ],
+                false,
+            )
+            .unwrap();
+        device.run(&plan).unwrap();
+        device.download(&counts).unwrap()
+    };
+    let in_order = run(&Device::cpu(Some(2), "tests").unwrap());
+    assert_eq!(in_order, histogram(&vec![2; n as usize], 4));
+    let shuffled: Vec<Vec<u32>> = (0..8)
+        .map(|seed| run(&Device::cpu_scheduled(Some(2), Schedule::Shuffled { seed }, "tests").unwrap()))
+        .collect();
+    assert!(
+        shuffled.iter().any(|counts| *counts != in_order),
+        "every shuffled schedule hid the race: {shuffled:?}"
+    );
+}
+
+on_both_backends!(
+    a_prefix_sum_of_one_device_is_refused_on_another,
+    an_op_of_two_devices_is_refused,
+    a_ring_is_its_devices,
+    a_branch_that_writes_what_the_chain_reads_is_refused,
+);
