@@ -15,6 +15,7 @@
 //!   rectangles, shots, vision), to show that a scene costs only what it uses.
 
 pub mod analytic;
+pub mod plots;
 pub mod reference;
 
 use std::path::PathBuf;
@@ -24,7 +25,7 @@ use anyhow::Context as _;
 use glam::Vec2;
 use serde::{Deserialize, Serialize};
 
-use super::{Outputs, Provenance, plot, progress, write_csv, write_json};
+use super::{Outputs, Provenance, progress, write_csv, write_json};
 use crate::files::write_atomically;
 use crate::game::accuracy::{AuditLength, audit_game};
 use crate::game::spec::Machine;
@@ -744,10 +745,10 @@ pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<Tradeof
     write_csv(&outputs.csv, &summary.physics)?;
     write_json(&outputs.json, &summary)?;
     write_atomically(&outputs.markdown(), summary.to_markdown().as_bytes())?;
-    plot::pareto(&outputs.png, &summary)
+    plots::pareto(&outputs.png, &summary)
         .with_context(|| format!("plotting {}", outputs.png.display()))?;
     let game_png = outputs.game_png();
-    plot::game_pareto(&game_png, &summary)
+    plots::game_pareto(&game_png, &summary)
         .with_context(|| format!("plotting {}", game_png.display()))?;
     Ok(summary)
 }
