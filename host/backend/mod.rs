@@ -20,18 +20,31 @@ use std::sync::{Arc, Mutex};
 
 pub use gpuwars_kernels::data::Element;
 use gpuwars_kernels::data::{Build, Convert, Store};
-use gpuwars_kernels::{DevSlice, KernelArgs};
+use gpuwars_kernels::{DevSlice, Kernel, KernelArgs};
 use serde::Serialize;
 
 pub use cpu::Schedule;
 pub use cuda::GpuProperties;
 pub use interop::GlBuffer;
-pub use plan::{Binder, Launch, Op, Plan};
+pub use plan::{Binder, Op, Plan};
 pub use ring::Ring;
 
 /// The largest block the GPU accepts; the emulator enforces it too, so that a launch that runs
 /// on one backend runs on the other.
 pub const MAX_BLOCK: u32 = 1024;
+
+/// One kernel launch: the kernel, `grid` blocks of `block` threads, and its arguments.
+#[derive(Clone, Copy, Debug)]
+pub struct Launch<A> {
+    /// The kernel.
+    pub kernel: Kernel<A>,
+    /// Blocks (a launch of none does nothing).
+    pub grid: u32,
+    /// Threads per block (1 to [`MAX_BLOCK`]).
+    pub block: u32,
+    /// The kernel's argument struct.
+    pub args: A,
+}
 
 /// What went wrong on the host side of a kernel or a transfer.
 #[derive(Debug, thiserror::Error)]

@@ -15,23 +15,10 @@ use std::time::Instant;
 
 use cudarc::driver::CudaGraph;
 use gpuwars_kernels::data::{Convert, View};
-use gpuwars_kernels::{DevSlice, Kernel, KernelArgs};
+use gpuwars_kernels::{DevSlice, KernelArgs};
 
 use super::cuda::Fence;
-use super::{Buffer, Buffers, Device, Element, Error, Hold, Imp};
-
-/// One kernel launch: the kernel, `grid` blocks of `block` threads, and its arguments.
-#[derive(Clone, Copy, Debug)]
-pub struct Launch<A> {
-    /// The kernel.
-    pub kernel: Kernel<A>,
-    /// Blocks (a launch of none does nothing).
-    pub grid: u32,
-    /// Threads per block (1 to [`super::MAX_BLOCK`]).
-    pub block: u32,
-    /// The kernel's argument struct.
-    pub args: A,
-}
+use super::{Buffer, Buffers, Device, Element, Error, Hold, Imp, Launch};
 
 /// Makes the views of buffers that go into one op's arguments, and takes a [`Hold`] of
 /// each, which the op keeps: views and holds go together.
