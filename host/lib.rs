@@ -19,6 +19,7 @@ pub mod primitives;
 pub mod ptx;
 pub mod sim;
 pub mod sound;
+mod terminal;
 
 pub use backend::{BackendKind, BackendRequest, Buffer, Device, Element, Error, Op, Plan};
 pub use gpuwars_kernels as kernels;

@@ -5,6 +5,8 @@
 //! [`Device::select`] picks the backend at run time: `auto` takes the GPU when the driver and a
 //! device are there and otherwise says once, on stderr, why it runs on the CPU.
 
+pub mod floor;
+
 mod cpu;
 mod cuda;
 mod interop;
@@ -691,6 +693,15 @@ impl Device {
             Imp::Cpu(_) => Ok(()),
             Imp::Cuda(gpu) => gpu.synchronize(),
         }
+    }
+}
+
+/// A short description of the device.
+pub fn device_name(device: &Device) -> String {
+    match (device.gpu_properties(), device.cpu_threads()) {
+        (Some(gpu), _) => gpu.name.clone(),
+        (None, Some(threads)) => format!("CPU emulation, {threads} threads"),
+        (None, None) => "CPU emulation".to_string(),
     }
 }
 

@@ -12,7 +12,7 @@ use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::plot::{legend, log_range, png};
-use super::{Outputs, Provenance, Spread, progress, write_csv, write_json};
+use super::{Outputs, Provenance, Spread, write_csv, write_json};
 use crate::Device;
 use crate::game::scene::built_in;
 use crate::game::{Game, Options};
@@ -24,6 +24,7 @@ use crate::graphics::unpack;
 use crate::meter::{Second, Seconds};
 use crate::pipeline::Profile;
 use crate::play::{Pilot, PlayOptions};
+use crate::terminal::progress;
 
 /// What the measured frames show: the whole field, as the paper's experiment drew it (and
 /// as earlier runs of this benchmark did, so that their summaries compare).

@@ -11,12 +11,14 @@ use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::plot::{legend, log_range, png};
-use super::{Outputs, Provenance, floor, progress, write_csv, write_json};
+use super::{Outputs, Provenance, write_csv, write_json};
+use crate::backend::floor;
 use crate::files::thousands;
 use crate::game::scene::built_in;
 use crate::game::{Game, Options, Scene};
 use crate::graphics::camera::Camera;
 use crate::pipeline::Profile;
+use crate::terminal::progress;
 use crate::{Device, Error};
 
 /// The fewest enemies measured.
@@ -57,7 +59,7 @@ pub struct ScaleRow {
     pub step_us: f64,
     /// The launch floor of a step this size: as many one-touch launches as it makes over
     /// its slots, replayed as a graph launched as the step's is (µs; see
-    /// `benchmark::floor`).
+    /// `backend::floor`).
     pub floor_us: f64,
     /// Each stage's share of it, in step order: `stage=µs` joined by spaces.
     pub stages: String,

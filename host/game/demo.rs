@@ -11,14 +11,15 @@ use super::Game;
 use super::engine::Options;
 use super::replay::Replay;
 use super::spec::Scene;
-use crate::benchmark::floor::{self, Floor};
-use crate::benchmark::progress;
+use crate::backend::device_name;
+use crate::backend::floor::{self, Floor};
 use crate::graphics::Renderer;
 use crate::graphics::bodies::BodyRenderer;
 use crate::graphics::camera::Camera;
 use crate::graphics::headless::Headless;
 use crate::pipeline::{Frame, Profile};
 use crate::sim::WorldSpec;
+use crate::terminal::progress;
 use crate::{BackendKind, Device, Error};
 
 /// What `gpuwars demo` and `gpuwars replay` print.
@@ -182,15 +183,6 @@ impl Report {
             );
         }
         out
-    }
-}
-
-/// A short description of the device.
-pub fn device_name(device: &Device) -> String {
-    match (device.gpu_properties(), device.cpu_threads()) {
-        (Some(gpu), _) => gpu.name.clone(),
-        (None, Some(threads)) => format!("CPU emulation, {threads} threads"),
-        (None, None) => "CPU emulation".to_string(),
     }
 }
 

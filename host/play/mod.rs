@@ -34,7 +34,8 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::PhysicalKey;
 use winit::window::{Fullscreen, Window, WindowId};
 
-use crate::game::demo::{Record, device_name};
+use crate::backend::device_name;
+use crate::game::demo::Record;
 use crate::game::highscore::{self, HighScores};
 use crate::game::replay::Replay;
 use crate::game::{Game, Options, Scene};

@@ -25,7 +25,7 @@ use anyhow::Context as _;
 use glam::Vec2;
 use serde::{Deserialize, Serialize};
 
-use super::{Outputs, Provenance, progress, write_csv, write_json};
+use super::{Outputs, Provenance, write_csv, write_json};
 use crate::files::write_atomically;
 use crate::game::accuracy::{AuditLength, audit_game};
 use crate::game::spec::Machine;
@@ -33,6 +33,7 @@ use crate::game::{Game, Options, Scene};
 use crate::pipeline::{Pipeline, Profile, Simulation};
 use crate::sim::audit::{Accuracy, BODY_WALL, ENEMY_SHIP, SHOT_ENEMY};
 use crate::sim::{Boundary, Field, Integrator, KindSpec, Physics, Shape, Sweep, WorldSpec};
+use crate::terminal::progress;
 use crate::{Device, Error};
 use analytic::AnalyticRow;
 use reference::Reference;
