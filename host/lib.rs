@@ -7,7 +7,9 @@
 
 pub mod backend;
 pub mod benchmark;
+pub mod camera;
 pub mod cli;
+pub mod demo;
 pub mod files;
 pub mod game;
 pub mod graphics;

@@ -11,11 +11,11 @@ use glam::Vec2;
 use glium::texture::RawImage2d;
 use gpuwars::Device;
 use gpuwars::backend::Schedule;
+use gpuwars::camera::{self, Camera, CameraMode};
 use gpuwars::game::looks::{BACKGROUND, rgb};
 use gpuwars::game::scene::built_in;
 use gpuwars::game::{Game, Scene};
 use gpuwars::graphics::bodies::BodyRenderer;
-use gpuwars::graphics::camera::{self, Camera, CameraMode};
 use gpuwars::graphics::headless::Headless;
 use gpuwars::graphics::picture::DeviceImage;
 use gpuwars::kernels::registry;
@@ -1245,7 +1245,7 @@ on_both_backends!(
 
 #[test]
 fn zooming_out_stops_at_the_whole_field_and_zooming_in_starts_at_once() {
-    use gpuwars::graphics::camera::Camera;
+    use gpuwars::camera::Camera;
     let field = Vec2::new(4096.0, 4096.0);
     let mut camera = Camera::default();
     for _ in 0..40 {

@@ -35,12 +35,12 @@ use winit::keyboard::PhysicalKey;
 use winit::window::{Fullscreen, Window, WindowId};
 
 use crate::backend::device_name;
-use crate::game::demo::Record;
+use crate::camera::{self, Camera};
+use crate::demo::Record;
 use crate::game::highscore::{self, HighScores};
 use crate::game::replay::Replay;
 use crate::game::{Game, Options, Scene};
 use crate::graphics::bodies::BodyRenderer;
-use crate::graphics::camera::{self, Camera};
 use crate::graphics::headless::Target;
 use crate::graphics::hud::text_image;
 use crate::graphics::picture::{Blit, DeviceImage, Upload};

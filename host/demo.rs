@@ -7,15 +7,15 @@ use std::time::Instant;
 use gpuwars_kernels::game::control::{DESTROYED, Input, Status, TOO_SLOW};
 use serde::Serialize;
 
-use super::Game;
-use super::engine::Options;
-use super::replay::Replay;
-use super::spec::Scene;
 use crate::backend::device_name;
 use crate::backend::floor::{self, Floor};
+use crate::camera::Camera;
+use crate::game::Game;
+use crate::game::engine::Options;
+use crate::game::replay::Replay;
+use crate::game::spec::Scene;
 use crate::graphics::Renderer;
 use crate::graphics::bodies::BodyRenderer;
-use crate::graphics::camera::Camera;
 use crate::graphics::headless::Headless;
 use crate::pipeline::{Frame, Profile};
 use crate::sim::WorldSpec;
@@ -446,7 +446,7 @@ pub fn demo(
     };
     let (report, inputs, state_hash) = play(&mut game, setup_s, seed, steps, options, |_| pilot)?;
     let replay = Replay {
-        version: super::replay::VERSION,
+        version: crate::game::replay::VERSION,
         scene: scene.name.clone(),
         scene_toml: scene.source.clone(),
         seed,
