@@ -1,6 +1,7 @@
 //! The shape of the sources: no file of the host crate (`host/`) or of the kernels crate
-//! (`kernels/src/`) imports itself through other files, and no top-level module of either
-//! imports itself through other top-level modules.
+//! (`kernels/src/`) imports itself through other files, no top-level module of either
+//! imports itself through other top-level modules, and no file of `host/` is longer than
+//! [`MAX_LINES`] lines.
 //!
 //! What counts as "file A imports file B": A names, in code (not in comments, doc comments
 //! or literals), a path that starts with `crate::`, `$crate::`, `super::` or `self::` and
@@ -15,8 +16,8 @@
 //! Not counted: paths that start with a bare name, that is a parent naming its own child
 //! module (`mod x; use x::Y;`: a parent declares its parts, while a child's `super::` paths
 //! up to it are counted) or another crate; glob re-exports; a file's paths into itself.
-//! `host/main.rs` is the binary's own crate root, naming the library as `gpuwars::`: it has
-//! no edges.
+//! `host/main.rs` is the binary's own crate root, naming the library as `gpuwars::`: its
+//! length is checked, it has no edges.
 //!
 //! The reading is a tokenizer that skips comments and string and character literals, not a
 //! Rust parser: a path that a macro pastes together from pieces is not seen.
@@ -24,6 +25,9 @@
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::fs;
 use std::path::Path;
+
+/// The most lines a file of `host/` may have.
+const MAX_LINES: usize = 800;
 
 /// The files of one crate: its source folder and each file's path and text.
 struct Crate {
@@ -514,6 +518,21 @@ fn no_top_level_module_imports_itself_through_others() {
         found.is_empty(),
         "modules that import each other:\n{}",
         found.join("\n")
+    );
+}
+
+#[test]
+fn no_host_file_is_too_long() {
+    let host = Crate::read("host", &[]);
+    let long: Vec<String> = (host.files.iter())
+        .map(|(path, text)| (path, text.lines().count()))
+        .filter(|&(_, lines)| lines > MAX_LINES)
+        .map(|(path, lines)| format!("{path}: {lines} lines"))
+        .collect();
+    assert!(
+        long.is_empty(),
+        "over {MAX_LINES} lines:\n{}",
+        long.join("\n")
     );
 }
 
