@@ -21,10 +21,10 @@
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glium::Surface;
 use gpuwars::BackendKind;
+use gpuwars::camera::Camera;
 use gpuwars::game::scene::built_in;
 use gpuwars::game::{Game, looks};
 use gpuwars::graphics::bodies::BodyRenderer;
-use gpuwars::graphics::camera::Camera;
 use gpuwars::graphics::headless::{Headless, Target};
 use gpuwars::graphics::picture::{Blit, DeviceImage, Upload};
 use gpuwars::graphics::unpack;

@@ -9,13 +9,13 @@ use clap::{Args, Parser, Subcommand};
 
 use crate::BackendRequest;
 use crate::benchmark::{Outputs, scale};
+use crate::camera::{Camera, CameraMode, DEFAULT_ZOOM, MAX_ZOOM, MIN_ZOOM};
+use crate::demo::{DemoPilot, Frames, RunOptions};
 use crate::files::{RunFiles, shown, thousands};
 use crate::game::Options;
-use crate::game::demo::{DemoPilot, Frames, RunOptions};
 use crate::game::replay::MAX_STEPS;
 use crate::game::{highscore, scene};
 use crate::graphics::Renderer;
-use crate::graphics::camera::{Camera, CameraMode, DEFAULT_ZOOM, MAX_ZOOM, MIN_ZOOM};
 use crate::pipeline::Lanes;
 use crate::pipeline::draw::MAX_SIDE;
 use crate::play::Pilot;

@@ -7,7 +7,9 @@
 
 pub mod backend;
 pub mod benchmark;
+pub mod camera;
 pub mod cli;
+pub mod demo;
 pub mod files;
 pub mod game;
 pub mod graphics;
@@ -19,6 +21,7 @@ pub mod primitives;
 pub mod ptx;
 pub mod sim;
 pub mod sound;
+mod terminal;
 
 pub use backend::{BackendKind, BackendRequest, Buffer, Device, Element, Error, Op, Plan};
 pub use gpuwars_kernels as kernels;

@@ -13,9 +13,9 @@ use gpuwars::benchmark::tradeoff::{self, TradeoffOptions, TradeoffSummary};
 use gpuwars::cli::{
     BenchCommand, Cli, Command, THREADS_PER_CPU, cpu_threads, default_demo, defaults,
 };
+use gpuwars::demo::{self, Report, RunOptions};
 use gpuwars::files::{excerpt, shown, thousands};
 use gpuwars::game::Scene;
-use gpuwars::game::demo::{self, Report, RunOptions};
 use gpuwars::game::engine::footprint;
 use gpuwars::game::replay::Replay;
 use gpuwars::game::scene;

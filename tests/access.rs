@@ -32,19 +32,24 @@ fn a_prefix_sum_of_one_device_is_refused_on_another(device: &Device) {
     let data = device.upload(&[1u32; 64]).unwrap();
     let scan = PrefixSum::new(device, 64).unwrap();
     let ops = scan.ops(&data, &data, 64).unwrap();
-    refused(other.plan(ops.clone(), false).err().expect("another device"));
-    refused(other.download(&data).err().expect("another device"));
+    refused(
+        other
+            .plan(ops.clone(), false)
+            .err()
+            .expect("another device"),
+    );
+    refused(other.download(&data).expect_err("another device"));
     let mut mine = other.alloc_zeroed::<u32>(64).unwrap();
-    refused(other.copy(&data, &mut mine).err().expect("another device"));
-    refused(device.copy(&data, &mut mine).err().expect("another device"));
-    refused(device.write(&mut mine, &[1]).err().expect("another device"));
-    refused(device.zero(&mut mine).err().expect("another device"));
+    refused(other.copy(&data, &mut mine).expect_err("another device"));
+    refused(device.copy(&data, &mut mine).expect_err("another device"));
+    refused(device.write(&mut mine, &[1]).expect_err("another device"));
+    refused(device.zero(&mut mine).expect_err("another device"));
     // Its own device runs it.
     let plan = device.plan(ops, false).unwrap();
     device.run(&plan).unwrap();
     let expected: Vec<u32> = (0..64).collect();
     assert_eq!(device.download(&data).unwrap(), expected);
-    refused(other.run(&plan).err().expect("another device"));
+    refused(other.run(&plan).expect_err("another device"));
 }
 
 /// An op whose views are of two devices' buffers is refused, naming both.
@@ -68,7 +73,7 @@ fn a_ring_is_its_devices(device: &Device) {
     let outputs = device.alloc_shared::<u32>(2).unwrap();
     refused(other.ring(&inputs, &outputs).err().expect("another device"));
     let mut ring = device.ring(&inputs, &outputs).unwrap();
-    refused(ring.send(&other, 7).err().expect("another device"));
+    refused(ring.send(&other, 7).expect_err("another device"));
     ring.send(device, 7).unwrap();
 }
 
@@ -132,7 +137,9 @@ fn a_declared_name_no_view_has_is_refused() {
     let data = device.upload(&[0u32; 32]).unwrap();
     // SAFETY: the view goes into this op only.
     let mut b = unsafe { Binder::new() };
-    let args = b.writing(&["Bodies.pos"], |b| TouchArgs { data: b.view(&data) });
+    let args = b.writing(&["Bodies.pos"], |b| TouchArgs {
+        data: b.view(&data),
+    });
     let launch = Launch {
         kernel: registry::TOUCH,
         grid: 1,
@@ -172,7 +179,9 @@ fn a_hidden_race_changes_the_shuffled_schedules_results() {
     let in_order = run(&Device::cpu(Some(2), "tests").unwrap());
     assert_eq!(in_order, histogram(&vec![2; n as usize], 4));
     let shuffled: Vec<Vec<u32>> = (0..8)
-        .map(|seed| run(&Device::cpu_scheduled(Some(2), Schedule::Shuffled { seed }, "tests").unwrap()))
+        .map(|seed| {
+            run(&Device::cpu_scheduled(Some(2), Schedule::Shuffled { seed }, "tests").unwrap())
+        })
         .collect();
     assert!(
         shuffled.iter().any(|counts| *counts != in_order),

@@ -126,9 +126,9 @@ fn an_op_beside_the_others_is_joined_at_the_plans_end(device: &Device) {
         let fast_counts = device.alloc_zeroed::<u32>(8).unwrap();
         // Far longer than the fast launch after it.
         let beside = histogram(&slow, &slow_counts, slow_n as u32, slow_n as u32 / 32, 32);
-        // SAFETY: the ops after it touch other buffers.
+        // The ops after it touch other buffers (making the plan checks it).
         let ops = vec![
-            unsafe { beside.beside() },
+            beside.beside(),
             histogram(&fast, &fast_counts, fast_n as u32, 8, 128),
         ];
         let plan = device.plan(ops, graph).unwrap();
@@ -159,9 +159,9 @@ fn an_op_after_the_branches_sees_what_they_wrote(device: &Device) {
         let fast_counts = device.alloc_zeroed::<u32>(8).unwrap();
         let scan = PrefixSum::new(device, 8).unwrap();
         let beside = histogram(&slow, &slow_counts, slow_n as u32, slow_n as u32 / 32, 32);
-        // SAFETY: the op after it touches other buffers, up to the scan after the branches.
+        // The op after it touches other buffers, up to the scan after the branches.
         let mut ops = vec![
-            unsafe { beside.beside() },
+            beside.beside(),
             histogram(&fast, &fast_counts, 1000, 8, 128),
         ];
         let scanned = scan.ops(&slow_counts, &sums, 8).unwrap();

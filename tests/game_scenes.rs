@@ -5,10 +5,10 @@ mod common;
 
 use gpuwars::Device;
 use gpuwars::backend::Schedule;
+use gpuwars::demo::{self, DemoPilot, RunOptions};
 use gpuwars::game::Options;
-use gpuwars::game::demo::{DemoPilot, RunOptions};
 use gpuwars::game::scene::built_in;
-use gpuwars::game::{Game, Scene, demo};
+use gpuwars::game::{Game, Scene};
 use gpuwars::kernels::game::control::{Input, Status};
 use gpuwars::kernels::registry;
 use gpuwars::pipeline::Lanes;

@@ -9,8 +9,8 @@ use std::path::Path;
 use std::process::Command;
 use std::sync::Mutex;
 
+use gpuwars::demo::{self, RunOptions};
 use gpuwars::game::Game;
-use gpuwars::game::demo::{self, RunOptions};
 use gpuwars::game::highscore::{self, HighScores};
 use gpuwars::game::replay::Replay;
 use gpuwars::kernels::game::control::{AIM_STEPS, Input, MOVE_SCALE};

@@ -4,7 +4,7 @@ mod common;
 
 use common::{EDGE_SIZES, random_below, rng_for};
 use gpuwars::Device;
-use gpuwars::benchmark::floor;
+use gpuwars::backend::floor;
 use gpuwars::primitives::{CountingSort, PrefixSum, histogram};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};

@@ -11,18 +11,18 @@ use glam::Vec2;
 use glium::texture::RawImage2d;
 use gpuwars::Device;
 use gpuwars::backend::Schedule;
+use gpuwars::camera::{self, Camera, CameraMode};
 use gpuwars::game::looks::{BACKGROUND, rgb};
 use gpuwars::game::scene::built_in;
 use gpuwars::game::{Game, Scene};
 use gpuwars::graphics::bodies::BodyRenderer;
-use gpuwars::graphics::camera::{self, Camera, CameraMode};
 use gpuwars::graphics::headless::Headless;
 use gpuwars::graphics::picture::DeviceImage;
 use gpuwars::kernels::registry;
-use gpuwars::kernels::render::camera::{CameraState, Lens, NO_SHIP};
+use gpuwars::kernels::render::camera::{CameraState, Lens};
 use gpuwars::kernels::render::radar::{self, radar_box};
 use gpuwars::kernels::render::shapes::{self, DISC};
-use gpuwars::kernels::render::{Look, Shown, View, backdrop, fade};
+use gpuwars::kernels::render::{Look, NO_SHIP, Shown, View, backdrop, fade};
 use gpuwars::pipeline::Pipeline;
 use gpuwars::pipeline::Simulation;
 use gpuwars::pipeline::draw::Frame;
@@ -1245,7 +1245,7 @@ on_both_backends!(
 
 #[test]
 fn zooming_out_stops_at_the_whole_field_and_zooming_in_starts_at_once() {
-    use gpuwars::graphics::camera::Camera;
+    use gpuwars::camera::Camera;
     let field = Vec2::new(4096.0, 4096.0);
     let mut camera = Camera::default();
     for _ in 0..40 {

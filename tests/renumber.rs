@@ -10,7 +10,7 @@ use common::sim::{circle, kind, ten_thousand, world};
 use glam::Vec2;
 use gpuwars::Device;
 use gpuwars::backend::Schedule;
-use gpuwars::game::demo::{self, RunOptions};
+use gpuwars::demo::{self, RunOptions};
 use gpuwars::game::replay::{FIRST_VERSION, Replay, VERSION};
 use gpuwars::game::scene::built_in;
 use gpuwars::game::{Game, Scene};

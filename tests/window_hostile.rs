@@ -10,7 +10,7 @@ use std::path::Path;
 use std::process::Command;
 use std::sync::Mutex;
 
-use gpuwars::game::demo::{self, RunOptions};
+use gpuwars::demo::{self, RunOptions};
 use gpuwars::game::replay::Replay;
 
 /// One window at a time: two would share the machine's cores and the display server.

@@ -19,23 +19,10 @@ use std::time::Instant;
 
 use cudarc::driver::CudaGraph;
 use gpuwars_kernels::data::{Convert, View};
-use gpuwars_kernels::{DevSlice, Kernel, KernelArgs};
+use gpuwars_kernels::{DevSlice, KernelArgs};
 
 use super::cuda::Fence;
-use super::{Buffer, Buffers, Device, DeviceId, Element, Error, Hold, Imp};
-
-/// One kernel launch: the kernel, `grid` blocks of `block` threads, and its arguments.
-#[derive(Clone, Copy, Debug)]
-pub struct Launch<A> {
-    /// The kernel.
-    pub kernel: Kernel<A>,
-    /// Blocks (a launch of none does nothing).
-    pub grid: u32,
-    /// Threads per block (1 to [`super::MAX_BLOCK`]).
-    pub block: u32,
-    /// The kernel's argument struct.
-    pub args: A,
-}
+use super::{Buffer, Buffers, Device, DeviceId, Element, Error, Hold, Imp, Launch};
 
 /// Makes the views of buffers that go into one op's arguments, and takes a [`Hold`] of
 /// each, which the op keeps: views and holds go together.
@@ -188,7 +175,9 @@ impl Binder {
         let made = views(self);
         self.mode = was;
         let viewed = &self.touches[before..];
-        let missing = names.iter().filter(|n| !viewed.iter().any(|t| t.name == **n));
+        let missing = names
+            .iter()
+            .filter(|n| !viewed.iter().any(|t| t.name == **n));
         self.unmatched.extend(missing);
         made
     }
@@ -609,9 +598,9 @@ fn join_branches<'scope, 'env>(
     }
     let mut result = Ok(());
     for branch in running.drain(..) {
-        let done = branch.join().unwrap_or_else(|_| {
-            Err(Error::Invalid("an op beside the others panicked".into()))
-        });
+        let done = branch
+            .join()
+            .unwrap_or_else(|_| Err(Error::Invalid("an op beside the others panicked".into())));
         result = result.and(done);
     }
     result

@@ -9,7 +9,6 @@
 //! - [`tradeoff`]: speed against accuracy for each physics choice (`gpuwars tradeoff`).
 
 pub mod compare;
-pub mod floor;
 pub mod paper;
 pub mod plot;
 pub mod scale;
@@ -19,12 +18,11 @@ use std::path::{Path, PathBuf};
 use std::time::SystemTime;
 
 use anyhow::Context as _;
-use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
 
 use crate::Device;
+use crate::backend::device_name;
 use crate::files::{FileError, io_words, shown, write_atomically};
-use crate::game::demo::device_name;
 
 /// Where and when a benchmark ran.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -146,20 +144,4 @@ fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> anyhow::Result<()> {
 fn write_json<T: Serialize>(path: &Path, value: &T) -> anyhow::Result<()> {
     let text = serde_json::to_string_pretty(value)? + "\n";
     Ok(write_atomically(path, text.as_bytes())?)
-}
-
-/// A progress bar over `len` units on stderr when `show` and stderr is a terminal; hidden
-/// otherwise.
-pub(crate) fn progress(len: u64, show: bool, what: &str) -> ProgressBar {
-    use std::io::IsTerminal;
-    if !show || !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::new(len);
-    let style = ProgressStyle::with_template("{prefix} [{bar:40}] {pos}/{len} {msg}")
-        .expect("a valid template")
-        .progress_chars("=> ");
-    bar.set_style(style);
-    bar.set_prefix(what.to_string());
-    bar
 }

@@ -3,25 +3,28 @@
 //! of wall time; frames per second, second by second, against the paper's two cards.
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use anyhow::Context as _;
+use anyhow::{Context as _, anyhow};
 use glium::Surface;
+use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::{Outputs, Provenance, Spread, plot, progress, write_csv, write_json};
+use super::plot::{legend, log_range, png};
+use super::{Outputs, Provenance, Spread, write_csv, write_json};
 use crate::Device;
+use crate::camera::{Camera, CameraMode, DEFAULT_ZOOM};
 use crate::game::scene::built_in;
 use crate::game::{Game, Options};
 use crate::graphics::Renderer;
 use crate::graphics::bodies::BodyRenderer;
-use crate::graphics::camera::{Camera, CameraMode, DEFAULT_ZOOM};
 use crate::graphics::headless::{Headless, Target};
 use crate::graphics::unpack;
-use crate::meter::Seconds;
+use crate::meter::{Second, Seconds};
 use crate::pipeline::Profile;
 use crate::play::{Pilot, PlayOptions};
+use crate::terminal::progress;
 
 /// What the measured frames show: the whole field, as the paper's experiment drew it (and
 /// as earlier runs of this benchmark did, so that their summaries compare).
@@ -244,9 +247,74 @@ fn finish(
     };
     write_csv(&outputs.csv, rows)?;
     write_json(&outputs.json, &summary)?;
-    plot::frames_over_time(&outputs.png, &summary, rows)
+    frames_over_time(&outputs.png, &summary, rows)
         .with_context(|| format!("plotting {}", outputs.png.display()))?;
     Ok(summary)
+}
+
+/// Figure 8 of the paper, redrawn: frames per second against time (log scale), with the
+/// paper's two cards as bands.
+pub fn frames_over_time(
+    path: &Path,
+    summary: &PaperSummary,
+    rows: &[Second],
+) -> anyhow::Result<()> {
+    png(path, |area| {
+        let bands: Vec<f64> = PAPER_BANDS
+            .iter()
+            .flat_map(|&(_, lo, hi)| [lo, hi])
+            .collect();
+        let y = log_range(rows.iter().map(|r| r.frames_per_s), &bands);
+        let x_end = rows.len().max(1) as f64;
+        let title = format!(
+            "paper: frames/s, one step per frame, {} renderer {}x{} ({}, {})",
+            summary.renderer.name(),
+            summary.size.0,
+            summary.size.1,
+            summary.machine.device,
+            summary.machine.backend
+        );
+        let mut chart = ChartBuilder::on(area)
+            .caption(title, ("sans-serif", 22))
+            .margin(16)
+            .x_label_area_size(48)
+            .y_label_area_size(80)
+            .build_cartesian_2d(0.0..x_end, y.log_scale())
+            .map_err(|e| anyhow!("{e}"))?;
+        chart
+            .configure_mesh()
+            .x_desc("time (s)")
+            .y_desc("frames per second (log)")
+            .label_style(("sans-serif", 16))
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+        let colours = [RGBColor(230, 140, 60), RGBColor(90, 160, 90)];
+        for (&(name, lo, hi), colour) in PAPER_BANDS.iter().zip(colours) {
+            chart
+                .draw_series([Rectangle::new(
+                    [(0.0, lo), (x_end, hi)],
+                    colour.mix(0.3).filled(),
+                )])
+                .map_err(|e| anyhow!("{e}"))?
+                .label(format!("{name}: {lo:.0}–{hi:.0}"))
+                .legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 6), (x + 16, y + 6)], colour.filled())
+                });
+        }
+        chart
+            .draw_series(LineSeries::new(
+                rows.iter().map(|r| (f64::from(r.second), r.frames_per_s)),
+                BLUE.stroke_width(2),
+            ))
+            .map_err(|e| anyhow!("{e}"))?
+            .label(format!(
+                "this run: median {:.0} frames/s",
+                summary.frames_per_s.median
+            ))
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLUE.stroke_width(2)));
+        legend(&mut chart, SeriesLabelPosition::LowerRight)?;
+        Ok(())
+    })
 }
 
 /// Each stage's spread over `seconds` (each second's stages in step order; a stage missing

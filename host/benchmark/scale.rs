@@ -3,18 +3,22 @@
 //! times, the bytes it moves against the device's copy bandwidth, and frames per second with
 //! the kernel renderer drawing every body (a point at these sizes).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use anyhow::{Context as _, bail};
+use anyhow::{Context as _, anyhow, bail};
+use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::{Outputs, Provenance, floor, plot, progress, write_csv, write_json};
+use super::plot::{legend, log_range, png};
+use super::{Outputs, Provenance, write_csv, write_json};
+use crate::backend::floor;
+use crate::camera::Camera;
 use crate::files::thousands;
 use crate::game::scene::built_in;
 use crate::game::{Game, Options, Scene};
-use crate::graphics::camera::Camera;
 use crate::pipeline::Profile;
+use crate::terminal::progress;
 use crate::{Device, Error};
 
 /// The fewest enemies measured.
@@ -55,7 +59,7 @@ pub struct ScaleRow {
     pub step_us: f64,
     /// The launch floor of a step this size: as many one-touch launches as it makes over
     /// its slots, replayed as a graph launched as the step's is (µs; see
-    /// `benchmark::floor`).
+    /// `backend::floor`).
     pub floor_us: f64,
     /// Each stage's share of it, in step order: `stage=µs` joined by spaces.
     pub stages: String,
@@ -188,9 +192,74 @@ pub fn run(device: &Device, options: &ScaleOptions) -> anyhow::Result<ScaleSumma
     };
     write_csv(&outputs.csv, &summary.rows)?;
     write_json(&outputs.json, &summary)?;
-    plot::scaling(&outputs.png, &summary)
+    scaling(&outputs.png, &summary)
         .with_context(|| format!("plotting {}", outputs.png.display()))?;
     Ok(summary)
+}
+
+/// One figure of a scale row.
+type Figure = fn(&ScaleRow) -> f64;
+
+/// Steps per second and frames per second against enemies, log-log.
+pub fn scaling(path: &Path, summary: &ScaleSummary) -> anyhow::Result<()> {
+    png(path, |area| {
+        let rows = &summary.rows;
+        let x_low = rows.first().map_or(1024.0, |r| r.enemies as f64);
+        let x_high = rows
+            .last()
+            .map_or(2048.0, |r| r.enemies as f64)
+            .max(x_low * 2.0);
+        let y = log_range(
+            rows.iter().flat_map(|r| [r.steps_per_s, r.frames_per_s]),
+            &[],
+        );
+        let title = format!(
+            "scaling: the paper's mix and density ({}, {})",
+            summary.machine.device, summary.machine.backend
+        );
+        let mut chart = ChartBuilder::on(area)
+            .caption(title, ("sans-serif", 22))
+            .margin(16)
+            .x_label_area_size(48)
+            .y_label_area_size(80)
+            .build_cartesian_2d((x_low / 1.2..x_high * 1.2).log_scale(), y.log_scale())
+            .map_err(|e| anyhow!("{e}"))?;
+        chart
+            .configure_mesh()
+            .x_desc("enemies (log)")
+            .y_desc("per second (log)")
+            .label_style(("sans-serif", 16))
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+        let series: [(&str, RGBColor, Figure); 2] = [
+            ("simulation steps/s", BLUE, |r| r.steps_per_s),
+            (
+                "frames/s (a step and a kernel-rendered frame each)",
+                RED,
+                |r| r.frames_per_s,
+            ),
+        ];
+        for (name, colour, value) in series {
+            let points: Vec<(f64, f64)> =
+                rows.iter().map(|r| (r.enemies as f64, value(r))).collect();
+            chart
+                .draw_series(LineSeries::new(points.clone(), colour.stroke_width(2)))
+                .map_err(|e| anyhow!("{e}"))?
+                .label(name)
+                .legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 16, y)], colour.stroke_width(2))
+                });
+            chart
+                .draw_series(
+                    points
+                        .into_iter()
+                        .map(|p| Circle::new(p, 4, colour.filled())),
+                )
+                .map_err(|e| anyhow!("{e}"))?;
+        }
+        legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+        Ok(())
+    })
 }
 
 /// Runs `work` on `game` for at least `time` and 3 times, then waits for everything queued;

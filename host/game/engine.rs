@@ -13,7 +13,7 @@ use xxhash_rust::xxh3::Xxh3;
 use super::looks;
 use super::spec::{Behaviour, EffectsSpec, GameSpec, Machine, Scene};
 use crate::backend::Ring;
-use crate::graphics::camera::Camera;
+use crate::camera::Camera;
 use crate::pipeline::{Frame, GameConfig, Lanes, Pipeline, Profile, bytes_needed, mind_slots};
 use crate::sim::layout::{Layout, steps};
 use crate::sim::{Snapshot, WorldSpec};

@@ -2,7 +2,6 @@
 //! kernels in order, replays, and high scores.
 
 pub mod accuracy;
-pub mod demo;
 pub mod engine;
 pub mod highscore;
 pub mod looks;

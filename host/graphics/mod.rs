@@ -1,5 +1,4 @@
-//! Drawing: the camera the renderers look through ([`camera`]); with OpenGL (glium), the
-//! GL renderer of the bodies ([`bodies`]), the display of
+//! Drawing with OpenGL (glium): the GL renderer of the bodies ([`bodies`]), the display of
 //! a frame the kernel renderer drew ([`picture`]), the HUD's text ([`hud`]), and a GL
 //! context without a window for screenshots and tests ([`headless`]).
 //!
@@ -7,7 +6,6 @@
 //! a GL frame can then be compared pixel for pixel with a kernel-drawn one.
 
 pub mod bodies;
-pub mod camera;
 pub mod headless;
 pub mod hud;
 pub mod picture;

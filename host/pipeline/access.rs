@@ -49,7 +49,8 @@ pub(super) const TALLY: &[&str] = &[
 /// What the tally's arguments (the master's) view and the tally leaves alone: the free
 /// lists, which the stage beside it rebuilds, and the autopilot's input, which the
 /// autopilot beside it writes.
-pub(super) const TALLY_IGNORES: &[&str] = &["FreeSlots.list", "FreeSlots.count", "GameData.steered"];
+pub(super) const TALLY_IGNORES: &[&str] =
+    &["FreeSlots.list", "FreeSlots.count", "GameData.steered"];
 
 /// The explosions: the particles only.
 pub(super) const EFFECTS: &[&str] = &[
@@ -80,5 +81,9 @@ pub(super) const FROZEN_UNREAD: &[&str] = &["Bodies.frozen"];
 /// The names in `lists`, and the deaths where the world plays a game (`game`).
 pub(super) fn with_deaths(game: bool, lists: &[&[&'static str]]) -> Vec<&'static str> {
     let deaths: &[&str] = if game { DEATHS } else { &[] };
-    lists.iter().chain([&deaths]).flat_map(|l| l.iter().copied()).collect()
+    lists
+        .iter()
+        .chain([&deaths])
+        .flat_map(|l| l.iter().copied())
+        .collect()
 }

@@ -9,7 +9,7 @@ use gpuwars_kernels::render::camera::{self, CameraArgs, CameraState, Lens};
 use gpuwars_kernels::render::particles::{ParticleSplatArgs, ParticleVertexArgs};
 use gpuwars_kernels::render::radar::{self, RadarArgs, RadarBox, RadarCounts, RadarImageArgs};
 use gpuwars_kernels::render::{
-    BodyVertex, LARGE_LANES, Look, ResolveArgs, Shown, SplatArgs, VertexArgs,
+    BodyVertex, LARGE_LANES, Look, NO_SHIP, ResolveArgs, Shown, SplatArgs, VertexArgs,
 };
 use gpuwars_kernels::{DevSlice, registry};
 use xxhash_rust::xxh3::xxh3_64;
@@ -125,9 +125,9 @@ fn check_lens(lens: &Lens) -> Result<(), Error> {
 }
 
 impl Pipeline<'_> {
-    /// The ship's slot, for [`Lens::ship`]: [`camera::NO_SHIP`] in a world without a game.
+    /// The ship's slot, for [`Lens::ship`]: [`NO_SHIP`] in a world without a game.
     pub fn ship(&self) -> u32 {
-        (self.world.game.as_ref()).map_or(camera::NO_SHIP, |g| g.config.rules.ship.start)
+        (self.world.game.as_ref()).map_or(NO_SHIP, |g| g.config.rules.ship.start)
     }
 
     /// Draws every live body as the camera of `lens` shows the world, each kind as `looks`

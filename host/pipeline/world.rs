@@ -302,8 +302,12 @@ impl World {
                     ));
                 }
                 Some(GameState {
-                    commands: device.alloc_shared(config.in_flight)?.named("Mailbox.commands"),
-                    statuses: device.alloc_shared(config.in_flight)?.named("Mailbox.statuses"),
+                    commands: device
+                        .alloc_shared(config.in_flight)?
+                        .named("Mailbox.commands"),
+                    statuses: device
+                        .alloc_shared(config.in_flight)?
+                        .named("Mailbox.statuses"),
                     config,
                     data,
                     effects,

@@ -90,6 +90,10 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
 
 /// The views `views` makes with `b`, writing only the buffers named in `written`, and
 /// leaving the bodies' frozen flag alone (the tally beside the free lists writes it).
-fn declared<R>(b: &mut Binder, written: &[&'static str], views: impl FnOnce(&mut Binder) -> R) -> R {
+fn declared<R>(
+    b: &mut Binder,
+    written: &[&'static str],
+    views: impl FnOnce(&mut Binder) -> R,
+) -> R {
     b.writing(written, |b| b.ignoring(access::FROZEN_UNREAD, views))
 }

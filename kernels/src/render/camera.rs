@@ -9,7 +9,7 @@
 use glam::Vec2;
 
 use super::radar::{self, RadarBox};
-use super::{Shown, View};
+use super::{NO_SHIP, Shown, View};
 use crate::game::control::Input;
 use crate::sim::Bodies;
 use crate::{DevSlice, Thread, kernel_args};
@@ -26,8 +26,6 @@ pub const MAX_ZOOM: f32 = 8.0;
 /// Time constant of the camera's smoothing, in seconds: after it the view has covered
 /// 63% of the way to its target.
 pub const TIME_CONSTANT: f32 = 0.12;
-/// [`Lens::ship`] of a world without a ship.
-pub const NO_SHIP: u32 = u32::MAX;
 
 /// What the host asks of a frame: its size, what it shows and how fast the view moves.
 #[repr(C)]

@@ -111,6 +111,9 @@ impl View {
     }
 }
 
+/// [`Shown::ship`] (and [`camera::Lens::ship`]) of a world without a ship.
+pub const NO_SHIP: u32 = u32::MAX;
+
 /// What one frame shows, written by the camera kernel for the drawing kernels.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -125,7 +128,7 @@ pub struct Shown {
     pub ship_pos: Vec2,
     /// The ship's aim, a unit vector: the way its chevron points.
     pub ship_aim: Vec2,
-    /// The ship's slot, or [`camera::NO_SHIP`].
+    /// The ship's slot, or [`NO_SHIP`].
     pub ship: u32,
     /// The ship's kind.
     pub ship_kind: u32,

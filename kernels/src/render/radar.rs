@@ -16,7 +16,7 @@
 
 use glam::Vec2;
 
-use super::{Look, Shown, key, unkey};
+use super::{Look, NO_SHIP, Shown, key, unkey};
 use crate::sim::Bodies;
 use crate::{DevSlice, Thread, kernel_args};
 
@@ -200,7 +200,7 @@ pub fn radar_colour(
     let (count, top) = (radar.counts.get(pixel), radar.top.get(pixel));
     radar.counts.set(pixel, 0);
     radar.top.set(pixel, 0);
-    if shown.ship != super::camera::NO_SHIP {
+    if shown.ship != NO_SHIP {
         let (sx, sy) = cell(shown.ship_pos, shown.field, inner);
         let (dx, dy) = ((ix - sx).abs(), (iy - sy).abs());
         if (dx == 0 && dy <= MARK_ARM) || (dy == 0 && dx <= MARK_ARM) {

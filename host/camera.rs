@@ -107,7 +107,7 @@ impl Camera {
     }
 
     /// What the device is asked for a `width × height` frame of a `field`-sized world whose
-    /// ship is in slot `ship` (`camera::NO_SHIP` for none), `dt` seconds after the previous
+    /// ship is in slot `ship` (`render::NO_SHIP` for none), `dt` seconds after the previous
     /// frame (0 snaps the view to the ship), over `background`.
     pub fn lens(
         &self,

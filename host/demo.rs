@@ -7,18 +7,19 @@ use std::time::Instant;
 use gpuwars_kernels::game::control::{DESTROYED, Input, Status, TOO_SLOW};
 use serde::Serialize;
 
-use super::Game;
-use super::engine::Options;
-use super::replay::Replay;
-use super::spec::Scene;
-use crate::benchmark::floor::{self, Floor};
-use crate::benchmark::progress;
+use crate::backend::device_name;
+use crate::backend::floor::{self, Floor};
+use crate::camera::Camera;
+use crate::game::Game;
+use crate::game::engine::Options;
+use crate::game::replay::Replay;
+use crate::game::spec::Scene;
 use crate::graphics::Renderer;
 use crate::graphics::bodies::BodyRenderer;
-use crate::graphics::camera::Camera;
 use crate::graphics::headless::Headless;
 use crate::pipeline::{Frame, Profile};
 use crate::sim::WorldSpec;
+use crate::terminal::progress;
 use crate::{BackendKind, Device, Error};
 
 /// What `gpuwars demo` and `gpuwars replay` print.
@@ -182,15 +183,6 @@ impl Report {
             );
         }
         out
-    }
-}
-
-/// A short description of the device.
-pub fn device_name(device: &Device) -> String {
-    match (device.gpu_properties(), device.cpu_threads()) {
-        (Some(gpu), _) => gpu.name.clone(),
-        (None, Some(threads)) => format!("CPU emulation, {threads} threads"),
-        (None, None) => "CPU emulation".to_string(),
     }
 }
 
@@ -454,7 +446,7 @@ pub fn demo(
     };
     let (report, inputs, state_hash) = play(&mut game, setup_s, seed, steps, options, |_| pilot)?;
     let replay = Replay {
-        version: super::replay::VERSION,
+        version: crate::game::replay::VERSION,
         scene: scene.name.clone(),
         scene_toml: scene.source.clone(),
         seed,

@@ -15,8 +15,7 @@ use serde::{Deserialize, Serialize};
 use gpuwars_kernels::primitives::touch::{TouchArgs, TouchRoundsArgs};
 use gpuwars_kernels::registry;
 
-use crate::backend::{Binder, Launch, MAX_BLOCK};
-use crate::{BackendKind, Buffer, Device, Error, Op};
+use super::{BackendKind, Binder, Buffer, Device, Error, Launch, MAX_BLOCK, Op};
 
 /// What a chain of `launches` one-touch launches over `threads` threads costs a step.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

@@ -1,0 +1,333 @@
+//! An independent audit of the contacts a step's motion made, to compare with the contacts
+//! the kernels counted. Brute force over every pair of live bodies whose kinds collide, in
+//! f64 and continuous in time: a pair whose paths met between two step ends is a contact
+//! even if it overlaps at neither end. It shares no code with the kernels, so it checks their
+//! narrow phase (swept or not) rather than repeating it.
+
+mod geometry;
+#[cfg(test)]
+mod tests;
+
+use std::collections::BTreeMap;
+
+use glam::Vec2;
+
+use super::spec::{KindSpec, WorldSpec};
+use geometry::{Link, scan};
+
+/// Class of the contacts of shots with enemies, counted from the shots.
+pub const SHOT_ENEMY: &str = "shot→enemy";
+/// Class of the contacts of enemies with the ship, counted from the ship.
+pub const ENEMY_SHIP: &str = "enemy→ship";
+/// Class of the contacts of movable bodies with walls, counted from the movable bodies.
+pub const BODY_WALL: &str = "body→wall";
+
+/// Relative change of every contact size (and tolerance of the speed limits) that a verdict
+/// must survive: f32 positions leave a pair that grazes within it undecided.
+const MARGIN: f64 = 1e-5;
+
+/// One step end of a world as read back: every slice has one element per slot, in slot
+/// order.
+#[derive(Clone, Copy, Debug)]
+pub struct StepEnd<'a> {
+    /// Non-zero where the slot holds a live body.
+    pub alive: &'a [u32],
+    /// Each body's kind (an index into the spec's kinds).
+    pub kind: &'a [u32],
+    /// Where each body was at the start of the step that ended here.
+    pub prev: &'a [Vec2],
+    /// Where it is at the end.
+    pub pos: &'a [Vec2],
+    /// Its velocity at the end.
+    pub vel: &'a [Vec2],
+    /// Its energy at the end.
+    pub energy: &'a [i32],
+    /// The contacts the kernels counted for each slot in this step's narrow phase, which
+    /// tests the motion of the step before (see [`Accuracy::add_step`]).
+    pub counted: &'a [u32],
+    /// Whether this step moved bodies to other slots (renumbering) before its narrow phase:
+    /// then no slot holds the body it held at the step before's end.
+    pub renumbered: bool,
+}
+
+impl StepEnd<'_> {
+    /// Number of slots.
+    ///
+    /// # Panics
+    ///
+    /// If the slices differ in length.
+    pub fn slots(&self) -> usize {
+        let n = self.alive.len();
+        let lengths = [
+            self.kind.len(),
+            self.prev.len(),
+            self.pos.len(),
+            self.vel.len(),
+            self.energy.len(),
+            self.counted.len(),
+        ];
+        assert!(
+            lengths.iter().all(|&l| l == n),
+            "a step end's slices differ in length ({n} slots, then {lengths:?})"
+        );
+        n
+    }
+}
+
+/// Which kinds play which part in the game, to sort contacts into classes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Roles {
+    /// The ship's kind.
+    pub ship: Option<u32>,
+    /// The shots' kind.
+    pub shot: Option<u32>,
+    /// Enemy kinds, one bit per kind.
+    pub enemies: u32,
+    /// Wall kinds (immovable), one bit per kind.
+    pub walls: u32,
+}
+
+impl Roles {
+    /// The roles of a game's world: the given ship and shot kinds, the controlled kinds as
+    /// enemies and the kinds of infinite mass as walls.
+    pub fn of(spec: &WorldSpec, ship: Option<u32>, shot: Option<u32>) -> Roles {
+        let mask = |keep: fn(&KindSpec) -> bool| {
+            (spec.kinds.iter().enumerate())
+                .filter(|(_, kind)| keep(kind))
+                .fold(0, |mask, (k, _)| mask | 1 << k)
+        };
+        Roles {
+            ship,
+            shot,
+            enemies: mask(|kind| kind.controlled),
+            walls: mask(|kind| kind.mass == f32::INFINITY),
+        }
+    }
+
+    /// The class of the contacts a body of kind `a` makes with bodies of kind `b` when they
+    /// are tallied from `a`'s side; `None` when they are tallied from `b`'s side only.
+    fn class(&self, spec: &WorldSpec, a: usize, b: usize) -> Option<String> {
+        if let Some(class) = self.special(a, b) {
+            return Some(class.to_owned());
+        }
+        // A pair of kinds belongs to one class, seen from one side (or both, for a kind with
+        // itself, which leaves the ratios unchanged).
+        if self.special(b, a).is_some() || a > b {
+            return None;
+        }
+        Some(format!("{}→{}", spec.kinds[a].name, spec.kinds[b].name))
+    }
+
+    /// The named class of `a`'s contacts with `b`, if any.
+    fn special(&self, a: usize, b: usize) -> Option<&'static str> {
+        let is = |mask: u32, k: usize| mask >> k & 1 != 0;
+        let kind = |role: Option<u32>| role.is_some_and(|r| r as usize == a);
+        if kind(self.shot) && is(self.enemies, b) {
+            Some(SHOT_ENEMY)
+        } else if kind(self.ship) && is(self.enemies, b) {
+            Some(ENEMY_SHIP)
+        } else if is(self.walls, b) && !is(self.walls, a) {
+            Some(BODY_WALL)
+        } else {
+            None
+        }
+    }
+}
+
+/// Contacts of one class (or of all audited slots), each seen from the slot that counts it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Tally {
+    /// Certain contacts the audit found.
+    pub expected: u64,
+    /// Of those, how many the kernels' counts lack.
+    pub missed: u64,
+    /// Contacts the kernels counted beyond the expected ones (in a class: those its
+    /// uncertain pairs may explain; the rest only in [`Accuracy::all`]).
+    pub extra: u64,
+    /// Expected contacts that overlapped at neither step end: their paths met in between.
+    pub tunnelling: u64,
+}
+
+impl Tally {
+    /// Missed contacts per thousand expected; `None` when none were expected.
+    pub fn missed_per_thousand(&self) -> Option<f64> {
+        (self.expected > 0).then(|| 1000.0 * self.missed as f64 / self.expected as f64)
+    }
+
+    fn add(&mut self, other: Tally) {
+        self.expected += other.expected;
+        self.missed += other.missed;
+        self.extra += other.extra;
+        self.tunnelling += other.tunnelling;
+    }
+}
+
+/// Penetration depths of the certain contacts that overlap at a step's end.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Depths {
+    /// Contacts measured, each pair once.
+    pub count: u64,
+    /// Sum of their depths.
+    pub sum: f64,
+    /// The deepest.
+    pub max: f64,
+}
+
+impl Depths {
+    /// Mean depth; `None` when none was measured.
+    pub fn mean(&self) -> Option<f64> {
+        (self.count > 0).then(|| self.sum / self.count as f64)
+    }
+
+    fn add(&mut self, depth: f64) {
+        self.count += 1;
+        self.sum += depth;
+        self.max = self.max.max(depth);
+    }
+}
+
+/// The audit of a run, step after step: contacts expected, missed and extra by class, and
+/// the bodies that broke their kinds' limits.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Accuracy {
+    /// Tallies by class ([`SHOT_ENEMY`], [`ENEMY_SHIP`], [`BODY_WALL`], or `A→B` with the
+    /// kinds' names), each colliding pair of kinds in one class.
+    pub classes: BTreeMap<String, Tally>,
+    /// Every audited slot's contacts, whatever the class: each contact between two audited
+    /// slots counts from both.
+    pub all: Tally,
+    /// Steps audited.
+    pub steps: u64,
+    /// Slots audited (body-steps): alive at the step's end and holding the same body at the
+    /// next step's narrow phase.
+    pub slots_audited: u64,
+    /// Live slots left out because the next step moved bodies to other slots.
+    pub slots_skipped: u64,
+    /// Pairs of an audited slot and a partner whose verdict the margin leaves undecided (left
+    /// out of the expected and missed contacts).
+    pub uncertain: u64,
+    /// Depths of the certain contacts at the audited steps' ends, between any live bodies
+    /// (audited or not).
+    pub depth: Depths,
+    /// Audited body-steps faster than their kind's speed limit at the step's end.
+    pub speed_violations: u64,
+    /// Audited body-steps with more energy than their kind's bodies have at birth.
+    pub energy_violations: u64,
+}
+
+impl Accuracy {
+    /// Audits the motion of one step. `this` is its end (`prev`: where the bodies started,
+    /// `pos`: where they ended) and `next` the end of the step after, whose `counted` are the
+    /// kernels' counts for that motion. A slot is audited when it holds the same body at both
+    /// ends: alive at `this`, and `next` did not renumber. A body that dies in `next` still
+    /// had its contacts counted there (it dies after the narrow phase, as a shot does on
+    /// the enemy it hits), and a body is born only into a slot that was free. Its partners
+    /// are all the live bodies of `this`.
+    ///
+    /// # Panics
+    ///
+    /// If the step ends differ in slots, a step end's slices differ in length, or a live
+    /// body's kind is not the spec's.
+    pub fn add_step(&mut self, spec: &WorldSpec, roles: &Roles, this: &StepEnd, next: &StepEnd) {
+        let n = this.slots();
+        assert_eq!(next.slots(), n, "two step ends of different worlds");
+        let same = |s: usize| this.alive[s] != 0 && !next.renumbered;
+        let audited: Vec<bool> = (0..n).map(same).collect();
+        self.steps += 1;
+
+        let kinds = spec.kinds.len();
+        let masks = spec.collision_masks();
+        let classes: Vec<Option<String>> = (0..kinds * kinds)
+            .map(|x| {
+                let (a, b) = (x / kinds, x % kinds);
+                (masks[a] >> b & 1 != 0)
+                    .then(|| roles.class(spec, a, b))
+                    .flatten()
+            })
+            .collect();
+        for name in classes.iter().flatten() {
+            self.classes.entry(name.clone()).or_default();
+        }
+
+        // (audited slot, link, partner): sorted, each slot's partners come in the order its
+        // missed contacts are attributed, then its uncertain ones.
+        let mut links = Vec::new();
+        for found in scan(spec, this) {
+            if let Some(depth) = found.depth {
+                self.depth.add(depth);
+            }
+            for (s, partner) in [(found.a, found.b), (found.b, found.a)] {
+                if audited[s] {
+                    links.push((s, found.link, partner));
+                }
+            }
+        }
+        links.sort_unstable();
+
+        let mut rest = &links[..];
+        for (s, &same) in audited.iter().enumerate() {
+            if !same {
+                self.slots_skipped += u64::from(this.alive[s] != 0);
+                continue;
+            }
+            let (mine, tail) = rest.split_at(rest.partition_point(|&(t, ..)| t == s));
+            rest = tail;
+            let class = |partner: usize| {
+                classes[this.kind[s] as usize * kinds + this.kind[partner] as usize].as_deref()
+            };
+            self.add_slot(mine, next.counted[s], class);
+            self.check_limits(&spec.kinds[this.kind[s] as usize], this, s);
+        }
+    }
+
+    /// Tallies an audited slot: its links (in attribution order) and the contacts the
+    /// kernels counted for it; `class` names the class of a partner's contacts with it.
+    fn add_slot<'c>(
+        &mut self,
+        links: &[(usize, Link, usize)],
+        counted: u32,
+        class: impl Fn(usize) -> Option<&'c str>,
+    ) {
+        self.slots_audited += 1;
+        let certain = links.iter().filter(|l| l.1 != Link::Uncertain).count();
+        let missed = certain.saturating_sub(counted as usize);
+        let extra = (counted as usize).saturating_sub(certain);
+        for (i, &(_, link, partner)) in links.iter().enumerate() {
+            let mut add = Tally::default();
+            if link == Link::Uncertain {
+                self.uncertain += 1;
+                add.extra = u64::from(i - certain < extra);
+            } else {
+                add.expected = 1;
+                add.missed = u64::from(i < missed);
+                add.tunnelling = u64::from(link == Link::Tunnelling);
+                self.all.add(add);
+            }
+            if let Some(tally) = class(partner).and_then(|c| self.classes.get_mut(c)) {
+                tally.add(add);
+            }
+        }
+        self.all.extra += extra as u64;
+    }
+
+    /// Counts the limits of its kind that the body in `slot` breaks.
+    fn check_limits(&mut self, kind: &KindSpec, end: &StepEnd, slot: usize) {
+        let speed = end.vel[slot].as_dvec2().length();
+        if kind.max_speed.is_finite() && speed > f64::from(kind.max_speed) * (1.0 + MARGIN) {
+            self.speed_violations += 1;
+        }
+        self.energy_violations += u64::from(end.energy[slot] > kind.energy);
+    }
+
+    /// Missed contacts per thousand expected in `class`; `None` when the class is unknown or
+    /// none were expected.
+    pub fn missed_per_thousand(&self, class: &str) -> Option<f64> {
+        self.classes.get(class)?.missed_per_thousand()
+    }
+
+    /// Missed contacts per thousand expected over every audited slot; `None` when none were
+    /// expected.
+    pub fn total_missed_per_thousand(&self) -> Option<f64> {
+        self.all.missed_per_thousand()
+    }
+}
