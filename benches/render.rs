@@ -149,7 +149,7 @@ fn displayed(c: &mut Criterion) {
         let mut gl_frame = |game: &mut Game| {
             let mut surface = target.surface(facade).unwrap();
             surface.clear_color_and_depth(unpack(lens.background), 0.0);
-            bodies.update(facade, game.pipeline_mut(), &lens).unwrap();
+            bodies.update(facade, &mut game.drawing(), &lens).unwrap();
             bodies.draw(&mut surface, &lens).unwrap();
             facade.finish();
         };

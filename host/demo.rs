@@ -289,7 +289,7 @@ impl Painter {
             Painter::Gl(gl) => {
                 let (gl, bodies) = &mut **gl;
                 let lens = game.lens(camera, width, height, 0.0);
-                gl.draw(bodies, game.pipeline_mut(), &lens)
+                gl.draw(bodies, &mut game.drawing(), &lens)
             }
         }
     }

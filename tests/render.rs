@@ -23,7 +23,7 @@ use gpuwars::kernels::render::camera::{CameraState, Lens};
 use gpuwars::kernels::render::radar::{self, radar_box};
 use gpuwars::kernels::render::shapes::{self, DISC};
 use gpuwars::kernels::render::{Look, NO_SHIP, Shown, View, backdrop, fade};
-use gpuwars::pipeline::Pipeline;
+use gpuwars::pipeline::Drawing;
 use gpuwars::pipeline::Simulation;
 use gpuwars::pipeline::draw::Frame;
 use gpuwars::sim::{Boundary, WorldSpec};
@@ -263,12 +263,12 @@ fn differing(a: &Frame, b: &Frame) -> usize {
 }
 
 /// The GL renderer's frame of `pipeline` through the camera of `lens`.
-fn gl_frame(gl: &Headless, pipeline: &mut Pipeline, looks: &[Look], lens: &Lens) -> (Frame, bool) {
-    let mut renderer = BodyRenderer::new(gl.facade(), pipeline, looks).unwrap();
+fn gl_frame(gl: &Headless, drawing: &mut Drawing, looks: &[Look], lens: &Lens) -> (Frame, bool) {
+    let mut renderer = BodyRenderer::new(gl.facade(), drawing, looks).unwrap();
     if let Some(why) = renderer.fallback() {
         panic!("the GPU's vertices are uploaded: {why}");
     }
-    let frame = gl.draw(&mut renderer, pipeline, lens).unwrap();
+    let frame = gl.draw(&mut renderer, drawing, lens).unwrap();
     (frame, renderer.is_interop())
 }
 
@@ -279,7 +279,7 @@ fn gl_draws_each_body_in_its_kinds_colour(device: &Device) {
     let bodies = place_three(&mut sim);
     let view = View::whole(spec.size, 400, 300, BACKGROUND);
     let lens = field_lens(spec.size, 400, 300);
-    let (frame, interop) = gl_frame(&gl, &mut sim, &looks, &lens);
+    let (frame, interop) = gl_frame(&gl, &mut sim.drawing(), &looks, &lens);
     assert_eq!(interop, device.kind() == BackendKind::Cuda);
     check_three(&frame, &view, &looks, bodies);
     let kernel = sim.draw(&lens, &looks).unwrap();
@@ -316,7 +316,7 @@ fn gl_draws_a_game_as_the_kernel_does(device: &Device) {
     ] {
         let kernel = game.draw(size.0, size.1, &camera).unwrap();
         let lens = game.lens(&camera, size.0, size.1, 0.0);
-        let (frame, _) = gl_frame(&gl, game.pipeline_mut(), &looks, &lens);
+        let (frame, _) = gl_frame(&gl, &mut game.drawing(), &looks, &lens);
         let differ = differing(&frame, &kernel);
         println!(
             "paper after 300 steps, {camera:?}, GL on {}: {differ} of {} pixels differ from \
@@ -356,7 +356,7 @@ fn the_gpus_interop_frame_matches_the_cpus() {
     let looks = looks::looks(&scene);
     let camera = Camera::default();
     let lens = game.lens(&camera, 640, 360, 0.0);
-    let (on_gpu, interop) = gl_frame(&gl, game.pipeline_mut(), &looks, &lens);
+    let (on_gpu, interop) = gl_frame(&gl, &mut game.drawing(), &looks, &lens);
     assert!(interop);
     let [cpu, _] = paper_frames(common::cpu(), 300, &camera);
     println!(
@@ -629,7 +629,7 @@ fn silhouettes_cover_the_pixels_of_their_shapes(device: &Device) {
                 let frame = sim.draw(&lens, &looks).unwrap();
                 // The GL renderer's shader mirrors the inside tests: at most an edge pixel
                 // or two rounds the other way.
-                let on_gl = gl.draw(&mut renderer, &mut sim, &lens).unwrap();
+                let on_gl = gl.draw(&mut renderer, &mut sim.drawing(), &lens).unwrap();
                 let differ = differing(&on_gl, &frame);
                 assert!(
                     differ <= 2,
@@ -908,7 +908,7 @@ fn drawing_leaves_the_game_state_alone(device: &Device) {
             drawn.draw(200, 100, &Camera::field()).unwrap();
             let lens = drawn.lens(&Camera::default(), 800, 600, 0.03);
             drawn
-                .pipeline_mut()
+                .drawing()
                 .vertices_into(&lens, &looks, &mut vertices)
                 .unwrap();
         }
@@ -1050,7 +1050,7 @@ fn gl_draws_the_particles_as_the_kernel_does(device: &Device) {
     let (mut game, kernel) = crash_frame(device, 45);
     let looks = looks::looks(game.scene());
     let lens = game.lens(&close_camera(), 640, 360, 0.0);
-    let (frame, _) = gl_frame(&gl, game.pipeline_mut(), &looks, &lens);
+    let (frame, _) = gl_frame(&gl, &mut game.drawing(), &looks, &lens);
     let colours = particle_colours(&looks);
     let count = |f: &Frame| f.pixels.iter().filter(|p| colours.contains(p)).count();
     let differ = differing(&frame, &kernel);
@@ -1083,7 +1083,7 @@ fn particle_launches(scene: &Scene) -> (u64, u64, u32) {
     let count = game.pipeline().vertex_count();
     let mut vertices = device.alloc_zeroed(count as usize).unwrap();
     let looks = looks::looks(scene);
-    game.pipeline_mut()
+    game.drawing()
         .vertices_into(&lens, &looks, &mut vertices)
         .unwrap();
     drop(game);
@@ -1193,7 +1193,7 @@ fn the_backdrop_grid_lies_on_the_worlds_multiples(device: &Device) {
     // The GL renderer draws the same lines, an edge pixel aside.
     let frame = game.draw(width, height, &camera).unwrap();
     let looks = looks::looks(&scene);
-    let (on_gl, _) = gl_frame(&gl, game.pipeline_mut(), &looks, &lens);
+    let (on_gl, _) = gl_frame(&gl, &mut game.drawing(), &looks, &lens);
     let apart = frame
         .pixels
         .iter()
@@ -1223,7 +1223,7 @@ fn the_backdrop_grid_lies_on_the_worlds_multiples(device: &Device) {
     assert_eq!(marked(&whole), 0, "the field mode's frame");
     let lens = game.lens(&Camera::field(), width, height, 0.0);
     assert_eq!(
-        marked(&gl_frame(&gl, game.pipeline_mut(), &looks, &lens).0),
+        marked(&gl_frame(&gl, &mut game.drawing(), &looks, &lens).0),
         0
     );
 }

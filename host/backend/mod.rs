@@ -162,7 +162,7 @@ impl DeviceId {
     }
 
     /// `Ok` if `what`, of this device, is used on device `on`; else the error that says so.
-    pub(crate) fn check(self, on: DeviceId, what: &str) -> Result<(), Error> {
+    pub fn check(self, on: DeviceId, what: &str) -> Result<(), Error> {
         match self == on {
             true => Ok(()),
             false => Err(Error::Invalid(format!(

@@ -9,9 +9,10 @@
 //! another device, and an op run beside the others ([`Op::beside`]) that touches what the
 //! ops it runs beside write, or writes what they touch. What keeps the memory a launch uses
 //! from being freed *while it runs* is the device's order: every launch, copy, clear and
-//! free of a device happens in one order, on the GPU that of its one stream (cudarc frees a
-//! buffer on the stream it was allocated on, after the work queued before), on the CPU under
-//! the emulator's order lock, each operation done before the next begins.
+//! free of a device is ordered by its stream on the GPU (an op beside the others goes on a
+//! side stream that forks from it and joins it again before the plan ends; cudarc frees a
+//! buffer on the stream it was allocated on, after the work queued before), and on the CPU
+//! by the emulator's order lock, held for a whole run.
 
 use std::fmt;
 use std::sync::Arc;

@@ -86,6 +86,11 @@ fn host_ptr<T: Element>(buffer: &BufferImp<T>, slot: usize) -> *mut T {
 }
 
 impl<I: Element, O: Element> Ring<I, O> {
+    /// Steps queued through the ring so far.
+    pub fn queued(&self) -> u64 {
+        self.queued
+    }
+
     /// Steps the ring holds in flight.
     pub fn depth(&self) -> usize {
         self.depth
@@ -116,9 +121,12 @@ impl<I: Element, O: Element> Ring<I, O> {
                 // SAFETY: an element of a live host buffer, in the device's order.
                 unsafe { at.write_unaligned(input) };
             }
-            // SAFETY: the slot is not in flight (checked): the step that last read it has
-            // passed its fence, and the step that reads it next is launched after this write
-            // (a launch sees the host's writes made before it).
+            // SAFETY: the slot is not in flight: `check` refuses a step past the depth, so the
+            // step that last read the slot has passed its fence (`reserve` waited for it), and
+            // the kernels find the slot by their count of steps, which is the ring's (the game
+            // that owns both steps its world only through the ring, and checks the counts
+            // agree); the step that reads it next is launched after this write (a launch sees
+            // the host's writes made before it).
             Imp::Cuda(_) => unsafe { at.write_volatile(input) },
         }
         Ok(())

@@ -131,7 +131,7 @@ impl Drawer {
             Drawer::Gl(gl) => {
                 let (gl, bodies, target) = &mut **gl;
                 let lens = game.lens(&CAMERA, width, height, 0.0);
-                bodies.update(gl.facade(), game.pipeline_mut(), &lens)?;
+                bodies.update(gl.facade(), &mut game.drawing(), &lens)?;
                 let written = match start {
                     Some(start) => device.mark()?.seconds_since(&start)?,
                     None => 0.0,

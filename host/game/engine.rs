@@ -14,7 +14,9 @@ use super::looks;
 use super::spec::{Behaviour, EffectsSpec, GameSpec, Machine, Scene};
 use crate::backend::Ring;
 use crate::camera::Camera;
-use crate::pipeline::{Frame, GameConfig, Lanes, Pipeline, Profile, bytes_needed, mind_slots};
+use crate::pipeline::{
+    Drawing, Frame, GameConfig, Lanes, Pipeline, Profile, bytes_needed, mind_slots,
+};
 use crate::sim::layout::{Layout, steps};
 use crate::sim::{Snapshot, WorldSpec};
 use crate::{Device, Error};
@@ -240,9 +242,10 @@ impl<'d> Game<'d> {
         &self.pipeline
     }
 
-    /// The pipeline, for drawing (its renderers keep their buffers in it).
-    pub fn pipeline_mut(&mut self) -> &mut Pipeline<'d> {
-        &mut self.pipeline
+    /// The world's drawing (its renderers keep their buffers in the pipeline): the game's
+    /// steps go through its ring only, so nothing that draws can step it.
+    pub fn drawing(&mut self) -> Drawing<'_, 'd> {
+        self.pipeline.drawing()
     }
 
     /// The latest status read back.
@@ -279,6 +282,15 @@ impl<'d> Game<'d> {
             }
             None => Command::autopilot(),
         };
+        // One count of the steps: the kernels find each step's slot of the ring by theirs,
+        // which is the pipeline's.
+        if self.ring.queued() != self.pipeline.steps() {
+            return Err(Error::Invalid(format!(
+                "the game's ring queued {} steps and its world took {}",
+                self.ring.queued(),
+                self.pipeline.steps()
+            )));
+        }
         if let Some(status) = self.ring.reserve()? {
             self.arrived.push_back(status);
         }

@@ -35,7 +35,8 @@ use super::picture::{Blit, DeviceImage, Upload};
 use super::{gl_error, program};
 use crate::backend::GlBuffer;
 use crate::game::{Game, looks};
-use crate::pipeline::{Frame, Pipeline};
+use crate::backend::DeviceId;
+use crate::pipeline::{Drawing, Frame, Pipeline};
 use crate::{BackendKind, Buffer, Error};
 
 /// The attributes of [`BodyVertex`], as the vertex shader names them.
@@ -319,6 +320,8 @@ pub struct BodyRenderer {
     radar_device: Result<Option<DeviceImage>, ()>,
     radar_upload: Upload,
     blit: Blit,
+    /// The device of the pipeline it was made for, whose memory its buffers are.
+    device: DeviceId,
 }
 
 impl BodyRenderer {
@@ -381,6 +384,7 @@ impl BodyRenderer {
             },
             radar_upload: Upload::default(),
             blit: Blit::new(facade)?,
+            device: device.id(),
         })
     }
 
@@ -400,14 +404,15 @@ impl BodyRenderer {
     }
 
     /// Points the camera of `lens` and writes every body's vertex in its view after the
-    /// steps queued on `pipeline` (the pipeline this renderer was made for), and takes the
-    /// radar's image.
+    /// steps queued on the pipeline of `drawing` (one of the device this renderer was made
+    /// for: another's is refused), and takes the radar's image.
     pub fn update(
         &mut self,
         facade: &impl Facade,
-        pipeline: &mut Pipeline,
+        drawing: &mut Drawing,
         lens: &Lens,
     ) -> Result<(), Error> {
+        self.device.check(drawing.device().id(), "a renderer")?;
         let looks = &self.looks;
         match &mut self.feed {
             Feed::Interop(buffer) => {
@@ -415,12 +420,12 @@ impl BodyRenderer {
                 // mapped buffer holds one vertex per slot (made so above) and only these
                 // launches touch it until the unmap.
                 unsafe {
-                    buffer.with_mapped(|vertices| pipeline.write_vertices(lens, looks, vertices))
+                    buffer.with_mapped(|vertices| drawing.write_vertices(lens, looks, vertices))
                 }?;
             }
             Feed::Upload(buffer) => {
-                pipeline.vertices_into(lens, looks, buffer)?;
-                let vertices = pipeline.device().download(buffer)?;
+                drawing.vertices_into(lens, looks, buffer)?;
+                let vertices = drawing.device().download(buffer)?;
                 self.vertices.write(&vertices);
             }
         }
@@ -428,7 +433,7 @@ impl BodyRenderer {
             .then(|| radar_box(lens.width, lens.height, lens.field))
             .filter(|radar| radar.width != 0);
         if let Some(radar) = self.radar {
-            self.show_radar(facade, pipeline, radar)?;
+            self.show_radar(facade, drawing, radar)?;
         }
         Ok(())
     }

@@ -20,7 +20,7 @@ use gpuwars_kernels::render::camera::Lens;
 use super::bodies::BodyRenderer;
 use super::{gl_error, unpack};
 use crate::game::Game;
-use crate::pipeline::{Frame, Pipeline};
+use crate::pipeline::{Drawing, Frame};
 use crate::{BackendKind, Error};
 
 /// The EGL extension of NVIDIA's devices (those CUDA can share buffers with).
@@ -129,11 +129,11 @@ impl Headless {
     pub fn draw(
         &self,
         renderer: &mut BodyRenderer,
-        pipeline: &mut Pipeline,
+        drawing: &mut Drawing,
         lens: &Lens,
     ) -> Result<Frame, Error> {
         let target = Target::new(&self.context, lens.width, lens.height)?;
-        renderer.update(&self.context, pipeline, lens)?;
+        renderer.update(&self.context, drawing, lens)?;
         let mut surface = target.surface(&self.context)?;
         surface.clear_color_and_depth(unpack(lens.background), 0.0);
         renderer.draw(&mut surface, lens)?;

@@ -538,3 +538,82 @@ enum Vertices<'a> {
     Mapped(DevSlice<BodyVertex>),
     Buffer(&'a Buffer<BodyVertex>),
 }
+
+/// A world's drawing without its step: the frames, vertices and radar of
+/// [`Pipeline`]'s drawing methods, and every `&self` method of the pipeline (through
+/// `Deref`), but not [`Pipeline::step`]. What a game lends to whatever draws it
+/// ([`crate::game::Game::drawing`]), so that nothing that draws can step the world past
+/// the game's ring of steps in flight:
+/// ```compile_fail,E0596
+/// fn step_past_the_ring(game: &mut gpuwars::game::Game) {
+///     game.drawing().step().unwrap();
+/// }
+/// ```
+pub struct Drawing<'p, 'd> {
+    pipeline: &'p mut Pipeline<'d>,
+}
+
+impl<'d> std::ops::Deref for Drawing<'_, 'd> {
+    type Target = Pipeline<'d>;
+
+    fn deref(&self) -> &Pipeline<'d> {
+        self.pipeline
+    }
+}
+
+impl<'d> Pipeline<'d> {
+    /// The pipeline's drawing, for as long as it is borrowed.
+    pub fn drawing(&mut self) -> Drawing<'_, 'd> {
+        Drawing { pipeline: self }
+    }
+}
+
+impl Drawing<'_, '_> {
+    /// See [`Pipeline::draw`].
+    pub fn draw(&mut self, lens: &Lens, looks: &[Look]) -> Result<Frame, Error> {
+        self.pipeline.draw(lens, looks)
+    }
+
+    /// See [`Pipeline::render`].
+    pub fn render(&mut self, lens: &Lens, looks: &[Look]) -> Result<(), Error> {
+        self.pipeline.render(lens, looks)
+    }
+
+    /// See [`Pipeline::render_into`].
+    ///
+    /// # Safety
+    /// As for [`Pipeline::render_into`].
+    pub unsafe fn render_into(
+        &mut self,
+        lens: &Lens,
+        looks: &[Look],
+        image: DevSlice<u32>,
+    ) -> Result<(), Error> {
+        // SAFETY: forwarded.
+        unsafe { self.pipeline.render_into(lens, looks, image) }
+    }
+
+    /// See [`Pipeline::write_vertices`].
+    ///
+    /// # Safety
+    /// As for [`Pipeline::write_vertices`].
+    pub unsafe fn write_vertices(
+        &mut self,
+        lens: &Lens,
+        looks: &[Look],
+        vertices: DevSlice<BodyVertex>,
+    ) -> Result<(), Error> {
+        // SAFETY: forwarded.
+        unsafe { self.pipeline.write_vertices(lens, looks, vertices) }
+    }
+
+    /// See [`Pipeline::vertices_into`].
+    pub fn vertices_into(
+        &mut self,
+        lens: &Lens,
+        looks: &[Look],
+        vertices: &mut Buffer<BodyVertex>,
+    ) -> Result<(), Error> {
+        self.pipeline.vertices_into(lens, looks, vertices)
+    }
+}

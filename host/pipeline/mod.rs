@@ -40,7 +40,7 @@ mod stages;
 mod teams;
 pub(crate) mod world;
 
-pub use draw::Frame;
+pub use draw::{Drawing, Frame};
 pub use profile::{Profile, StageTimes};
 pub use simulation::Simulation;
 pub use stage::{Stage, StagePlan};

@@ -116,8 +116,7 @@ impl App<'_> {
                 let target = screen.target.as_ref().expect("made above");
                 let mut surface = target.surface(&screen.display)?;
                 surface.clear_color_and_depth(unpack(lens.background), 0.0);
-                let pipeline = self.round.game.pipeline_mut();
-                bodies.update(&screen.display, pipeline, &lens)?;
+                bodies.update(&screen.display, &mut self.round.game.drawing(), &lens)?;
                 bodies.draw(&mut surface, &lens)?;
                 screen
                     .blit

@@ -121,8 +121,8 @@ kernels! {
     /// The master before the physics: the step's input (the player's or the autopilot's),
     /// ship, shots, spawn counts (one warp).
     MASTER = master(master::MasterArgs) => master::master;
-    /// The autopilot: the ship's input for the next step, from the grid and the bodies as
-    /// the step leaves them (one warp).
+    /// The autopilot: the ship's input for the next step, from the step's grid as it was
+    /// built (its entries' places and velocities), beside the rest of the step (one warp).
     AUTOPILOT = autopilot(autopilot::AutopilotArgs) => autopilot::autopilot;
     /// Explosions: kills burst into particles, the others move and fade.
     BURST_AND_FADE = burst_and_fade(effects::EffectsArgs) => effects::burst_and_fade;
