@@ -4,7 +4,7 @@
 //! e.g. to map the cursor to the field.
 
 use glam::Vec2;
-use gpuwars_kernels::render::View;
+use gpuwars_kernels::render::Framing;
 use gpuwars_kernels::render::camera::{self, CameraState, Lens};
 
 /// What the camera shows.
@@ -137,7 +137,7 @@ impl Camera {
 /// The view the device shows for `lens` when the ship is at `ship` (`None`: no ship, or a
 /// dead one), advancing `state` as the device advances its own: the host's copy of the
 /// camera kernel's result, bit for bit.
-pub fn view(lens: &Lens, ship: Option<Vec2>, state: &mut CameraState) -> View {
+pub fn view(lens: &Lens, ship: Option<Vec2>, state: &mut CameraState) -> Framing {
     let (next, view) = camera::advance(lens, ship, *state);
     *state = next;
     view

@@ -10,7 +10,7 @@ use clap::{Args, Parser, Subcommand};
 use crate::BackendRequest;
 use crate::benchmark::{Outputs, scale};
 use crate::camera::{Camera, CameraMode, DEFAULT_ZOOM, MAX_ZOOM, MIN_ZOOM};
-use crate::demo::{DemoPilot, Frames, RunOptions};
+use crate::demo::{DemoFlyer, Frames, RunOptions};
 use crate::files::{RunFiles, shown, thousands};
 use crate::game::Options;
 use crate::game::replay::MAX_STEPS;
@@ -18,7 +18,7 @@ use crate::game::{highscore, scene};
 use crate::graphics::Renderer;
 use crate::pipeline::Lanes;
 use crate::pipeline::draw::MAX_SIDE;
-use crate::play::Pilot;
+use crate::play::Flyer;
 
 /// GpuWars: a top-down shooter whose whole game loop runs as GPU kernels.
 #[derive(Parser)]
@@ -316,7 +316,7 @@ pub struct DemoArgs {
     pub record: Option<PathBuf>,
     /// Who flies the ship: the autopilot, or nobody (it never moves and never fires).
     #[arg(long, value_enum, default_value_t)]
-    pub pilot: DemoPilot,
+    pub pilot: DemoFlyer,
     /// Draw the final state with the kernel renderer and write it to this PNG file (a bare
     /// `gpuwars` writes gpuwars-demo.png in the system's temporary folder).
     #[arg(long, env = "GPUWARS_SCREENSHOT")]
@@ -388,7 +388,7 @@ pub struct PlayArgs {
     pub seed: u32,
     /// Who flies the ship: you (keyboard, mouse or gamepad), the autopilot, or nobody.
     #[arg(long, value_enum, default_value_t)]
-    pub pilot: Pilot,
+    pub pilot: Flyer,
     /// Start with the sound off (M toggles it).
     #[arg(long)]
     pub mute: bool,

@@ -189,7 +189,7 @@ impl Report {
 /// Who flies the ship in a demo.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
 #[serde(rename_all = "lowercase")]
-pub enum DemoPilot {
+pub enum DemoFlyer {
     /// The autopilot.
     #[default]
     Auto,
@@ -227,7 +227,7 @@ impl Frames {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RunOptions {
     /// Who flies the ship (`demo` only; a replay flies its recorded inputs).
-    pub pilot: DemoPilot,
+    pub pilot: DemoFlyer,
     /// Lag and graphs.
     pub game: Options,
     /// Time every stage of every step (steps then run stage by stage and wait).
@@ -441,8 +441,8 @@ pub fn demo(
     let mut game = Game::with_options(device, scene, seed, options.game)?;
     let setup_s = start.elapsed().as_secs_f64();
     let pilot = match options.pilot {
-        DemoPilot::Auto => None,
-        DemoPilot::None => Some(Input::default()),
+        DemoFlyer::Auto => None,
+        DemoFlyer::None => Some(Input::default()),
     };
     let (report, inputs, state_hash) = play(&mut game, setup_s, seed, steps, options, |_| pilot)?;
     let replay = Replay {

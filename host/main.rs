@@ -214,7 +214,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             if window {
                 let options = PlayOptions {
                     seed: replay.seed,
-                    pilot: play::Pilot::default(),
+                    pilot: play::Flyer::default(),
                     muted: mute,
                     vsync: true,
                     renderer: render,

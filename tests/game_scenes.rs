@@ -5,7 +5,7 @@ mod common;
 
 use gpuwars::Device;
 use gpuwars::backend::Schedule;
-use gpuwars::demo::{self, DemoPilot, RunOptions};
+use gpuwars::demo::{self, DemoFlyer, RunOptions};
 use gpuwars::game::Options;
 use gpuwars::game::scene::built_in;
 use gpuwars::game::{Game, Scene};
@@ -315,7 +315,7 @@ fn a_ship_with_no_pilot_loses_the_paper_scene_and_the_autopilot_does_better() {
     let five_minutes = 5 * 60 * 60;
     for seed in [1, 2] {
         let idle = RunOptions {
-            pilot: DemoPilot::None,
+            pilot: DemoFlyer::None,
             ..RunOptions::default()
         };
         let (lost, _) =

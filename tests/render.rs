@@ -22,7 +22,7 @@ use gpuwars::kernels::registry;
 use gpuwars::kernels::render::camera::{CameraState, Lens};
 use gpuwars::kernels::render::radar::{self, radar_box};
 use gpuwars::kernels::render::shapes::{self, DISC};
-use gpuwars::kernels::render::{Look, NO_SHIP, Shown, View, backdrop, fade};
+use gpuwars::kernels::render::{Framing, Look, NO_SHIP, Shown, backdrop, fade};
 use gpuwars::pipeline::Drawing;
 use gpuwars::pipeline::Simulation;
 use gpuwars::pipeline::draw::Frame;
@@ -67,7 +67,7 @@ fn three_kinds() -> (WorldSpec, Vec<Look>) {
 }
 
 /// The pixel under world position `pos` in `view`.
-fn pixel_at(frame: &Frame, view: &View, pos: Vec2) -> u32 {
+fn pixel_at(frame: &Frame, view: &Framing, pos: Vec2) -> u32 {
     let p = view.to_image(pos);
     frame.pixel(p.x as u32, p.y as u32)
 }
@@ -90,7 +90,7 @@ fn place_three(sim: &mut Simulation) -> [(u32, Vec2); 4] {
 /// Checks a frame of the bodies of [`place_three`] against their shapes: each body's
 /// colour at its place, the top layer where they overlap, every kind's colour present, and
 /// the background far from every body.
-fn check_three(frame: &Frame, view: &View, looks: &[Look], bodies: [(u32, Vec2); 4]) {
+fn check_three(frame: &Frame, view: &Framing, looks: &[Look], bodies: [(u32, Vec2); 4]) {
     let [big, big_under, boxed, dot] = bodies;
     let colour = |k: usize| looks[k].colour;
     // Each body's centre is its colour; the overlap is the box's.
@@ -155,7 +155,7 @@ fn a_frame_shows_each_body_in_its_kinds_colour(device: &Device) {
     let (spec, looks) = three_kinds();
     let mut sim = Simulation::new(device, &spec, 1).unwrap();
     let bodies = place_three(&mut sim);
-    let view = View::whole(spec.size, 400, 300, BACKGROUND);
+    let view = Framing::whole(spec.size, 400, 300, BACKGROUND);
     let lens = field_lens(spec.size, 400, 300);
     let frame = sim.draw(&lens, &looks).unwrap();
     assert_eq!(
@@ -277,7 +277,7 @@ fn gl_draws_each_body_in_its_kinds_colour(device: &Device) {
     let (spec, looks) = three_kinds();
     let mut sim = Simulation::new(device, &spec, 1).unwrap();
     let bodies = place_three(&mut sim);
-    let view = View::whole(spec.size, 400, 300, BACKGROUND);
+    let view = Framing::whole(spec.size, 400, 300, BACKGROUND);
     let lens = field_lens(spec.size, 400, 300);
     let (frame, interop) = gl_frame(&gl, &mut sim.drawing(), &looks, &lens);
     assert_eq!(interop, device.kind() == BackendKind::Cuda);
@@ -432,7 +432,7 @@ fn the_camera_centres_the_ship_and_keeps_the_view_inside_the_field() {
     assert_eq!(v.scale, 1.0);
     assert_eq!(v.origin, Vec2::new(4000.0 - 1920.0, 50.0 - 540.0));
     // The zoom is kept between the whole field and 8 times zoom 1.
-    let whole = View::whole(field, 1920, 1080, BACKGROUND);
+    let whole = Framing::whole(field, 1920, 1080, BACKGROUND);
     assert_eq!(whole.scale, 1080.0 / 4096.0);
     assert_eq!(whole.origin.y, 0.0);
     assert_eq!(whole.origin.x + 960.0 / whole.scale, 2048.0);

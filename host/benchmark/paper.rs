@@ -23,7 +23,7 @@ use crate::graphics::headless::{Headless, Target};
 use crate::graphics::unpack;
 use crate::meter::{Second, Seconds};
 use crate::pipeline::Profile;
-use crate::play::{Pilot, PlayOptions};
+use crate::play::{Flyer, PlayOptions};
 use crate::terminal::progress;
 
 /// What the measured frames show: the whole field, as the paper's experiment drew it (and
@@ -205,7 +205,7 @@ pub fn run_in_window(device: &Device, options: &PaperOptions) -> anyhow::Result<
     let machine = Provenance::now(device);
     let play = PlayOptions {
         seed: options.seed,
-        pilot: Pilot::Auto,
+        pilot: Flyer::Auto,
         muted: true,
         vsync: false,
         renderer: options.renderer,

@@ -4,7 +4,7 @@
 use std::collections::VecDeque;
 
 use bytemuck::Zeroable;
-use gpuwars_kernels::game::control::{Command, Input, Status};
+use gpuwars_kernels::game::control::{Input, Order, Status};
 use gpuwars_kernels::game::effects::Burst;
 use gpuwars_kernels::game::rules::{Brain, Rules, Wave};
 use gpuwars_kernels::render::camera::Lens;
@@ -47,7 +47,7 @@ impl Default for Options {
 pub struct Game<'d> {
     /// The host's side of the mailbox the steps read their commands from and post their
     /// statuses to.
-    ring: Ring<Command, Status>,
+    ring: Ring<Order, Status>,
     pipeline: Pipeline<'d>,
     scene: Scene,
     /// Statuses read back and not yet handed out, oldest first.
@@ -278,9 +278,9 @@ impl<'d> Game<'d> {
                         "input {field} is out of range (allowed {allowed}): {input:?}"
                     )));
                 }
-                Command::input(input)
+                Order::input(input)
             }
-            None => Command::autopilot(),
+            None => Order::autopilot(),
         };
         // One count of the steps: the kernels find each step's slot of the ring by theirs,
         // which is the pipeline's.

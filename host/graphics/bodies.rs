@@ -33,9 +33,9 @@ use gpuwars_kernels::render::{BodyVertex, Look, NOSE_FROM, backdrop};
 
 use super::picture::{Blit, DeviceImage, Upload};
 use super::{gl_error, program};
+use crate::backend::DeviceId;
 use crate::backend::GlBuffer;
 use crate::game::{Game, looks};
-use crate::backend::DeviceId;
 use crate::pipeline::{Drawing, Frame, Pipeline};
 use crate::{BackendKind, Buffer, Error};
 

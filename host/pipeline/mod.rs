@@ -47,7 +47,7 @@ pub use stage::{Stage, StagePlan};
 pub use teams::Lanes;
 pub use world::bytes_needed;
 
-use gpuwars_kernels::game::control::{Command, Status};
+use gpuwars_kernels::game::control::{Order, Status};
 use gpuwars_kernels::game::effects::{Burst, Particles};
 use gpuwars_kernels::game::rules::{Brain, Rules, Wave};
 use gpuwars_kernels::sim::Space;
@@ -299,7 +299,7 @@ impl ParticleSnapshot {
 impl Pipeline<'_> {
     /// The mailbox's shared buffers: the commands the steps read, the statuses they leave
     /// (a ring over them is the host's side, see `Device::ring`).
-    pub(crate) fn mailbox(&self) -> Result<(&Buffer<Command>, &Buffer<Status>), Error> {
+    pub(crate) fn mailbox(&self) -> Result<(&Buffer<Order>, &Buffer<Status>), Error> {
         let game = self.world.game()?;
         Ok((&game.commands, &game.statuses))
     }

@@ -8,7 +8,7 @@
 
 use gpuwars_kernels::data::{Sizes, Unmade};
 use gpuwars_kernels::game::GameData;
-use gpuwars_kernels::game::control::{Command, Mailbox, Status};
+use gpuwars_kernels::game::control::{Mailbox, Order, Status};
 use gpuwars_kernels::game::effects::{Burst, Particles};
 use gpuwars_kernels::game::master::{BirthArgs, MasterArgs};
 use gpuwars_kernels::registry;
@@ -80,7 +80,7 @@ pub(crate) struct GameState {
     pub config: GameConfig,
     pub data: GameData<Buffers>,
     /// The mailbox's commands and statuses, one per step in flight, in shared memory.
-    pub commands: Buffer<Command>,
+    pub commands: Buffer<Order>,
     pub statuses: Buffer<Status>,
     /// The explosions' particles and how kills burst, if the scene has explosions.
     pub effects: Option<(Particles<Buffers>, Burst)>,

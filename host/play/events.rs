@@ -11,13 +11,13 @@ use winit::keyboard::PhysicalKey;
 use winit::window::WindowId;
 
 use super::keys::{Action, ZOOM_STEP};
-use super::{App, Pilot};
+use super::{App, Flyer};
 
 impl App<'_> {
     /// Whether a person flies the ship (not the autopilot, nobody, a recording or the
     /// benchmark).
     fn player(&self) -> bool {
-        self.options.pilot == Pilot::Human && self.watch.is_none() && self.bench.is_none()
+        self.options.pilot == Flyer::Human && self.watch.is_none() && self.bench.is_none()
     }
 
     /// Leaves the start screen; returns whether this call did.

@@ -5,12 +5,12 @@ use std::time::Instant;
 
 use glam::Vec2;
 use gpuwars_kernels::game::control::{Input, Status};
-use gpuwars_kernels::render::View;
+use gpuwars_kernels::render::Framing;
 use winit::event_loop::ActiveEventLoop;
 use winit::window::Fullscreen;
 
 use super::keys::{Action, ZOOM_STEP};
-use super::{App, Pilot, Round};
+use super::{App, Flyer, Round};
 use crate::game::Scene;
 
 impl App<'_> {
@@ -20,14 +20,14 @@ impl App<'_> {
             return Some(watch.replay.inputs[self.round.submitted as usize]);
         }
         match self.options.pilot {
-            Pilot::Human => {
+            Flyer::Human => {
                 let ship = self.aim_view.as_ref().map_or(Vec2::ZERO, |view| {
                     ship_on_screen(&self.scene, &self.round.record.last, view)
                 });
                 Some(self.controls.input(ship))
             }
-            Pilot::Auto => None,
-            Pilot::None => Some(Input::default()),
+            Flyer::Auto => None,
+            Flyer::None => Some(Input::default()),
         }
     }
 
@@ -88,7 +88,7 @@ impl App<'_> {
 /// Where the ship of `status` is on the screen shown through `view`, in pixels (x right, y
 /// down): the mouse aims from there. Before the first status, where it is born: the world's
 /// middle.
-fn ship_on_screen(scene: &Scene, status: &Status, view: &View) -> Vec2 {
+fn ship_on_screen(scene: &Scene, status: &Status, view: &Framing) -> Vec2 {
     view.to_image(ship_position(scene, status))
 }
 

@@ -28,7 +28,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context as _, anyhow, bail};
 use glium::Display;
 use glutin::surface::WindowSurface;
-use gpuwars_kernels::render::View;
+use gpuwars_kernels::render::Framing;
 use gpuwars_kernels::render::camera::CameraState;
 use serde::Serialize;
 use winit::event_loop::{ControlFlow, EventLoop};
@@ -58,7 +58,7 @@ pub const MAX_CATCH_UP: u64 = 8;
 /// Who flies the ship in the window.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Pilot {
+pub enum Flyer {
     /// The player, at the keyboard.
     #[default]
     Human,
@@ -74,7 +74,7 @@ pub struct PlayOptions {
     /// Seed of the generators.
     pub seed: u32,
     /// Who flies the ship.
-    pub pilot: Pilot,
+    pub pilot: Flyer,
     /// Start with the sound off.
     pub muted: bool,
     /// Swap frames with the display's refresh.
@@ -340,7 +340,7 @@ struct App<'d> {
     /// own functions: the view the mouse aims through (the device's, a few steps late).
     aim_camera: CameraState,
     /// The last frame's view by [`App::aim_camera`].
-    aim_view: Option<View>,
+    aim_view: Option<Framing>,
 }
 
 impl<'d> App<'d> {
@@ -370,7 +370,7 @@ impl<'d> App<'d> {
             screen: None,
             round,
             controls: Controls::new(),
-            gamepads: (options.pilot == Pilot::Human && watch.is_none()).then(Gamepads::open),
+            gamepads: (options.pilot == Flyer::Human && watch.is_none()).then(Gamepads::open),
             // A replay plays at once: nobody is there to start it.
             begun: watch.is_some(),
             watch,

@@ -40,7 +40,7 @@ pub fn is_copy_of_lane0(lane: u32) -> bool {
 const BUTTERFLY: [u32; 5] = [16, 8, 4, 2, 1];
 
 /// A value the lanes of a warp can exchange: made of 32-bit words.
-pub trait Lanes: Copy {
+pub trait Exchanged: Copy {
     /// The value that lane `lane ^ mask` holds (GPU only).
     #[cfg(target_arch = "nvptx64")]
     fn shuffle_xor(self, mask: u32) -> Self;
@@ -53,7 +53,7 @@ pub trait Handed: Copy {
     fn shuffle_from(self, source: u32, members: u32) -> Self;
 }
 
-impl Lanes for u32 {
+impl Exchanged for u32 {
     #[cfg(target_arch = "nvptx64")]
     #[inline(always)]
     fn shuffle_xor(self, mask: u32) -> Self {
@@ -139,7 +139,7 @@ impl Handed for Vec2 {
     }
 }
 
-impl Lanes for f32 {
+impl Exchanged for f32 {
     #[cfg(target_arch = "nvptx64")]
     #[inline(always)]
     fn shuffle_xor(self, mask: u32) -> Self {
@@ -147,7 +147,7 @@ impl Lanes for f32 {
     }
 }
 
-impl Lanes for u64 {
+impl Exchanged for u64 {
     #[cfg(target_arch = "nvptx64")]
     #[inline(always)]
     fn shuffle_xor(self, mask: u32) -> Self {
@@ -157,7 +157,7 @@ impl Lanes for u64 {
     }
 }
 
-impl Lanes for Vec2 {
+impl Exchanged for Vec2 {
     #[cfg(target_arch = "nvptx64")]
     #[inline(always)]
     fn shuffle_xor(self, mask: u32) -> Self {
@@ -187,7 +187,7 @@ fn shuffle_up(value: u32, delta: u32) -> u32 {
 /// `value(lane)` of all 32 lanes of the calling thread's warp combined by the commutative
 /// `combine`, as a butterfly: the same result in every lane (see the module's contract).
 #[inline(always)]
-pub fn reduce<T: Lanes>(lane: u32, value: impl Fn(u32) -> T, combine: impl Fn(T, T) -> T) -> T {
+pub fn reduce<T: Exchanged>(lane: u32, value: impl Fn(u32) -> T, combine: impl Fn(T, T) -> T) -> T {
     #[cfg(target_arch = "nvptx64")]
     {
         let mut v = value(lane);

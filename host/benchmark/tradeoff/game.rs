@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
 
-use super::Sizes;
+use super::RunSizes;
 use crate::Device;
 use crate::game::accuracy::{AuditLength, audit_game};
 use crate::game::spec::Machine;
@@ -202,7 +202,7 @@ pub(super) fn game_row(
     device: &Device,
     (choice, scene): (String, &Scene),
     seed: u32,
-    sizes: &Sizes,
+    sizes: &RunSizes,
     audited: bool,
 ) -> anyhow::Result<GameRow> {
     let mut game = Game::with_options(device, scene, seed, Options::default())?;

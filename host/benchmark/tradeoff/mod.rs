@@ -63,7 +63,7 @@ pub struct TradeoffOptions {
 
 /// The sizes of a run.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Sizes {
+pub struct RunSizes {
     /// Balls of the crowd whose error is measured.
     pub error_bodies: u32,
     /// Simulated seconds after which the error is measured.
@@ -84,12 +84,12 @@ pub struct Sizes {
     pub crowded: [u32; 2],
 }
 
-impl Sizes {
+impl RunSizes {
     /// The sizes of a full run on `device`, or of a quick one.
     fn new(device: &Device, quick: bool) -> Self {
         let gpu = device.kind() == crate::BackendKind::Cuda;
         match (quick, gpu) {
-            (true, _) => Sizes {
+            (true, _) => RunSizes {
                 error_bodies: 96,
                 error_seconds: 0.25,
                 speed_bodies: 1024,
@@ -100,7 +100,7 @@ impl Sizes {
                 analytic_dts: [1.0 / 30.0, 1.0 / 60.0],
                 crowded: [256, 1024],
             },
-            (false, false) => Sizes {
+            (false, false) => RunSizes {
                 error_bodies: 768,
                 error_seconds: 0.25,
                 speed_bodies: 16_384,
@@ -112,7 +112,7 @@ impl Sizes {
                 analytic_dts: [1.0 / 60.0, 1.0 / 240.0],
                 crowded: [4096, 32_768],
             },
-            (false, true) => Sizes {
+            (false, true) => RunSizes {
                 error_bodies: 768,
                 error_seconds: 0.25,
                 speed_bodies: 262_144,
@@ -137,7 +137,7 @@ pub struct TradeoffSummary {
     /// Whether it was a quick run.
     pub quick: bool,
     /// The sizes it ran.
-    pub sizes: Sizes,
+    pub sizes: RunSizes,
     /// The crowd table.
     pub physics: Vec<PhysicsRow>,
     /// The analytic cases.
@@ -156,7 +156,7 @@ pub struct TradeoffSummary {
 pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<TradeoffSummary> {
     let outputs = Outputs::in_dir(&options.out, "tradeoff")?;
     let machine = Provenance::now(device);
-    let sizes = Sizes::new(device, options.quick);
+    let sizes = RunSizes::new(device, options.quick);
     let choices = crowd_choices();
     let games = game_choices(&options.scene);
     let features = feature_choices(&options.scene);

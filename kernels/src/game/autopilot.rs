@@ -2,7 +2,7 @@
 //! headless demo, the benchmarks and the tests. Each step it looks around the ship through
 //! the step's grid, as the grid was built (the places and velocities its entries hold, before
 //! the step's physics moves anything), and leaves its input for the next step, whose master
-//! takes it unless the host's [`Command`](super::control::Command) says the player flies; so
+//! takes it unless the host's [`Order`](super::control::Order) says the player flies; so
 //! a bot-played step needs no read-back, and, reading nothing the physics writes, the search
 //! runs beside the rest of the step (the physics, free lists, effects, tally), off the chain
 //! of launches that a step waits for.
@@ -86,7 +86,7 @@ impl Sighting {
     }
 }
 
-impl warp::Lanes for Sighting {
+impl warp::Exchanged for Sighting {
     #[cfg(target_arch = "nvptx64")]
     #[inline(always)]
     fn shuffle_xor(self, mask: u32) -> Self {

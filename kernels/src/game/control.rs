@@ -91,17 +91,17 @@ impl Input {
 /// Either way the step launches the same kernels; the choice is made on the device.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct Command {
+pub struct Order {
     /// The input to apply when the autopilot does not fly.
     pub input: Input,
     /// Non-zero: the autopilot flies this step and `input` is ignored.
     pub autopilot: u32,
 }
 
-impl Command {
+impl Order {
     /// The player's `input`.
     pub fn input(input: Input) -> Self {
-        Command {
+        Order {
             input,
             autopilot: 0,
         }
@@ -109,7 +109,7 @@ impl Command {
 
     /// The autopilot flies.
     pub fn autopilot() -> Self {
-        Command {
+        Order {
             input: Input::default(),
             autopilot: 1,
         }
@@ -187,7 +187,7 @@ impl Status {
 #[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct Mailbox {
     /// The commands, one per step in flight (at least one).
-    pub commands: DevSlice<Command>,
+    pub commands: DevSlice<Order>,
     /// The statuses, as many.
     pub statuses: DevSlice<Status>,
     /// Steps tallied so far, modulo 2³² (one element): the step under way is the next.
@@ -197,7 +197,7 @@ pub struct Mailbox {
 impl Mailbox {
     /// The command of the step under way.
     #[inline(always)]
-    pub fn command(&self) -> Command {
+    pub fn command(&self) -> Order {
         self.commands.get(self.tallied.get(0) % self.commands.len())
     }
 

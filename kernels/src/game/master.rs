@@ -412,7 +412,7 @@ impl Counts {
     }
 }
 
-impl warp::Lanes for Counts {
+impl warp::Exchanged for Counts {
     #[cfg(target_arch = "nvptx64")]
     #[inline(always)]
     fn shuffle_xor(self, mask: u32) -> Self {

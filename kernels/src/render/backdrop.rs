@@ -11,7 +11,7 @@
 
 use glam::Vec2;
 
-use super::View;
+use super::Framing;
 
 /// World units between grid lines.
 pub const SPACING: f32 = 64.0;
@@ -63,7 +63,7 @@ fn mark(origin: f32, scale: f32, field: f32, lines: bool, p: f32) -> Mark {
 /// `field`-sized world: [`BORDER`] on the field's border, [`LINE`] on a grid line (when
 /// lines are at least [`MIN_GAP_PX`] apart), `None` elsewhere and outside the field.
 #[inline(always)]
-pub fn on_grid(view: &View, field: Vec2, x: u32, y: u32) -> Option<u32> {
+pub fn on_grid(view: &Framing, field: Vec2, x: u32, y: u32) -> Option<u32> {
     let lines = SPACING * view.scale >= MIN_GAP_PX;
     // Rows from the bottom, as the world's y runs.
     let row = (view.height - 1 - y) as f32;
@@ -82,8 +82,8 @@ mod tests {
     use super::*;
 
     /// A `width × height` view of world units from `origin` at `scale` pixels per unit.
-    fn view(origin: Vec2, scale: f32, width: u32, height: u32) -> View {
-        View {
+    fn view(origin: Vec2, scale: f32, width: u32, height: u32) -> Framing {
+        Framing {
             origin,
             scale,
             width,

@@ -9,7 +9,7 @@
 use glam::Vec2;
 
 use super::radar::{self, RadarBox};
-use super::{NO_SHIP, Shown, View};
+use super::{Framing, NO_SHIP, Shown};
 use crate::game::control::Input;
 use crate::sim::Bodies;
 use crate::{DevSlice, Thread, kernel_args};
@@ -121,9 +121,9 @@ pub fn clamp_centre(centre: Vec2, shown: Vec2, field: Vec2) -> Vec2 {
 
 /// The view of a `width × height` image centred on `centre` at `scale` pixels per unit.
 #[inline]
-pub fn view_at(centre: Vec2, scale: f32, width: u32, height: u32, background: u32) -> View {
+pub fn view_at(centre: Vec2, scale: f32, width: u32, height: u32, background: u32) -> Framing {
     let shown = Vec2::new(width as f32, height as f32) / scale;
-    View {
+    Framing {
         origin: centre - shown * 0.5,
         scale,
         width,
@@ -135,7 +135,7 @@ pub fn view_at(centre: Vec2, scale: f32, width: u32, height: u32, background: u3
 /// The camera after one frame: `state` moved towards the [`target`] of `lens` (snapped on
 /// the first frame and when `lens.dt` is 0), and the frame's view, kept inside the field.
 #[inline]
-pub fn advance(lens: &Lens, ship: Option<Vec2>, state: CameraState) -> (CameraState, View) {
+pub fn advance(lens: &Lens, ship: Option<Vec2>, state: CameraState) -> (CameraState, Framing) {
     let goal = target(lens, ship);
     let next = if state.primed == 0 {
         goal
@@ -200,7 +200,7 @@ fn aim(input: &DevSlice<Input>) -> Vec2 {
 /// What a frame of `lens` seen through `view` shows, the ship (position, kind) at `ship`
 /// aiming along `aim`: what [`camera`] writes, for the host too.
 #[inline]
-pub fn shown(lens: &Lens, view: View, ship: Option<(Vec2, u32)>, aim: Vec2) -> Shown {
+pub fn shown(lens: &Lens, view: Framing, ship: Option<(Vec2, u32)>, aim: Vec2) -> Shown {
     Shown {
         view,
         radar: if lens.radar != 0 {

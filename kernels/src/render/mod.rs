@@ -75,7 +75,7 @@ pub const HALO_TO: f32 = 1.7;
 /// world around `origin + ((x + ½) / scale, (height − y − ½) / scale)`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct View {
+pub struct Framing {
     /// World position of the image's bottom-left corner.
     pub origin: Vec2,
     /// Pixels per world unit.
@@ -88,10 +88,10 @@ pub struct View {
     pub background: u32,
 }
 
-impl View {
+impl Framing {
     /// The whole world `size` centred in a `width × height` image, the same scale on both
     /// axes (what the camera shows in its field mode).
-    pub fn whole(size: Vec2, width: u32, height: u32, background: u32) -> View {
+    pub fn whole(size: Vec2, width: u32, height: u32, background: u32) -> Framing {
         let scale = camera::fit_scale(size, width, height);
         camera::view_at(size * 0.5, scale, width, height, background)
     }
@@ -104,7 +104,7 @@ impl View {
     }
 
     /// The world position at image position `p` (x to the right, y down, in pixels): the
-    /// inverse of [`View::to_image`].
+    /// inverse of [`Framing::to_image`].
     #[inline(always)]
     pub fn to_world(&self, p: Vec2) -> Vec2 {
         self.origin + Vec2::new(p.x, self.height as f32 - p.y) / self.scale
@@ -119,7 +119,7 @@ pub const NO_SHIP: u32 = u32::MAX;
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct Shown {
     /// The part of the world in the frame.
-    pub view: View,
+    pub view: Framing,
     /// Where the radar is ([`RadarBox::NONE`]: no radar).
     pub radar: RadarBox,
     /// Size of the field.
@@ -397,7 +397,7 @@ fn drawn(args: &SplatArgs, shown: &Shown, slot: u32) -> Option<Drawn> {
 
 /// Draws every `step`-th row of `body`'s pixels from its `first` (0-based) into the keys.
 #[inline(always)]
-fn plot(args: &SplatArgs, view: &View, body: &Drawn, first: u32, step: u32) {
+fn plot(args: &SplatArgs, view: &Framing, body: &Drawn, first: u32, step: u32) {
     let sprite = &body.sprite;
     cover_rows(
         view,
@@ -464,7 +464,7 @@ pub fn splat_large(t: Thread, args: &SplatArgs) {
 /// Whether something centred at image position `centre` and `bound` pixels across (each
 /// way) may cover a pixel of `view`'s image.
 #[inline(always)]
-fn near_image(view: &View, centre: Vec2, bound: f32) -> bool {
+fn near_image(view: &Framing, centre: Vec2, bound: f32) -> bool {
     let (w, h) = (view.width as f32, view.height as f32);
     centre.x > -bound - 1.0
         && centre.x < w + bound + 1.0
@@ -477,13 +477,13 @@ fn near_image(view: &View, centre: Vec2, bound: f32) -> bool {
 /// centre from `centre`, and whether it is the pixel under `centre` (which a drawing
 /// covers however small it is). Nothing for a `centre` far off the image.
 #[inline(always)]
-fn cover(view: &View, centre: Vec2, reach: Vec2, f: impl FnMut(u32, Vec2, bool)) {
+fn cover(view: &Framing, centre: Vec2, reach: Vec2, f: impl FnMut(u32, Vec2, bool)) {
     cover_rows(view, centre, reach, 0, 1, f);
 }
 
 /// The rows of `view`'s image within `reach.y` of `centre` (see [`cover`]): first and last.
 #[inline(always)]
-fn row_span(view: &View, centre: Vec2, reach: Vec2) -> (u32, u32) {
+fn row_span(view: &Framing, centre: Vec2, reach: Vec2) -> (u32, u32) {
     let y0 = (centre.y - reach.y).max(0.0) as u32;
     let y1 = ((centre.y + reach.y) as u32).min(view.height - 1);
     (y0, y1)
@@ -491,7 +491,7 @@ fn row_span(view: &View, centre: Vec2, reach: Vec2) -> (u32, u32) {
 
 /// How many rows [`cover`] walks for `centre` and `reach` (0 off the image).
 #[inline(always)]
-fn rows(view: &View, centre: Vec2, reach: Vec2) -> u32 {
+fn rows(view: &Framing, centre: Vec2, reach: Vec2) -> u32 {
     if !near_image(view, centre, reach.max_element()) {
         return 0;
     }
@@ -502,7 +502,7 @@ fn rows(view: &View, centre: Vec2, reach: Vec2) -> u32 {
 /// [`cover`] for every `step`-th of its rows from its `first` (0-based) only.
 #[inline(always)]
 fn cover_rows(
-    view: &View,
+    view: &Framing,
     centre: Vec2,
     reach: Vec2,
     first: u32,

@@ -8,7 +8,8 @@
 use glam::Vec2;
 
 use super::{
-    BodyVertex, Shown, VERTEX_ALIVE, VERTEX_LEVEL_SHIFT, VERTEX_PARTICLE, View, cover, particle_key,
+    BodyVertex, Framing, Shown, VERTEX_ALIVE, VERTEX_LEVEL_SHIFT, VERTEX_PARTICLE, cover,
+    particle_key,
 };
 use crate::game::effects::{Particles, fade_level};
 use crate::{DevSlice, Thread, kernel_args};
@@ -22,7 +23,7 @@ pub const MAX_RADIUS_PX: f32 = 3.0;
 /// pixels ([`SIZE`] at the view's scale, at most [`MAX_RADIUS_PX`]; the pixel under its
 /// centre is drawn however small).
 #[inline(always)]
-pub fn disc(particles: &Particles, view: &View, p: u32) -> Option<(Vec2, f32)> {
+pub fn disc(particles: &Particles, view: &Framing, p: u32) -> Option<(Vec2, f32)> {
     if particles.life.get(p) == 0 {
         return None;
     }
