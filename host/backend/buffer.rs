@@ -12,7 +12,7 @@ use super::{Device, DeviceId, Element, Error, Imp, check_len, cpu, cuda};
 /// A buffer of `T` in the device's memory (host memory under the emulator).
 ///
 /// The host reads and writes it through the [`Device`] (`write`, `download`, `copy`), and
-/// kernels through the views a [`Binder`] makes for an [`Op`]. The memory is shared with the
+/// kernels through the views a [`Binder`](super::Binder) makes for an [`Op`](super::Op). The memory is shared with the
 /// ops that view it ([`Buffer::hold`]): it is freed when the buffer and every op and plan
 /// made with it are gone, not before.
 ///
@@ -33,7 +33,7 @@ pub struct Buffer<T: Element> {
 }
 
 /// A share in a buffer's memory that keeps it allocated and gives no access to it: what an
-/// [`Op`] holds of each buffer its arguments view.
+/// [`Op`](super::Op) holds of each buffer its arguments view.
 #[derive(Clone)]
 pub struct Hold {
     _memory: Arc<dyn Send + Sync>,
@@ -199,7 +199,7 @@ impl Device {
     /// page-locked host memory mapped into the GPU's address space (plain host memory under
     /// the emulation). Kernels reach it across the bus, so it suits a few words a step. Its
     /// bytes are host memory, not counted as the device's. The host reaches it through a
-    /// [`Ring`], or with [`Device::download`] and [`Device::write`], which wait for the GPU
+    /// [`Ring`](super::Ring), or with [`Device::download`] and [`Device::write`], which wait for the GPU
     /// first.
     pub fn alloc_shared<T: Element>(&self, len: usize) -> Result<Buffer<T>, Error> {
         check_len::<T>(len)?;
