@@ -126,6 +126,50 @@ fn random_worlds(device: &Device) {
         .unwrap();
 }
 
+/// A field far larger than its bodies need: the grid has at most `BUCKETS_PER_SLOT`
+/// buckets a slot (its cost follows the bodies, not the field's area), and still finds
+/// exactly the pairs brute force finds, wherever the bodies are.
+fn sparse_fields(device: &Device) {
+    use gpuwars::sim::layout::{BUCKETS_PER_SLOT, Layout, space};
+    let strategy =
+        (1e4f32..1e6, 1e4f32..1e6, any::<bool>(), 0usize..40).prop_flat_map(|(w, h, wrap, n)| {
+            let size = Vec2::new(w, h);
+            let boundary = if wrap {
+                Boundary::Wrap
+            } else {
+                Boundary::Clamp
+            };
+            let spec = two_kind_world(size, boundary, 4.0, 40);
+            let space = space(&spec);
+            let cell = size / Vec2::new(space.cols as f32, space.rows as f32);
+            // Half of them near one spot, so that some pairs touch.
+            let near = (0.0f32..40.0, 0.0f32..40.0).prop_map(|(x, y)| Vec2::new(x, y));
+            let place = prop_oneof![position(size, cell), near];
+            let body = (0usize..2, place, (-30.0f32..30.0, -30.0f32..30.0));
+            (Just(spec), prop::collection::vec(body, n))
+        });
+    let mut runner = TestRunner::new(Config {
+        cases: 24,
+        ..Config::default()
+    });
+    runner
+        .run(&strategy, |(spec, bodies)| {
+            let (space, slots) = (space(&spec), Layout::new(&spec).slots);
+            let buckets = u64::from(space.cols) * u64::from(space.rows) * 2;
+            prop_assert!(
+                buckets <= BUCKETS_PER_SLOT * u64::from(slots),
+                "{buckets} buckets for {slots} slots"
+            );
+            let placed: Vec<_> = bodies
+                .into_iter()
+                .map(|(k, p, v)| (k, p, Vec2::from(v)))
+                .collect();
+            check_step(device, &spec, &placed);
+            Ok(())
+        })
+        .unwrap();
+}
+
 fn everything_in_one_cell(device: &Device) {
     let spec = two_kind_world(Vec2::splat(400.0), Boundary::Clamp, 3.0, 200);
     // 300 bodies on 4 spots, all inside one cell: every pair on a spot overlaps.
@@ -201,6 +245,7 @@ fn no_bodies_and_full_capacity(device: &Device) {
 
 on_both_backends!(
     random_worlds,
+    sparse_fields,
     everything_in_one_cell,
     seams_edges_and_borders,
     a_grid_narrower_than_three_cells,

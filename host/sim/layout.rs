@@ -8,6 +8,10 @@ use super::spec::{Boundary, SWEEP_MARGIN, Shape, WorldSpec};
 pub const WARP: u32 = gpuwars_kernels::warp::WARP;
 /// Most grid cells: a world of tiny bodies gets coarser cells rather than a huge grid.
 pub const MAX_CELLS: u32 = 1 << 22;
+/// Most grid buckets (a cell's bucket for each kind) a world gets per slot: a field far
+/// larger than its bodies need gets coarser cells, so that the grid costs what the bodies
+/// do, not what the field's area does (the cells a query reads stay the 3×3 around it).
+pub const BUCKETS_PER_SLOT: u64 = 4;
 /// Cells are made this much larger than the largest reach, so that rounding in the cell
 /// arithmetic can never separate two touching bodies by more than one cell.
 const CELL_MARGIN: f32 = 1.0 + 1.0 / 1024.0;
@@ -106,7 +110,8 @@ pub fn kind_table(spec: &WorldSpec) -> Vec<KindInfo> {
 }
 
 /// The world and its grid: cells no smaller than the largest distance at which two bodies
-/// can touch or a body can see, as many as fit (up to [`MAX_CELLS`]).
+/// can touch or a body can see, as many as fit, up to [`MAX_CELLS`] and to
+/// [`BUCKETS_PER_SLOT`] buckets a slot.
 pub fn space(spec: &WorldSpec) -> Space {
     let masks = spec.collision_masks();
     // Two bodies touch only if their centres are closer than the sum of their reaches.
@@ -131,7 +136,10 @@ pub fn space(spec: &WorldSpec) -> Space {
         }
     };
     let (mut cols, mut rows) = (fit(spec.size.x), fit(spec.size.y));
-    while u64::from(cols) * u64::from(rows) > u64::from(MAX_CELLS) {
+    let kinds = spec.kinds.len().max(1) as u64;
+    let per_slots = BUCKETS_PER_SLOT * u64::from(Layout::new(spec).slots) / kinds;
+    let most = per_slots.clamp(1, u64::from(MAX_CELLS));
+    while u64::from(cols) * u64::from(rows) > most {
         if cols >= rows {
             cols = cols.div_ceil(2);
         } else {
