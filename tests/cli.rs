@@ -888,3 +888,32 @@ fn play_without_a_display_says_what_to_do_in_words() {
         );
     }
 }
+
+/// Under an address-space limit too small for the world, the program says what it needs
+/// and what is free, and exits with status 1: no allocation aborts it (it used to die with
+/// "memory allocation of … bytes failed", status 134). The limit is set in a child shell.
+#[test]
+fn a_world_larger_than_the_address_space_limit_is_an_error_in_words() {
+    let limit_kib = 2_000_000;
+    let out = Command::new("sh")
+        .arg("-c")
+        .arg(format!("ulimit -v {limit_kib} && exec \"$0\" \"$@\""))
+        .arg(env!("CARGO_BIN_EXE_gpuwars"))
+        .args([
+            "--backend",
+            "cpu",
+            "demo",
+            "--scene",
+            "scale-16m",
+            "--steps",
+            "1",
+        ])
+        .env_remove("GPUWARS_CPU_THREADS")
+        .output()
+        .expect("sh runs");
+    // `scale-16m` takes 4.6 GB.
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("needs"), "{stderr}");
+    assert!(stderr.contains("ulimit"), "{stderr}");
+}

@@ -185,7 +185,7 @@ impl Device {
         check_len::<T>(len)?;
         self.note_allocation::<T>(len);
         let imp = match &self.imp {
-            Imp::Cpu(_) => BufferImp::Cpu(cpu::HostBuffer::zeroed(len)),
+            Imp::Cpu(_) => BufferImp::Cpu(cpu::HostBuffer::zeroed(len)?),
             Imp::Cuda(gpu) => BufferImp::cuda(gpu.alloc_zeroed(len * size_of::<T>())?),
         };
         Ok(Buffer {
@@ -204,7 +204,7 @@ impl Device {
     pub fn alloc_shared<T: Element>(&self, len: usize) -> Result<Buffer<T>, Error> {
         check_len::<T>(len)?;
         let imp = match &self.imp {
-            Imp::Cpu(_) => BufferImp::Cpu(cpu::HostBuffer::zeroed(len)),
+            Imp::Cpu(_) => BufferImp::Cpu(cpu::HostBuffer::zeroed(len)?),
             Imp::Cuda(gpu) => BufferImp::Mapped {
                 memory: gpu.mapped(len * size_of::<T>())?,
                 len,
@@ -223,7 +223,7 @@ impl Device {
         check_len::<T>(data.len())?;
         self.note_allocation::<T>(data.len());
         let imp = match &self.imp {
-            Imp::Cpu(_) => BufferImp::Cpu(cpu::HostBuffer::from_slice(data)),
+            Imp::Cpu(_) => BufferImp::Cpu(cpu::HostBuffer::from_slice(data)?),
             Imp::Cuda(gpu) => BufferImp::cuda(gpu.upload(data)?),
         };
         Ok(Buffer {

@@ -165,12 +165,32 @@ unsafe impl<T: Send> Send for HostBuffer<T> {}
 unsafe impl<T: Sync> Sync for HostBuffer<T> {}
 
 impl<T: Element> HostBuffer<T> {
-    pub(super) fn zeroed(len: usize) -> Self {
-        Self::from_box(vec![T::zeroed(); len].into_boxed_slice())
+    /// `len` zeroed elements, or [`Error::OutOfMemory`] where the host cannot give them
+    /// (an allocation that fails is an error, not an abort).
+    pub(super) fn zeroed(len: usize) -> Result<Self, Error> {
+        let mut data = Self::reserved(len)?;
+        data.resize(len, T::zeroed());
+        Ok(Self::from_box(data.into_boxed_slice()))
     }
 
-    pub(super) fn from_slice(data: &[T]) -> Self {
-        Self::from_box(data.into())
+    /// A copy of `data`, or [`Error::OutOfMemory`] as for [`HostBuffer::zeroed`].
+    pub(super) fn from_slice(data: &[T]) -> Result<Self, Error> {
+        let mut copy = Self::reserved(data.len())?;
+        copy.extend_from_slice(data);
+        Ok(Self::from_box(copy.into_boxed_slice()))
+    }
+
+    /// An empty vector with room for exactly `len` elements.
+    fn reserved(len: usize) -> Result<Vec<T>, Error> {
+        let mut data = Vec::new();
+        data.try_reserve_exact(len)
+            .map_err(|_| Error::OutOfMemory {
+                what: format!("a buffer of {len} elements of {} bytes", size_of::<T>()),
+                needed: (len * size_of::<T>()) as u64,
+                free: super::host_memory().map_or(0, |(free, _)| free),
+                place: "host",
+            })?;
+        Ok(data)
     }
 
     fn from_box(data: Box<[T]>) -> Self {

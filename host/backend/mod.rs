@@ -396,7 +396,9 @@ impl Device {
                 free,
                 place: match self.kind() {
                     BackendKind::Cuda => "device",
-                    BackendKind::Cpu => "host",
+                    BackendKind::Cpu => {
+                        "host (what the machine has available, within this process's ulimit -v and -d)"
+                    }
                 },
             }),
             _ => Ok(()),
@@ -476,11 +478,12 @@ fn check_len<T>(len: usize) -> Result<(), Error> {
     Ok(())
 }
 
-/// The host's available and total memory, from `/proc/meminfo`.
+/// The host memory this process can still have, and the host's total: what `/proc/meminfo`
+/// says is available, less where this process's address-space or data limit (`ulimit -v`,
+/// `ulimit -d`) leaves less room than that.
 fn host_memory() -> Option<(u64, u64)> {
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let field = |name: &str| -> Option<u64> {
-        let line = info.lines().find(|l| l.starts_with(name))?;
+    let kib_field = |text: &str, name: &str| -> Option<u64> {
+        let line = text.lines().find(|l| l.starts_with(name))?;
         let kib: u64 = line[name.len()..]
             .trim()
             .trim_end_matches("kB")
@@ -489,5 +492,26 @@ fn host_memory() -> Option<(u64, u64)> {
             .ok()?;
         Some(kib * 1024)
     };
-    Some((field("MemAvailable:")?, field("MemTotal:")?))
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let available = kib_field(&info, "MemAvailable:")?;
+    let total = kib_field(&info, "MemTotal:")?;
+    let limits = std::fs::read_to_string("/proc/self/limits").unwrap_or_default();
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    let room = |limit: &str, used: &str| -> Option<u64> {
+        let line = limits.lines().find(|l| l.starts_with(limit))?;
+        let soft: u64 = line[limit.len()..]
+            .split_whitespace()
+            .next()?
+            .parse()
+            .ok()?;
+        Some(soft.saturating_sub(kib_field(&status, used).unwrap_or(0)))
+    };
+    let free = [
+        room("Max address space", "VmSize:"),
+        room("Max data size", "VmData:"),
+    ]
+    .into_iter()
+    .flatten()
+    .fold(available, u64::min);
+    Some((free, total))
 }
