@@ -48,7 +48,7 @@ pub struct Cli {
         default_value = "on",
         value_name = "on|off",
         action = clap::ArgAction::Set,
-        value_parser = clap::builder::BoolishValueParser::new()
+        value_parser = on_off
     )]
     pub dependent_launch: bool,
     /// What to do; none plays in a window when a display is there, else runs the demo.
@@ -233,17 +233,55 @@ pub struct BenchOut {
     pub json: bool,
 }
 
-/// A value parser for a number from `low` to `high`, whose errors say so.
+/// A value parser for a number from `low` to `high`, whose errors say so. The bounds hold
+/// for the number as written, not only once rounded to `T` (8.0000004 is past 8, though
+/// as an `f32` it is 8).
 pub fn decimal<T>(low: T, high: T) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync
 where
     T: std::str::FromStr + PartialOrd + std::fmt::Display + Copy + Send + Sync + 'static,
 {
     move |text| {
         let allowed = format!("allowed a number from {low} to {high}");
+        let exact = |t: &str| t.parse::<f64>().ok();
+        let written = match (
+            exact(text.trim()),
+            exact(&low.to_string()),
+            exact(&high.to_string()),
+        ) {
+            (Some(v), Some(lo), Some(hi)) => lo <= v && v <= hi,
+            _ => true,
+        };
         match text.trim().parse::<T>() {
-            Ok(v) if low <= v && v <= high => Ok(v),
+            Ok(v) if written && low <= v && v <= high => Ok(v),
             Ok(_) => Err(format!("out of range ({allowed})")),
             Err(_) => Err(format!("not a number ({allowed})")),
+        }
+    }
+}
+
+/// A value parser for `on` or `off` (the words the usage shows), whose error names both
+/// ways of giving it.
+fn on_off(text: &str) -> Result<bool, String> {
+    match text.trim().to_ascii_lowercase().as_str() {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err("allowed: on or off (as --dependent-launch or GPUWARS_DEPENDENT_LAUNCH)".into()),
+    }
+}
+
+/// Shortens the values a command-line error quotes, and escapes their control characters,
+/// as errors show file names (see [`crate::files::short_name`]): a 100,000-character value
+/// is quoted by its start and its end, a newline as `\n`.
+pub fn quote_short(error: &mut clap::Error) {
+    use clap::error::{ContextKind, ContextValue};
+    for kind in [
+        ContextKind::InvalidValue,
+        ContextKind::InvalidArg,
+        ContextKind::InvalidSubcommand,
+    ] {
+        if let Some(ContextValue::String(value)) = error.get(kind) {
+            let short = crate::files::short_name(value);
+            error.insert(kind, ContextValue::String(short));
         }
     }
 }

@@ -25,7 +25,10 @@ use gpuwars::play::{self, PlayOptions, PlayReport};
 use gpuwars::{BackendKind, Device};
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = Cli::try_parse().unwrap_or_else(|mut e| {
+        gpuwars::cli::quote_short(&mut e);
+        e.exit()
+    });
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

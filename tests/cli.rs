@@ -917,3 +917,60 @@ fn a_world_larger_than_the_address_space_limit_is_an_error_in_words() {
     assert!(stderr.contains("needs"), "{stderr}");
     assert!(stderr.contains("ulimit"), "{stderr}");
 }
+
+/// Flag errors in words: the choices the usage shows and where the value came from; bounds
+/// held for the number as written; a long or strange value quoted short and escaped.
+#[test]
+fn flag_values_are_refused_in_words_and_quoted_short() {
+    let refused = |args: &[&str]| {
+        let out = gpuwars(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let text = refused(&["--dependent-launch", "maybe", "info"]);
+    for word in ["on or off", "GPUWARS_DEPENDENT_LAUNCH"] {
+        assert!(text.contains(word), "{text}");
+    }
+    // 8.0000004 rounds to 8 as an f32, but is past the documented 8.
+    let text = refused(&["demo", "--zoom", "8.0000004", "--steps", "1"]);
+    assert!(text.contains("out of range"), "{text}");
+    let long = "9".repeat(100_000);
+    let text = refused(&["demo", "--zoom", &long, "--steps", "1"]);
+    assert!(text.len() < 1_000, "{} bytes: {}", text.len(), &text[..200]);
+    let text = refused(&["demo", "--steps", "1\nrm -rf /"]);
+    assert!(text.contains("1\\nrm"), "{text}");
+    assert!(!text.contains("1\nrm"), "{text}");
+}
+
+/// `replay --window` without a display names the replay as errors name files: a newline
+/// in its name escaped, not printed.
+#[test]
+fn the_window_refusal_names_the_replay_escaped() {
+    let dir = tempfile::tempdir().unwrap();
+    let replay = dir.path().join("two\nlines.json");
+    let replay_arg = replay.to_str().unwrap();
+    let out = gpuwars(&[
+        "--backend",
+        "cpu",
+        "demo",
+        "--steps",
+        "5",
+        "--record",
+        replay_arg,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
+        .args(["--backend", "cpu", "replay", replay_arg, "--window"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    assert!(text.contains("two\\nlines"), "{text}");
+    assert!(!text.contains("two\nlines"), "{text}");
+}

@@ -191,7 +191,7 @@ pub fn watch(
 ) -> anyhow::Result<PlayReport> {
     let headless = format!(
         "`gpuwars replay {}` (without --window) checks it headless",
-        file.display()
+        crate::files::shown(file)
     );
     if !display_present() {
         bail!(
