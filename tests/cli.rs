@@ -974,3 +974,52 @@ fn the_window_refusal_names_the_replay_escaped() {
     assert!(text.contains("two\\nlines"), "{text}");
     assert!(!text.contains("two\nlines"), "{text}");
 }
+
+/// A display that accepts the connection and never answers (a fake Wayland socket whose
+/// listener holds every connection silently) is an error naming it, for the game and the
+/// replay's window alike, not a silent wait for ever (which would hang this test).
+#[test]
+fn a_silent_display_is_an_error_naming_it() {
+    use std::os::unix::net::UnixListener;
+    let dir = tempfile::tempdir().unwrap();
+    let socket = dir.path().join("silent-wayland");
+    let listener = UnixListener::bind(&socket).unwrap();
+    std::thread::spawn(move || {
+        let mut held = Vec::new();
+        for stream in listener.incoming().flatten() {
+            held.push(stream);
+        }
+    });
+    let replay = dir.path().join("game.json");
+    let recorded = gpuwars(&[
+        "--backend",
+        "cpu",
+        "demo",
+        "--steps",
+        "5",
+        "--record",
+        replay.to_str().unwrap(),
+    ]);
+    assert!(recorded.status.success());
+    for args in [
+        vec!["--backend", "cpu", "play"],
+        vec![
+            "--backend",
+            "cpu",
+            "replay",
+            replay.to_str().unwrap(),
+            "--window",
+        ],
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
+            .args(&args)
+            .env_remove("DISPLAY")
+            .env("WAYLAND_DISPLAY", &socket)
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {text}");
+        assert!(text.contains("silent-wayland"), "{text}");
+        assert!(text.contains("did not answer"), "{text}");
+    }
+}

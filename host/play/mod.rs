@@ -13,6 +13,7 @@
 
 mod clock;
 pub mod controls;
+pub mod display;
 mod draw;
 mod events;
 mod gamepad;
@@ -167,6 +168,7 @@ pub fn display_present() -> bool {
 /// Plays `scene` in a window until Esc or the window is closed; returns the last game's
 /// report (and writes its replay if asked).
 pub fn play(device: &Device, scene: &Scene, options: PlayOptions) -> anyhow::Result<PlayReport> {
+    display::check().map_err(anyhow::Error::msg)?;
     // winit's error quotes its own source file: the user is told what to do instead.
     let event_loop = EventLoop::new()
         .map_err(|_| anyhow!("no display to open a window on; `gpuwars demo` plays without one"))?;
@@ -198,6 +200,7 @@ pub fn watch(
             "no display to open a window on (neither DISPLAY nor WAYLAND_DISPLAY is set): {headless}"
         );
     }
+    display::check().map_err(|silent| anyhow!("{silent}; {headless}"))?;
     // winit's error quotes its own source file: the user is told what to do instead.
     let event_loop =
         EventLoop::new().map_err(|_| anyhow!("no display to open a window on: {headless}"))?;
@@ -230,6 +233,7 @@ pub fn measure(
     options: PlayOptions,
     duration: Duration,
 ) -> anyhow::Result<(Seconds, bool)> {
+    display::check().map_err(anyhow::Error::msg)?;
     let event_loop = EventLoop::new().map_err(|_| {
         anyhow!("no display to open a window on; leave out --window to render offscreen")
     })?;
