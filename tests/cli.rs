@@ -1023,3 +1023,37 @@ fn a_silent_display_is_an_error_naming_it() {
         assert!(text.contains("did not answer"), "{text}");
     }
 }
+
+/// Long work says how long it will take once its speed is known: a demo of a million
+/// enemies for many steps announces its steps per second and what is left, on stderr,
+/// beside its JSON (stopped once it has).
+#[test]
+fn a_long_demo_says_how_long_it_will_take() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
+        .args([
+            "--backend",
+            "cpu",
+            "demo",
+            "--scene",
+            "scale-1m",
+            "--steps",
+            "100000",
+            "--json",
+        ])
+        .env_remove("GPUWARS_CPU_THREADS")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let stderr = BufReader::new(child.stderr.take().unwrap());
+    let notice = stderr
+        .lines()
+        .map_while(Result::ok)
+        .find(|line| line.contains("steps/s: about"));
+    child.kill().ok();
+    child.wait().ok();
+    let notice = notice.expect("a notice before the run ends");
+    assert!(notice.contains("100,000 steps"), "{notice}");
+}
