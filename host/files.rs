@@ -437,12 +437,16 @@ enum How {
 }
 
 /// Which file a path is: by device and inode where it exists (links followed, so a link
-/// and its target, or two hard links, are one file), else by its folder's real path and
-/// its name.
+/// and its target, or two hard links, are one file, and so are a file and itself seen
+/// through a bind mount), else by its folder's identity and its name.
 #[derive(Debug, PartialEq, Eq)]
 enum Identity {
     Inode(u64, u64),
-    Named(PathBuf),
+    /// Where there are no inodes: the real path.
+    #[cfg(not(unix))]
+    Real(PathBuf),
+    /// A file not there yet: which folder it would be in, and its name.
+    InFolder(Box<Identity>, std::ffi::OsString),
 }
 
 impl RunFiles {
@@ -514,16 +518,17 @@ impl RunFiles {
                 })?;
             }
         }
-        // A folder's files may land on any other file of the run named like one of them.
+        // A folder's files may land on any other file of the run named like one of them, in
+        // that folder however it is reached (a link, a bind mount).
         for many in self.uses.iter().filter(|u| u.how == How::Many) {
-            let Ok(dir) = std::fs::canonicalize(&many.path) else {
+            let Some(dir) = identity(&many.path).filter(Identity::exists) else {
                 continue;
             };
             let mut others = self.uses.iter().filter(|u| u.how != How::Many);
             let landed = others.find(|u| {
                 (u.how != How::Reads || u.path.exists())
                     && real_path(&u.path).is_some_and(|real| {
-                        real.parent() == Some(dir.as_path())
+                        real.parent().and_then(identity).as_ref() == Some(&dir)
                             && real
                                 .file_name()
                                 .and_then(|name| name.to_str())
@@ -584,7 +589,7 @@ impl RunFiles {
 impl Identity {
     /// Whether the file is there.
     fn exists(&self) -> bool {
-        matches!(self, Identity::Inode(..))
+        !matches!(self, Identity::InFolder(..))
     }
 }
 
@@ -597,12 +602,29 @@ fn real_path(path: &Path) -> Option<PathBuf> {
     })
 }
 
-/// Which file `path` is, when it can be told (a missing folder cannot be resolved).
+/// Which file `path` is, when it can be told (a file in a missing folder cannot be).
 fn identity(path: &Path) -> Option<Identity> {
-    #[cfg(unix)]
-    if let Ok(meta) = std::fs::metadata(path) {
-        use std::os::unix::fs::MetadataExt;
-        return Some(Identity::Inode(meta.dev(), meta.ino()));
+    if let Some(id) = inode(path) {
+        return Some(id);
     }
-    real_path(path).map(Identity::Named)
+    let real = real_path(path)?;
+    let dir = inode(real.parent()?)?;
+    Some(Identity::InFolder(
+        Box::new(dir),
+        real.file_name()?.to_owned(),
+    ))
+}
+
+/// The device and inode of the file or folder at `path` (links followed), where it exists.
+#[cfg(unix)]
+fn inode(path: &Path) -> Option<Identity> {
+    use std::os::unix::fs::MetadataExt;
+    let meta = std::fs::metadata(path).ok()?;
+    Some(Identity::Inode(meta.dev(), meta.ino()))
+}
+
+/// The real path of the file or folder at `path` (links followed), where it exists.
+#[cfg(not(unix))]
+fn inode(path: &Path) -> Option<Identity> {
+    std::fs::canonicalize(path).ok().map(Identity::Real)
 }

@@ -1057,3 +1057,87 @@ fn a_long_demo_says_how_long_it_will_take() {
     let notice = notice.expect("a notice before the run ends");
     assert!(notice.contains("100,000 steps"), "{notice}");
 }
+
+/// A bind mount of a folder, undone when dropped; `None` (with the reason printed) where the
+/// test may not mount.
+struct BindMount(std::path::PathBuf);
+
+impl BindMount {
+    fn new(from: &std::path::Path, to: &std::path::Path) -> Option<BindMount> {
+        let mounted = Command::new("mount")
+            .arg("--bind")
+            .arg(from)
+            .arg(to)
+            .output();
+        match mounted {
+            Ok(out) if out.status.success() => Some(BindMount(to.to_path_buf())),
+            other => {
+                let why = match other {
+                    Ok(out) => String::from_utf8_lossy(&out.stderr).trim().to_owned(),
+                    Err(e) => e.to_string(),
+                };
+                eprintln!("skipped: cannot make a bind mount here ({why})");
+                None
+            }
+        }
+    }
+}
+
+impl Drop for BindMount {
+    fn drop(&mut self) {
+        let _ = Command::new("umount").arg(&self.0).output();
+    }
+}
+
+/// Outputs are refused when they land on an input or another output through a bind mount
+/// of its folder: the folder is the same one (device and inode), whatever path reaches it.
+/// Nothing is written, and the files are as they were.
+#[test]
+fn outputs_through_a_bind_mount_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (real, mount) = (dir.path().join("real"), dir.path().join("mount"));
+    std::fs::create_dir_all(&real).unwrap();
+    std::fs::create_dir_all(&mount).unwrap();
+    let Some(_mounted) = BindMount::new(&real, &mount) else {
+        return;
+    };
+    // A scene named like a frame, and frames written into its folder through the mount.
+    let scene = real.join("frame-000005.png");
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/paper.toml")).unwrap();
+    std::fs::write(&scene, &text).unwrap();
+    let frames = [
+        "--backend",
+        "cpu",
+        "demo",
+        "--steps",
+        "10",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--frames-every",
+        "5",
+        mount.to_str().unwrap(),
+    ];
+    // Two outputs, one file: the replay and the screenshot through the mount.
+    let record = real.join("y.out");
+    let screenshot = mount.join("y.out");
+    let both = [
+        "--backend",
+        "cpu",
+        "demo",
+        "--steps",
+        "10",
+        "--record",
+        record.to_str().unwrap(),
+        "--screenshot",
+        screenshot.to_str().unwrap(),
+    ];
+    for args in [&frames[..], &both[..]] {
+        let out = gpuwars(args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(stderr.contains("cannot write"), "{stderr}");
+    }
+    assert_eq!(std::fs::read_to_string(&scene).unwrap(), text);
+    assert!(!record.exists());
+}
