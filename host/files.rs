@@ -436,17 +436,16 @@ enum How {
     Many,
 }
 
-/// Which file a path is: by device and inode where it exists (links followed, so a link
-/// and its target, or two hard links, are one file, and so are a file and itself seen
+/// Which file a path is: by the OS's identity of it where it exists (links followed, so a
+/// link and its target, or two hard links, are one file, and so are a file and itself seen
 /// through a bind mount), else by its folder's identity and its name.
 #[derive(Debug, PartialEq, Eq)]
 enum Identity {
-    Inode(u64, u64),
-    /// Where there are no inodes: the real path.
-    #[cfg(not(unix))]
-    Real(PathBuf),
+    /// A file or folder that is there: the OS's identity of it (device and inode; volume
+    /// serial and file index on Windows).
+    There(same_file::Handle),
     /// A file not there yet: which folder it would be in, and its name.
-    InFolder(Box<Identity>, std::ffi::OsString),
+    InFolder(same_file::Handle, std::ffi::OsString),
 }
 
 impl RunFiles {
@@ -589,7 +588,7 @@ impl RunFiles {
 impl Identity {
     /// Whether the file is there.
     fn exists(&self) -> bool {
-        !matches!(self, Identity::InFolder(..))
+        matches!(self, Identity::There(..))
     }
 }
 
@@ -602,29 +601,17 @@ fn real_path(path: &Path) -> Option<PathBuf> {
     })
 }
 
-/// Which file `path` is, when it can be told (a file in a missing folder cannot be).
+/// Which file `path` is, when it can be told (a file in a missing folder cannot be). Only
+/// files and folders are opened to be told apart: a named pipe would wait for a writer, and
+/// what is neither is refused where it is read or written.
 fn identity(path: &Path) -> Option<Identity> {
-    if let Some(id) = inode(path) {
-        return Some(id);
+    if let Ok(meta) = std::fs::metadata(path) {
+        if !(meta.is_file() || meta.is_dir()) {
+            return None;
+        }
+        return same_file::Handle::from_path(path).ok().map(Identity::There);
     }
     let real = real_path(path)?;
-    let dir = inode(real.parent()?)?;
-    Some(Identity::InFolder(
-        Box::new(dir),
-        real.file_name()?.to_owned(),
-    ))
-}
-
-/// The device and inode of the file or folder at `path` (links followed), where it exists.
-#[cfg(unix)]
-fn inode(path: &Path) -> Option<Identity> {
-    use std::os::unix::fs::MetadataExt;
-    let meta = std::fs::metadata(path).ok()?;
-    Some(Identity::Inode(meta.dev(), meta.ino()))
-}
-
-/// The real path of the file or folder at `path` (links followed), where it exists.
-#[cfg(not(unix))]
-fn inode(path: &Path) -> Option<Identity> {
-    std::fs::canonicalize(path).ok().map(Identity::Real)
+    let dir = same_file::Handle::from_path(real.parent()?).ok()?;
+    Some(Identity::InFolder(dir, real.file_name()?.to_owned()))
 }
