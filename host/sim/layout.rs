@@ -11,7 +11,7 @@ pub const MAX_CELLS: u32 = 1 << 22;
 /// Most grid buckets (a cell's bucket for each kind) a world gets per slot: a field far
 /// larger than its bodies need gets coarser cells, so that the grid costs what the bodies
 /// do, not what the field's area does (the cells a query reads stay the 3×3 around it).
-pub const BUCKETS_PER_SLOT: u64 = 4;
+pub const BUCKETS_PER_SLOT: u64 = 8;
 /// Cells are made this much larger than the largest reach, so that rounding in the cell
 /// arithmetic can never separate two touching bodies by more than one cell.
 const CELL_MARGIN: f32 = 1.0 + 1.0 / 1024.0;
