@@ -121,6 +121,14 @@ fn each_kind_gets_its_own_warp_aligned_range() {
 #[test]
 fn grid_cells_cover_the_largest_contact_and_vision() {
     let mut spec = valid();
+    // Its 192 slots may have 512 cells of their 3 kinds' buckets (8 a slot): the 50 × 37
+    // cells of 16 units that fit the field would be more, so they are coarser.
+    let s = space(&spec);
+    let cell = spec.size / Vec2::new(s.cols as f32, s.rows as f32);
+    assert!(cell.min_element() >= 16.0, "{cell}");
+    assert!(s.cells() * 3 <= 8 * 192, "{} cells", s.cells());
+    // With enough bodies for them, the cells are as small as the contacts allow.
+    spec.kinds[1].capacity = 1000;
     let s = space(&spec);
     // The ship (radius 8) touches enemies: cells of at least 16.
     let cell = spec.size / Vec2::new(s.cols as f32, s.rows as f32);

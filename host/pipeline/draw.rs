@@ -15,31 +15,55 @@ use gpuwars_kernels::{DevSlice, registry};
 use xxhash_rust::xxh3::xxh3_64;
 
 use super::Pipeline;
-use crate::backend::Binder;
+use crate::backend::{Binder, Buffers};
 use crate::files::FileError;
 use crate::primitives::threads;
+use crate::sim::state::made;
 use crate::{Buffer, Error, Op};
 
 /// Largest image side, in pixels.
 pub const MAX_SIDE: u32 = 16384;
 
-/// The kernel renderer's device buffers: the camera between frames, the frame's
-/// [`Shown`], the radar's counts and image, and the keys and pixels of frames of one size.
+gpuwars_kernels::device_data! {
+    /// The kernel renderer's device buffers that outlive a frame's size: the looks, the
+    /// camera between frames, the frame's [`Shown`], the radar's counts and image, and the
+    /// bodies too large for one thread.
+    pub struct CanvasData(kinds, slots) {
+        /// Each kind's look.
+        looks: [Look; kinds],
+        /// The camera between frames.
+        camera: [CameraState; 1],
+        /// What the last frame showed.
+        shown: [Shown; 1],
+        /// The radar's pixels, its frame included.
+        radar_image: [u32; RADAR_BOX],
+        /// The slots of the bodies too large for one thread (see
+        /// `gpuwars_kernels::render::splat_large`).
+        large: [u32; slots],
+        /// How many of them.
+        large_count: [u32; 1],
+    } nested {
+        /// The radar's per-pixel counts.
+        radar: RadarCounts(RADAR_CELLS),
+    }
+}
+
+gpuwars_kernels::device_data! {
+    /// A frame's pixels, made again when its size changes.
+    pub struct FramePixels(pixels) {
+        /// Each pixel's depth key of the splats.
+        keys: [u32; pixels],
+        /// The frame's colours.
+        image: [u32; pixels],
+    }
+}
+
+/// The kernel renderer's device buffers, for frames of one size.
 pub(super) struct Canvas {
     width: u32,
     height: u32,
-    keys: Buffer<u32>,
-    image: Buffer<u32>,
-    looks: Buffer<Look>,
-    camera: Buffer<CameraState>,
-    shown: Buffer<Shown>,
-    counts: Buffer<u32>,
-    top: Buffer<u32>,
-    radar_image: Buffer<u32>,
-    /// The slots of the bodies too large for one thread, and how many (see
-    /// `gpuwars_kernels::render::splat_large`).
-    large: Buffer<u32>,
-    large_count: Buffer<u32>,
+    data: CanvasData<Buffers>,
+    pixels: FramePixels<Buffers>,
 }
 
 /// Most threads the large bodies' launch has: a warp each for a thousand bodies at once,
@@ -144,14 +168,14 @@ impl Pipeline<'_> {
         Ok(Frame {
             width: canvas.width,
             height: canvas.height,
-            pixels: self.device.download(&canvas.image)?,
+            pixels: self.device.download(&canvas.pixels.image)?,
         })
     }
 
     /// What the last frame drawn (or the last vertices written) showed, as the camera
     /// kernel decided it (waits for it).
     pub fn shown(&self) -> Result<Shown, Error> {
-        Ok(self.device.download(&self.canvas()?.shown)?[0])
+        Ok(self.device.download(&self.canvas()?.data.shown)?[0])
     }
 
     /// The radar's pixels after the last vertices written (see [`Pipeline::write_vertices`]),
@@ -161,10 +185,10 @@ impl Pipeline<'_> {
         let canvas = self.canvas()?;
         // SAFETY: the view goes into this op only.
         let mut b = unsafe { Binder::new() };
-        let image = b.view(&canvas.radar_image);
+        let image = b.view(&canvas.data.radar_image);
         // SAFETY: the canvas's radar image holds the largest radar's box.
         self.device.launch(unsafe { self.radar_op(image, b) }?)?;
-        let mut pixels = self.device.download(&canvas.radar_image)?;
+        let mut pixels = self.device.download(&canvas.data.radar_image)?;
         pixels.truncate((radar.width * radar.height) as usize);
         Ok(pixels)
     }
@@ -190,9 +214,9 @@ impl Pipeline<'_> {
     unsafe fn radar_op(&self, image: DevSlice<u32>, mut b: Binder) -> Result<Op, Error> {
         let canvas = self.canvas()?;
         let args = RadarImageArgs {
-            looks: b.view(&canvas.looks),
-            shown: b.view(&canvas.shown),
-            radar: canvas.radar(&mut b),
+            looks: b.view(&canvas.data.looks),
+            shown: b.view(&canvas.data.shown),
+            radar: made(canvas.data.radar.convert(&mut b)),
             image,
             stride: radar::stride(self.world.layout.slots),
             reserved: 0,
@@ -268,28 +292,20 @@ impl Pipeline<'_> {
             Some(c) => {
                 // The camera's state outlives a change of size.
                 (c.width, c.height) = (width, height);
-                c.keys = device.alloc_zeroed(pixels)?;
-                c.image = device.alloc_zeroed(pixels)?;
+                c.pixels = FramePixels::build(&mut device.zeroed(), pixels)?;
             }
             None => {
+                let slots = self.world.layout.slots as usize;
                 self.canvas = Some(Canvas {
                     width,
                     height,
-                    keys: device.alloc_zeroed(pixels)?,
-                    image: device.alloc_zeroed(pixels)?,
-                    looks: device.alloc_zeroed(kinds)?,
-                    camera: device.alloc_zeroed(1)?,
-                    shown: device.alloc_zeroed(1)?,
-                    counts: device.alloc_zeroed(RADAR_CELLS)?,
-                    top: device.alloc_zeroed(RADAR_CELLS)?,
-                    radar_image: device.alloc_zeroed(RADAR_BOX)?,
-                    large: device.alloc_zeroed(self.world.layout.slots as usize)?,
-                    large_count: device.alloc_zeroed(1)?,
+                    data: CanvasData::build(&mut device.zeroed(), kinds, slots)?,
+                    pixels: FramePixels::build(&mut device.zeroed(), pixels)?,
                 })
             }
         }
         let canvas = self.canvas.as_mut().expect("made above");
-        device.write(&mut canvas.looks, looks)?;
+        device.write(&mut canvas.data.looks, looks)?;
         let (world, slots) = (&self.world, self.world.layout.slots);
         // SAFETY (both binders): the views go into the op made with each.
         let mut b = unsafe { Binder::new() };
@@ -297,8 +313,8 @@ impl Pipeline<'_> {
         let camera = CameraArgs {
             bodies: world.state.bodies(&mut b),
             input: input.map_or(DevSlice::EMPTY, |input| b.view(input)),
-            state: b.view(&canvas.camera),
-            shown: b.view(&canvas.shown),
+            state: b.view(&canvas.data.camera),
+            shown: b.view(&canvas.data.shown),
             lens: *lens,
         };
         // SAFETY (both ops): the world's and the canvas's buffers, sized for the world's
@@ -310,9 +326,9 @@ impl Pipeline<'_> {
             let mut b = unsafe { Binder::new() };
             let radar = RadarArgs {
                 bodies: world.state.bodies(&mut b),
-                looks: b.view(&canvas.looks),
-                shown: b.view(&canvas.shown),
-                radar: canvas.radar(&mut b),
+                looks: b.view(&canvas.data.looks),
+                shown: b.view(&canvas.data.shown),
+                radar: made(canvas.data.radar.convert(&mut b)),
                 stride,
                 reserved: 0,
             };
@@ -344,18 +360,18 @@ impl Pipeline<'_> {
         let splat = |b: &mut Binder| SplatArgs {
             bodies: world.state.bodies(b),
             kinds: b.view(&world.state.tables.info),
-            looks: b.view(&canvas.looks),
-            shown: b.view(&canvas.shown),
-            keys: b.view(&canvas.keys),
-            large: b.view(&canvas.large),
-            large_count: b.view(&canvas.large_count),
+            looks: b.view(&canvas.data.looks),
+            shown: b.view(&canvas.data.shown),
+            keys: b.view(&canvas.pixels.keys),
+            large: b.view(&canvas.data.large),
+            large_count: b.view(&canvas.data.large_count),
         };
         // SAFETY (every binder below): the views go into the op made with it. (Every op
         // below): the world's and the canvas's buffers, sized for the world's slots and the
         // frame's pixels, or the caller's image (see `render_into`).
         unsafe {
             let mut b = Binder::new();
-            let large_count = b.view(&canvas.large_count);
+            let large_count = b.view(&canvas.data.large_count);
             ops.push(Op::clear(large_count, b));
             let mut b = Binder::new();
             let args = splat(&mut b);
@@ -374,8 +390,8 @@ impl Pipeline<'_> {
             if let Some((particles, lifetime)) = world.particles(&mut b) {
                 let args = ParticleSplatArgs {
                     particles,
-                    shown: b.view(&canvas.shown),
-                    keys: b.view(&canvas.keys),
+                    shown: b.view(&canvas.data.shown),
+                    keys: b.view(&canvas.pixels.keys),
                     lifetime,
                     reserved: 0,
                 };
@@ -389,11 +405,11 @@ impl Pipeline<'_> {
             }
             let mut b = Binder::new();
             let resolve = ResolveArgs {
-                looks: b.view(&canvas.looks),
-                keys: b.view(&canvas.keys),
-                image: image.unwrap_or_else(|| b.view(&canvas.image)),
-                shown: b.view(&canvas.shown),
-                radar: canvas.radar(&mut b),
+                looks: b.view(&canvas.data.looks),
+                keys: b.view(&canvas.pixels.keys),
+                image: image.unwrap_or_else(|| b.view(&canvas.pixels.image)),
+                shown: b.view(&canvas.data.shown),
+                radar: made(canvas.data.radar.convert(&mut b)),
                 stride: radar::stride(slots),
                 reserved: 0,
             };
@@ -408,16 +424,6 @@ impl Pipeline<'_> {
         }
         let device = self.device;
         device.run(&device.plan(ops, false)?)
-    }
-}
-
-impl Canvas {
-    /// The radar's counts, made by `b`.
-    fn radar(&self, b: &mut Binder) -> RadarCounts {
-        RadarCounts {
-            counts: b.view(&self.counts),
-            top: b.view(&self.top),
-        }
     }
 }
 
@@ -485,8 +491,8 @@ impl Pipeline<'_> {
             let args = VertexArgs {
                 bodies: world.state.bodies(&mut b),
                 kinds: b.view(&world.state.tables.info),
-                looks: b.view(&canvas.looks),
-                shown: b.view(&canvas.shown),
+                looks: b.view(&canvas.data.looks),
+                shown: b.view(&canvas.data.shown),
                 vertices: vertices(&mut b).range(0, slots + 1),
             };
             ops.push(threads(
@@ -500,7 +506,7 @@ impl Pipeline<'_> {
             if let Some((particles, lifetime)) = world.particles(&mut b) {
                 let args = ParticleVertexArgs {
                     particles,
-                    shown: b.view(&canvas.shown),
+                    shown: b.view(&canvas.data.shown),
                     vertices: vertices(&mut b).range(slots + 1, particles.len()),
                     lifetime,
                     reserved: 0,

@@ -114,14 +114,14 @@ pub fn cell(pos: Vec2, field: Vec2, inner: (u32, u32)) -> (i32, i32) {
     (x, h - 1 - y)
 }
 
-/// The radar's per-pixel buffers, one element per pixel of its inside (row-major).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct RadarCounts {
-    /// Sampled bodies per pixel.
-    pub counts: DevSlice<u32>,
-    /// The key ([`key`], shade 0) of the highest-layer kind counted there.
-    pub top: DevSlice<u32>,
+crate::device_data! {
+    /// The radar's per-pixel buffers, one element per pixel of its inside (row-major).
+    pub struct RadarCounts(cells) {
+        /// Sampled bodies per pixel.
+        counts: [u32; cells],
+        /// The key ([`key`], shade 0) of the highest-layer kind counted there.
+        top: [u32; cells],
+    }
 }
 
 kernel_args! {
