@@ -947,28 +947,8 @@ fn flag_values_are_refused_in_words_and_quoted_short() {
 #[test]
 fn the_window_refusal_names_the_replay_escaped() {
     let dir = tempfile::tempdir().unwrap();
-    let replay = dir.path().join("two\nlines.json");
-    let replay_arg = replay.to_str().unwrap();
-    let out = gpuwars(&[
-        "--backend",
-        "cpu",
-        "demo",
-        "--steps",
-        "5",
-        "--record",
-        replay_arg,
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let out = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
-        .args(["--backend", "cpu", "replay", replay_arg, "--window"])
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .unwrap();
+    let replay = recorded(&dir.path().join("two\nlines.json"));
+    let out = windowed(&["replay", replay.to_str().unwrap(), "--window"], None);
     let text = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{text}");
     assert!(text.contains("two\\nlines"), "{text}");
@@ -990,33 +970,12 @@ fn a_silent_display_is_an_error_naming_it() {
             held.push(stream);
         }
     });
-    let replay = dir.path().join("game.json");
-    let recorded = gpuwars(&[
-        "--backend",
-        "cpu",
-        "demo",
-        "--steps",
-        "5",
-        "--record",
-        replay.to_str().unwrap(),
-    ]);
-    assert!(recorded.status.success());
+    let replay = recorded(&dir.path().join("game.json"));
     for args in [
-        vec!["--backend", "cpu", "play"],
-        vec![
-            "--backend",
-            "cpu",
-            "replay",
-            replay.to_str().unwrap(),
-            "--window",
-        ],
+        vec!["play"],
+        vec!["replay", replay.to_str().unwrap(), "--window"],
     ] {
-        let out = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
-            .args(&args)
-            .env_remove("DISPLAY")
-            .env("WAYLAND_DISPLAY", &socket)
-            .output()
-            .unwrap();
+        let out = windowed(&args, Some(&socket));
         let text = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{args:?}: {text}");
         assert!(text.contains("silent-wayland"), "{text}");
@@ -1140,4 +1099,37 @@ fn outputs_through_a_bind_mount_are_refused() {
     }
     assert_eq!(std::fs::read_to_string(&scene).unwrap(), text);
     assert!(!record.exists());
+}
+
+/// A replay of a short demo on the CPU, written at `path`.
+fn recorded(path: &std::path::Path) -> std::path::PathBuf {
+    let out = gpuwars(&[
+        "--backend",
+        "cpu",
+        "demo",
+        "--steps",
+        "5",
+        "--record",
+        path.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    path.to_path_buf()
+}
+
+/// `gpuwars --backend cpu ARGS` with no display but the Wayland socket `wayland`, if any.
+fn windowed(args: &[&str], wayland: Option<&std::path::Path>) -> std::process::Output {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_gpuwars"));
+    command
+        .args(["--backend", "cpu"])
+        .args(args)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY");
+    if let Some(socket) = wayland {
+        command.env("WAYLAND_DISPLAY", socket);
+    }
+    command.output().unwrap()
 }
