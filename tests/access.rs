@@ -195,3 +195,22 @@ on_both_backends!(
     a_ring_is_its_devices,
     a_branch_that_writes_what_the_chain_reads_is_refused,
 );
+
+/// The shuffled schedule's branches run on a pool of one worker too (a worker waiting for
+/// a branch would otherwise hold back the only thread its launches need).
+#[test]
+fn branches_run_on_an_emulator_of_one_worker() {
+    for seed in 0..4 {
+        let device = Device::cpu_scheduled(Some(1), Schedule::Shuffled { seed }, "tests").unwrap();
+        let keys = device.upload(&[1u32; 256]).unwrap();
+        let elsewhere = device.upload(&[3u32; 64]).unwrap();
+        let counts = device.alloc_zeroed::<u32>(4).unwrap();
+        let ops = vec![
+            touch_beside(&elsewhere, false),
+            histogram_op(&keys, &counts, 256, 2, 128),
+        ];
+        device.run(&device.plan(ops, false).unwrap()).unwrap();
+        assert_eq!(device.download(&counts).unwrap(), [0, 256, 0, 0]);
+        assert_eq!(device.download(&elsewhere).unwrap(), vec![4; 64]);
+    }
+}

@@ -543,7 +543,10 @@ impl Device {
                 let ops = &plan.ops;
                 match emu.branch_starts() {
                     None => emu.run(|| ops.iter().try_for_each(|op| (op.issue)(self))),
-                    Some(mut starts) => emu.run(|| self.issue_branching(ops, &mut starts)),
+                    // From outside the pool: a worker waiting for a branch's thread would
+                    // hold back the pool the branch's launches need (with one worker, for
+                    // ever).
+                    Some(mut starts) => self.issue_branching(ops, &mut starts),
                 }
             }
         }
