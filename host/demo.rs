@@ -197,47 +197,6 @@ pub enum DemoFlyer {
     None,
 }
 
-/// The notice a long run gives once its speed is known: what it will take.
-#[derive(Default)]
-struct Estimate {
-    given: bool,
-}
-
-impl Estimate {
-    /// Seconds a run must be expected to take to be announced.
-    const LONG: f64 = 20.0;
-    /// Seconds of running after which the speed is taken as known.
-    const MEASURED: f64 = 2.0;
-
-    /// After `done` of `steps` steps in `elapsed`: once the speed is known, says on stderr
-    /// how long the rest will take if that is long (whether or not a bar shows it).
-    fn after(&mut self, done: u64, steps: u64, elapsed: std::time::Duration) {
-        let seconds = elapsed.as_secs_f64();
-        if self.given || done == 0 || seconds < Self::MEASURED {
-            return;
-        }
-        self.given = true;
-        let rate = done as f64 / seconds;
-        let left = (steps - done) as f64 / rate;
-        if left >= Self::LONG {
-            eprintln!(
-                "gpuwars: {} steps at {rate:.1} steps/s: about {} more",
-                crate::files::thousands(steps),
-                duration_words(left)
-            );
-        }
-    }
-}
-
-/// `seconds` in words: seconds, minutes or hours.
-fn duration_words(seconds: f64) -> String {
-    match seconds {
-        s if s < 120.0 => format!("{s:.0} s"),
-        s if s < 7200.0 => format!("{:.0} minutes", s / 60.0),
-        s => format!("{:.1} hours", s / 3600.0),
-    }
-}
-
 /// Frames written while a game plays, so that a run can be turned into a video.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Frames {
@@ -382,12 +341,10 @@ fn play(
         true => Some(Painter::new(options.renderer, game)?),
         false => None,
     };
-    let bar = progress(steps, options.progress, "steps");
+    let mut bar = progress(steps, options.progress, "demo", "steps");
     let start = Instant::now();
-    let mut estimate = Estimate::default();
     for i in 0..steps {
         bar.inc(1);
-        estimate.after(i, steps, start.elapsed());
         match &mut profile {
             Some(profile) => game.submit_profiled(pilot(i), profile)?,
             None => game.submit(pilot(i))?,

@@ -155,7 +155,7 @@ pub fn run(device: &Device, options: &PaperOptions) -> anyhow::Result<PaperSumma
     let mut game = Game::with_options(device, &scene, options.seed, Options::default())?;
     let mut drawer = Drawer::new(options.renderer, &game, options.size)?;
     let seconds = options.duration.as_secs().max(1) as usize;
-    let bar = progress(seconds as u64, options.progress, "bench paper");
+    let mut bar = progress(seconds as u64, options.progress, "bench paper", "seconds");
     let mut counter = Seconds::new(Instant::now());
     let mut last = game.status();
     while counter.rows().len() < seconds {

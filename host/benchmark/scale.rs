@@ -166,7 +166,7 @@ pub fn run(device: &Device, options: &ScaleOptions) -> anyhow::Result<ScaleSumma
     let machine = Provenance::now(device);
     let copy_bandwidth = device.copy_bandwidth()?;
     let sizes = sizes(options.max);
-    let bar = progress(sizes.len() as u64, options.progress, "bench scale");
+    let mut bar = progress(sizes.len() as u64, options.progress, "bench scale", "sizes");
     let mut rows = Vec::new();
     let mut stopped = format!("the largest size asked for ({})", options.max);
     for enemies in sizes {

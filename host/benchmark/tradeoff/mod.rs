@@ -160,10 +160,11 @@ pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<Tradeof
     let choices = crowd_choices();
     let games = game_choices(&options.scene);
     let features = feature_choices(&options.scene);
-    let bar = progress(
+    let mut bar = progress(
         (choices.len() + games.len() + features.len() + 1) as u64,
         options.progress,
         "tradeoff",
+        "choices",
     );
     let seed = options.seed;
 
