@@ -86,6 +86,23 @@ fn position(size: Vec2, cell: Vec2) -> impl Strategy<Value = Vec2> {
     prop_oneof![4 => anywhere, 2 => border, 1 => edge, 1 => Just(Vec2::ZERO)]
 }
 
+/// The world's boundary: wrapping or clamping.
+fn boundary(wrap: bool) -> Boundary {
+    if wrap {
+        Boundary::Wrap
+    } else {
+        Boundary::Clamp
+    }
+}
+
+/// Random bodies as `check_step` places them: (kind, position, velocity).
+fn placed(bodies: Vec<(usize, Vec2, (f32, f32))>) -> Vec<(usize, Vec2, Vec2)> {
+    bodies
+        .into_iter()
+        .map(|(k, p, v)| (k, p, Vec2::from(v)))
+        .collect()
+}
+
 fn random_worlds(device: &Device) {
     let strategy = (
         (20.0f32..300.0, 20.0f32..300.0),
@@ -95,11 +112,7 @@ fn random_worlds(device: &Device) {
     )
         .prop_flat_map(|((w, h), radius, wrap, n)| {
             let size = Vec2::new(w, h);
-            let boundary = if wrap {
-                Boundary::Wrap
-            } else {
-                Boundary::Clamp
-            };
+            let boundary = boundary(wrap);
             let spec = two_kind_world(size, boundary, radius, 128);
             let space = gpuwars::sim::layout::space(&spec);
             let cell = size / Vec2::new(space.cols as f32, space.rows as f32);
@@ -116,11 +129,7 @@ fn random_worlds(device: &Device) {
     });
     runner
         .run(&strategy, |(spec, bodies)| {
-            let placed: Vec<_> = bodies
-                .into_iter()
-                .map(|(k, p, v)| (k, p, Vec2::from(v)))
-                .collect();
-            check_step(device, &spec, &placed);
+            check_step(device, &spec, &placed(bodies));
             Ok(())
         })
         .unwrap();
@@ -134,11 +143,7 @@ fn sparse_fields(device: &Device) {
     let strategy =
         (1e4f32..1e6, 1e4f32..1e6, any::<bool>(), 0usize..40).prop_flat_map(|(w, h, wrap, n)| {
             let size = Vec2::new(w, h);
-            let boundary = if wrap {
-                Boundary::Wrap
-            } else {
-                Boundary::Clamp
-            };
+            let boundary = boundary(wrap);
             let spec = two_kind_world(size, boundary, 4.0, 40);
             let space = space(&spec);
             let cell = size / Vec2::new(space.cols as f32, space.rows as f32);
@@ -160,11 +165,7 @@ fn sparse_fields(device: &Device) {
                 buckets <= BUCKETS_PER_SLOT * u64::from(slots),
                 "{buckets} buckets for {slots} slots"
             );
-            let placed: Vec<_> = bodies
-                .into_iter()
-                .map(|(k, p, v)| (k, p, Vec2::from(v)))
-                .collect();
-            check_step(device, &spec, &placed);
+            check_step(device, &spec, &placed(bodies));
             Ok(())
         })
         .unwrap();

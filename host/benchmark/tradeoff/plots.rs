@@ -42,26 +42,11 @@ pub fn pareto(path: &Path, summary: &TradeoffSummary) -> anyhow::Result<()> {
             .label_style(("sans-serif", 16))
             .draw()
             .map_err(|e| anyhow!("{e}"))?;
-        let mut frontier: Vec<(f64, f64)> = rows
-            .iter()
-            .filter(|r| r.pareto)
-            .map(|r| (r.sim_seconds_per_s, error(r)))
-            .collect();
-        frontier.sort_by(|a, b| a.0.total_cmp(&b.0));
-        chart
-            .draw_series(LineSeries::new(frontier, RED.stroke_width(2)))
-            .map_err(|e| anyhow!("{e}"))?
-            .label("Pareto frontier")
-            .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], RED.stroke_width(2)));
-        let points: Vec<(f64, f64)> = rows
-            .iter()
-            .map(|r| (r.sim_seconds_per_s, error(r)))
-            .collect();
-        let frontier: Vec<bool> = rows.iter().map(|r| r.pareto).collect();
-        let names: Vec<String> = rows.iter().map(|r| r.choice.clone()).collect();
-        points_with_labels(area, &mut chart, &points, (&frontier, &names))?;
-        legend(&mut chart, SeriesLabelPosition::UpperRight)?;
-        Ok(())
+        let choices = rows.iter().map(|r| {
+            let point = (r.sim_seconds_per_s, error(r));
+            (point, r.pareto, r.choice.clone())
+        });
+        choices_and_frontier(area, &mut chart, choices.collect())
     })
 }
 
@@ -93,23 +78,35 @@ pub fn game_pareto(path: &Path, summary: &TradeoffSummary) -> anyhow::Result<()>
             .label_style(("sans-serif", 16))
             .draw()
             .map_err(|e| anyhow!("{e}"))?;
-        let mut frontier: Vec<(f64, f64)> = (rows.iter())
-            .filter(|(r, _)| r.pareto)
-            .map(|&(r, m)| (r.sim_seconds_per_s, m))
-            .collect();
-        frontier.sort_by(|a, b| a.0.total_cmp(&b.0));
-        chart
-            .draw_series(LineSeries::new(frontier, RED.stroke_width(2)))
-            .map_err(|e| anyhow!("{e}"))?
-            .label("Pareto frontier")
-            .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], RED.stroke_width(2)));
-        let points: Vec<(f64, f64)> = (rows.iter())
-            .map(|&(r, m)| (r.sim_seconds_per_s, m))
-            .collect();
-        let on: Vec<bool> = rows.iter().map(|(r, _)| r.pareto).collect();
-        let names: Vec<String> = rows.iter().map(|(r, _)| r.choice.clone()).collect();
-        points_with_labels(area, &mut chart, &points, (&on, &names))?;
-        legend(&mut chart, SeriesLabelPosition::UpperRight)?;
-        Ok(())
+        let choices =
+            (rows.iter()).map(|&(r, m)| ((r.sim_seconds_per_s, m), r.pareto, r.choice.clone()));
+        choices_and_frontier(area, &mut chart, choices.collect())
     })
+}
+
+/// Each choice's point, labelled (red on the Pareto frontier, blue off it), the frontier
+/// joined by a red line, and the legend: the part both plots share.
+fn choices_and_frontier<'a, Y>(
+    area: &DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>,
+    chart: &mut ChartContext<'a, BitMapBackend<'a>, Cartesian2d<LogCoord<f64>, Y>>,
+    choices: Vec<((f64, f64), bool, String)>,
+) -> anyhow::Result<()>
+where
+    Y: Ranged<ValueType = f64>,
+{
+    let mut frontier: Vec<(f64, f64)> = (choices.iter())
+        .filter(|(_, on, _)| *on)
+        .map(|(point, _, _)| *point)
+        .collect();
+    frontier.sort_by(|a, b| a.0.total_cmp(&b.0));
+    chart
+        .draw_series(LineSeries::new(frontier, RED.stroke_width(2)))
+        .map_err(|e| anyhow!("{e}"))?
+        .label("Pareto frontier")
+        .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], RED.stroke_width(2)));
+    let points: Vec<(f64, f64)> = choices.iter().map(|(point, _, _)| *point).collect();
+    let on: Vec<bool> = choices.iter().map(|(_, on, _)| *on).collect();
+    let names: Vec<String> = choices.into_iter().map(|(_, _, name)| name).collect();
+    points_with_labels(area, chart, &points, (&on, &names))?;
+    legend(chart, SeriesLabelPosition::UpperRight)
 }
