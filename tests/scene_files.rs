@@ -765,7 +765,8 @@ fn the_physics_table_reads_every_choice() {
     use gpuwars::sim::{Integrator, Physics};
     let text = with_physics(
         "integrator = \"verlet\"\nsubsteps = 4\nrelaxation = 0.5\naveraged = true\n\
-         cell_scale = 2\nneighbour_cap = 16\nvision_scale = 0.75\nrenumber_every = 4",
+         cell_scale = 2\nneighbour_cap = 16\nvision_scale = 0.75\nsight_budget = 24\n\
+         renumber_every = 4",
     );
     let scene = Scene::from_toml(&text, "paper.toml").unwrap();
     assert_eq!(
@@ -778,6 +779,7 @@ fn the_physics_table_reads_every_choice() {
             cell_scale: 2.0,
             neighbour_cap: 16,
             vision_scale: 0.75,
+            sight_budget: 24,
             renumber_every: Some(4),
             trace_paths: false,
         }
@@ -791,7 +793,7 @@ fn the_physics_table_reads_every_choice() {
 
 #[test]
 fn bad_physics_choices_name_the_key_and_the_allowed_values() {
-    let cases: [(&str, &str, &[&str]); 9] = [
+    let cases: [(&str, &str, &[&str]); 10] = [
         ("substeps = 0", "physics.substeps", &["from 1 to 64"]),
         ("substeps = 65", "physics.substeps", &["from 1 to 64"]),
         ("substeps = 2.0", "physics.substeps", &["whole number"]),
@@ -801,6 +803,11 @@ fn bad_physics_choices_name_the_key_and_the_allowed_values() {
             "neighbour_cap = -1",
             "physics.neighbour_cap",
             &["from 0 to"],
+        ),
+        (
+            "sight_budget = 1.5",
+            "physics.sight_budget",
+            &["whole number"],
         ),
         (
             "integrator = \"rk4\"",

@@ -178,7 +178,7 @@ fn brains(scene: &Scene) -> Vec<Brain> {
                 low_energy: b.low_energy,
                 recover_every: steps(1.0 / b.recovery, dt),
                 avoid_bullets: u32::from(b.avoid_bullets),
-                reserved: 0,
+                sight_budget: scene.world.physics.sight_budget,
             },
             _ => Brain {
                 kind: k as u32,

@@ -286,6 +286,7 @@ fn read_physics(node: &Node<'_>) -> Result<Physics, SceneError> {
         "cell_scale",
         "neighbour_cap",
         "vision_scale",
+        "sight_budget",
         "renumber_every",
     ])?;
     let d = Physics::default();
@@ -304,6 +305,7 @@ fn read_physics(node: &Node<'_>) -> Result<Physics, SceneError> {
         vision_scale: table.or("vision_scale", d.vision_scale, |n| {
             n.real(above(0.0, MAX_VISION_SCALE))
         })?,
+        sight_budget: table.or("sight_budget", d.sight_budget, |n| n.whole(0, MAX_SLOTS))?,
         renumber_every: table.or("renumber_every", d.renumber_every, |n| {
             n.whole(0, MAX_RENUMBER_EVERY).map(Some)
         })?,

@@ -29,6 +29,10 @@ pub const MAX_SUBSTEPS: u32 = 64;
 pub const MAX_CELL_SCALE: f32 = 64.0;
 /// Largest vision scale.
 pub const MAX_VISION_SCALE: f32 = 4.0;
+/// The bodies of one kind an enemy's look examines at most unless the scene says otherwise:
+/// enough that the built-in scenes' looks rarely meet it, few enough that a crowd on one
+/// spot costs each look a bounded amount.
+pub const DEFAULT_SIGHT_BUDGET: u32 = 128;
 /// Longest period of the renumbering, in steps.
 pub const MAX_RENUMBER_EVERY: u32 = 1 << 16;
 /// Slots from which a world renumbers its bodies unless its physics says otherwise (the
@@ -122,6 +126,9 @@ pub struct Physics {
     pub neighbour_cap: u32,
     /// The enemies' vision radii scaled by this, `(0, MAX_VISION_SCALE]` (games only).
     pub vision_scale: f32,
+    /// The most bodies of one kind an enemy's look examines, taken evenly from a crowd
+    /// beyond it (`gpuwars_kernels::sim::broad::Sample`); 0 for all (games only).
+    pub sight_budget: u32,
     /// Every how many steps the bodies move to slots in the grid's order (0: never, at most
     /// [`MAX_RENUMBER_EVERY`]); `None` lets the world's size choose (see
     /// [`Physics::renumber_period`]).
@@ -141,6 +148,7 @@ impl Default for Physics {
             cell_scale: 1.0,
             neighbour_cap: 0,
             vision_scale: 1.0,
+            sight_budget: DEFAULT_SIGHT_BUDGET,
             renumber_every: None,
             trace_paths: false,
         }
@@ -169,6 +177,12 @@ impl Physics {
         check_up_to(
             "physics.neighbour_cap",
             self.neighbour_cap,
+            "no limit",
+            MAX_SLOTS,
+        )?;
+        check_up_to(
+            "physics.sight_budget",
+            self.sight_budget,
             "no limit",
             MAX_SLOTS,
         )?;
@@ -219,6 +233,12 @@ impl Physics {
         }
         if self.vision_scale != d.vision_scale {
             parts.push(format!("vision x{}", number(self.vision_scale)));
+        }
+        if self.sight_budget != d.sight_budget {
+            parts.push(match self.sight_budget {
+                0 => "sight unbudgeted".to_owned(),
+                budget => format!("sight budget {budget}"),
+            });
         }
         if let Some(every) = self.renumber_every {
             parts.push(format!("renumber every {every}"));

@@ -126,6 +126,8 @@ pub(super) fn game_choices(scene: &Scene) -> Vec<(String, Scene)> {
         physics(&|p| p.neighbour_cap = 32),
         physics(&|p| p.neighbour_cap = 8),
         physics(&|p| p.vision_scale = 0.5),
+        physics(&|p| p.sight_budget = 16),
+        physics(&|p| p.sight_budget = 0),
     ];
     if scene.world.has_swept_pairs() {
         out.push(changed(Some("nothing swept".into()), &unswept));

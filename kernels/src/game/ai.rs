@@ -20,7 +20,7 @@ use super::control::Status;
 use super::fsm::{Machine, Percept, State, next_state};
 use super::rules::Brain;
 use crate::exec::follow_previous_launch;
-use crate::sim::broad::{CellIndex, Near, kind_bit};
+use crate::sim::broad::{CellIndex, Near, Sample, kind_bit};
 use crate::sim::integrate::{Field, IntegrateArgs, integrate_slot};
 use crate::sim::narrow::{CollideArgs, Relaxation, collide_slot};
 use crate::sim::teams::Teams;
@@ -120,12 +120,12 @@ pub fn threat(d: Vec2, rel: Vec2, radius: f32) -> Option<(f32, Vec2)> {
 struct Seen {
     /// The ship's grid entry plus one once it is seen, else 0.
     ship_seen: u32,
-    /// Bodies of its own kind seen.
+    /// Bodies of its own kind seen (of those a crowd's sample takes).
     similar: u32,
     /// The sum of the offsets to them, in units of `1 / scale` (see [`fixed_scale`]).
     sum: [i64; 2],
-    /// The sum of the unit offsets to those inside its personal space, in units of
-    /// [`UNIT_SCALE`]`⁻¹`.
+    /// The sum of the unit offsets to those inside its personal space, each weighted by the
+    /// stride of its kind's sample, in units of [`UNIT_SCALE`]`⁻¹`.
     crowd: [i64; 2],
     /// The soonest threat's seconds to its closest approach (as bits) above its slot;
     /// `u64::MAX` for none. Ties go to the lower slot.
@@ -302,12 +302,17 @@ pub fn look<const MOVING: bool>(
         reach: None,
         mask,
     };
+    // Each kind's crowd within the budget, taken from a share that depends on the slot.
+    let sample = Sample {
+        budget: brain.sight_budget,
+        phase: slot,
+    };
     let seen = args.grid.merge_near_in(
         team,
         &args.space,
-        near,
+        (near, sample),
         Seen::NONE,
-        |mut seen, other, kind, at, entry| {
+        |mut seen, weight, other, kind, at, entry| {
             if other == slot {
                 return seen;
             }
@@ -322,8 +327,10 @@ pub fn look<const MOVING: bool>(
                 seen.similar = seen.similar.wrapping_add(1);
                 seen.sum = add_fixed(seen.sum, fixed(offset, scale));
                 if dist2 < personal * personal {
-                    let away = fixed(offset.normalize_or_zero(), UNIT_SCALE);
-                    seen.crowd = add_fixed(seen.crowd, away);
+                    // A sampled neighbour stands for `weight` of them.
+                    let [x, y] = fixed(offset.normalize_or_zero(), UNIT_SCALE);
+                    let weight = i64::from(weight);
+                    seen.crowd = add_fixed(seen.crowd, [x * weight, y * weight]);
                 }
             } else if dodges
                 && kind == args.shot_kind

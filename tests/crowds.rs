@@ -1,0 +1,170 @@
+//! Crowds and the sight budget: a look examines at most `sight_budget` bodies of a kind,
+//! taken evenly from a crowd. Within the budget a look is the plain one, bit for bit; beyond
+//! it the game stays deterministic on every schedule, thread count and backend, and a group
+//! still gathers from what it samples.
+
+mod common;
+
+use common::game::{Enemy, live_of, mean_nearest, play, scene};
+use gpuwars::Device;
+use gpuwars::backend::Schedule;
+use gpuwars::game::{Game, Options, Scene};
+use gpuwars::kernels::game::control::Input;
+use gpuwars::pipeline::Lanes;
+
+/// The first enemy kind's index in the test scenes (after the ship and the shots).
+const FIRST_ENEMY: u32 = 2;
+
+/// The stress scene: 2,560 enemies of the three machines on one spot, where every body sees
+/// every other.
+fn one_spot() -> Scene {
+    let text = include_str!("../scenes/stress/one-spot.toml");
+    Scene::from_toml(text, "scenes/stress/one-spot.toml").unwrap()
+}
+
+/// The stress scene with its group enemies short-sighted (12 units of the 32-unit spot): they
+/// rarely see the ship, so what they make of the crowd (a sample of some 450 bodies in
+/// sight) drives them.
+fn one_spot_grouping() -> Scene {
+    let mut scene = one_spot();
+    let texel = scene.world.kind_index("texel").unwrap();
+    scene.game.behaviours[texel].as_mut().unwrap().vision = 12.0;
+    scene
+}
+
+/// The state hash after `steps` autopilot steps.
+fn hash_with(device: &Device, scene: &Scene, steps: u32, options: Options) -> u64 {
+    let mut game = Game::with_options(device, scene, 1, options).unwrap();
+    for _ in 0..steps {
+        game.step(None).unwrap();
+    }
+    game.state_hash().unwrap()
+}
+
+fn hash_after(device: &Device, scene: &Scene, steps: u32) -> u64 {
+    hash_with(device, scene, steps, Options::default())
+}
+
+/// `scene` with a sight budget of `budget`.
+fn budgeted(scene: &Scene, budget: u32) -> Scene {
+    let mut scene = scene.clone();
+    scene.world.physics.sight_budget = budget;
+    scene
+}
+
+#[test]
+fn a_crowd_on_one_spot_is_the_same_game_on_every_schedule_and_thread_count() {
+    // The short-sighted group's sample changes what it does: the budget is at work.
+    let grouping = one_spot_grouping();
+    let plain = hash_after(common::cpu(), &budgeted(&grouping, 0), 40);
+    assert_ne!(hash_after(common::cpu(), &grouping, 40), plain);
+    for scene in [one_spot(), grouping] {
+        let reference = hash_after(common::cpu(), &scene, 40);
+        for threads in [1, 3] {
+            let device = Device::cpu(Some(threads), "tests").unwrap();
+            assert_eq!(
+                hash_after(&device, &scene, 40),
+                reference,
+                "{threads} threads"
+            );
+        }
+        for seed in [1, 2] {
+            let device =
+                Device::cpu_scheduled(Some(2), Schedule::Shuffled { seed }, "tests").unwrap();
+            for lanes in [Lanes::Auto, Lanes::Fixed(8)] {
+                let options = Options {
+                    lanes,
+                    ..Options::default()
+                };
+                assert_eq!(
+                    hash_with(&device, &scene, 40, options),
+                    reference,
+                    "shuffle seed {seed}, {lanes:?}"
+                );
+            }
+        }
+    }
+}
+
+/// On a GPU the machines' looks are shared by teams of lanes, each lane taking its share of
+/// the sample: the same game as the CPU's one thread a body, crowd or not.
+fn the_crowd_is_the_cpus_game(device: &Device) {
+    for scene in [one_spot(), one_spot_grouping()] {
+        let reference = hash_after(common::cpu(), &scene, 60);
+        for lanes in [
+            Lanes::Auto,
+            Lanes::Fixed(1),
+            Lanes::Fixed(8),
+            Lanes::Fixed(32),
+        ] {
+            let options = Options {
+                lanes,
+                ..Options::default()
+            };
+            assert_eq!(
+                hash_with(device, &scene, 60, options),
+                reference,
+                "{lanes:?}"
+            );
+        }
+    }
+}
+
+/// 48 group enemies of wide sight, far from a still ship.
+fn gathering() -> Scene {
+    let enemies = [Enemy {
+        name: "texel",
+        machine: "group",
+        count: 48,
+        energy: 2,
+        vision: 150.0,
+        speed: 60.0,
+        extra: "",
+    }];
+    scene(1024.0, "wrap", 400.0, &enemies)
+}
+
+/// Mean distance from each enemy to its nearest fellow at the start and after 10 s.
+fn spread_after_ten_seconds(device: &Device, scene: &Scene) -> (f32, f32) {
+    let mut spread = Vec::new();
+    play(
+        device,
+        scene,
+        3,
+        600,
+        |_| Some(Input::default()),
+        |status, snap| {
+            if status.step == 1 || status.step == 600 {
+                let slots = live_of(snap, FIRST_ENEMY);
+                spread.push(mean_nearest(snap, &slots, 1024.0, true));
+            }
+        },
+    );
+    (spread[0], spread[1])
+}
+
+fn a_look_within_its_budget_is_the_plain_look(device: &Device) {
+    // No look can see more than the 48 bodies of the kind, nor more than the 64 shots.
+    let plain = hash_after(device, &budgeted(&gathering(), 0), 600);
+    for budget in [64, 1000] {
+        let scene = budgeted(&gathering(), budget);
+        assert_eq!(hash_after(device, &scene, 600), plain, "budget {budget}");
+    }
+    // A budget some looks exceed: their samples make another game.
+    let sampled = hash_after(device, &budgeted(&gathering(), 3), 600);
+    assert_ne!(sampled, plain);
+}
+
+fn a_group_gathers_from_a_sample_of_its_fellows(device: &Device) {
+    for budget in [0, 3] {
+        let (start, end) = spread_after_ten_seconds(device, &budgeted(&gathering(), budget));
+        println!("sight budget {budget}: mean nearest fellow {start:.1} -> {end:.1}");
+        assert!(end < 0.6 * start, "budget {budget}: {start} -> {end}");
+    }
+}
+
+on_both_backends!(
+    the_crowd_is_the_cpus_game,
+    a_look_within_its_budget_is_the_plain_look,
+    a_group_gathers_from_a_sample_of_its_fellows,
+);
