@@ -44,6 +44,20 @@ impl Progress {
         }
     }
 
+    /// Says on stderr that the whole run will take about `seconds`, if that is long, before
+    /// its speed is known from the units done (which then says nothing more).
+    pub(crate) fn announce(&mut self, seconds: f64) {
+        self.told = true;
+        if seconds >= Self::LONG {
+            let (len, unit) = (crate::files::thousands(self.len), self.unit);
+            eprintln!(
+                "gpuwars: {}: {len} {unit}: about {}",
+                self.what,
+                duration_words(seconds)
+            );
+        }
+    }
+
     /// What the bar says beside it.
     pub(crate) fn set_message(&self, message: impl Into<std::borrow::Cow<'static, str>>) {
         self.bar.set_message(message);

@@ -1017,6 +1017,43 @@ fn a_long_demo_says_how_long_it_will_take() {
     assert!(notice.contains("100,000 steps"), "{notice}");
 }
 
+/// A tradeoff of a large scene says what it will take before its first choice is measured,
+/// from its game timed first: the notice names its choices, not a rate of choices done
+/// (stopped once it has).
+#[test]
+fn a_long_tradeoff_says_how_long_it_will_take_from_the_start() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    let dir = tempfile::tempdir().unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
+        .args([
+            "--backend",
+            "cpu",
+            "tradeoff",
+            "--quick",
+            "--scene",
+            "scale-1m",
+        ])
+        .arg("--out")
+        .arg(dir.path())
+        .env_remove("GPUWARS_CPU_THREADS")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let stderr = BufReader::new(child.stderr.take().unwrap());
+    let notice = stderr
+        .lines()
+        .map_while(Result::ok)
+        .find(|line| line.contains("about"));
+    child.kill().ok();
+    child.wait().ok();
+    let notice = notice.expect("a notice before the run ends");
+    assert!(notice.starts_with("gpuwars: tradeoff: "), "{notice}");
+    assert!(notice.contains(" choices: about "), "{notice}");
+    assert!(!notice.contains("choices/s"), "{notice}");
+}
+
 /// A bind mount of a folder, undone when dropped; `None` (with the reason printed) where the
 /// test may not mount.
 struct BindMount(std::path::PathBuf);

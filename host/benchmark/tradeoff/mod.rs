@@ -21,7 +21,7 @@ pub mod plots;
 pub mod reference;
 
 use std::path::PathBuf;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use anyhow::Context as _;
 use serde::{Deserialize, Serialize};
@@ -29,7 +29,7 @@ use serde::{Deserialize, Serialize};
 use super::{Outputs, Provenance, write_csv, write_json};
 use crate::Device;
 use crate::files::write_atomically;
-use crate::game::Scene;
+use crate::game::{Game, Options, Scene};
 use crate::sim::Physics;
 use crate::terminal::progress;
 use analytic::AnalyticRow;
@@ -127,6 +127,40 @@ impl RunSizes {
     }
 }
 
+/// Steps of the scene's game timed before a run, to say what the run will take.
+const PROBE_STEPS: u32 = 2;
+
+/// Roughly what a run of `rows` (crowd, game and feature choices) will take, in seconds,
+/// from the scene's game made and played for [`PROBE_STEPS`] steps: the game rows are most
+/// of a slow run, and each is made, played, measured for a fixed time and (the game
+/// table's) audited with a snapshot a step. The crowd's rows are measured for a fixed
+/// time each, their error runs being short.
+fn estimate(
+    device: &Device,
+    options: &TradeoffOptions,
+    sizes: &RunSizes,
+    (crowd, games, features): (usize, usize, usize),
+) -> anyhow::Result<f64> {
+    let start = Instant::now();
+    let mut game = Game::with_options(device, &options.scene, options.seed, Options::default())?;
+    let made = start.elapsed().as_secs_f64();
+    let start = Instant::now();
+    for _ in 0..PROBE_STEPS {
+        game.step(None)?;
+    }
+    let step = start.elapsed().as_secs_f64() / f64::from(PROBE_STEPS);
+    let start = Instant::now();
+    game.snapshot()?;
+    let snapshot = start.elapsed().as_secs_f64();
+    let warmup = made + f64::from(sizes.game_warmup) * step;
+    let played = warmup + f64::from(sizes.profiled_steps) * step + sizes.speed_seconds;
+    let audited = warmup + f64::from(sizes.audit_steps) * (step + snapshot);
+    let rows = |n: usize| n as f64;
+    Ok(rows(crowd) * sizes.speed_seconds
+        + rows(games) * (played + audited)
+        + rows(features) * played)
+}
+
 /// The summary of a run, written as JSON.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TradeoffSummary {
@@ -167,6 +201,8 @@ pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<Tradeof
         "choices",
     );
     let seed = options.seed;
+    let rows = (choices.len(), games.len(), features.len());
+    bar.announce(estimate(device, options, &sizes, rows)?);
 
     // The truth: the default crowd's start, in f64 with many substeps.
     let base = crowd(sizes.error_bodies, DT, Physics::default());
