@@ -30,8 +30,8 @@ pub const MAX_CELL_SCALE: f32 = 64.0;
 /// Largest vision scale.
 pub const MAX_VISION_SCALE: f32 = 4.0;
 /// The bodies of one kind an enemy's look examines at most unless the scene says otherwise:
-/// enough that the built-in scenes' looks rarely meet it, few enough that a crowd on one
-/// spot costs each look a bounded amount.
+/// enough that the built-in scenes' looks meet it only once enemies crowd the ship, few
+/// enough that a crowd on one spot costs each look a bounded amount.
 pub const DEFAULT_SIGHT_BUDGET: u32 = 128;
 /// Longest period of the renumbering, in steps.
 pub const MAX_RENUMBER_EVERY: u32 = 1 << 16;
@@ -126,8 +126,9 @@ pub struct Physics {
     pub neighbour_cap: u32,
     /// The enemies' vision radii scaled by this, `(0, MAX_VISION_SCALE]` (games only).
     pub vision_scale: f32,
-    /// The most bodies of one kind an enemy's look examines, taken evenly from a crowd
-    /// beyond it (`gpuwars_kernels::sim::broad::Sample`); 0 for all (games only).
+    /// The most bodies of one kind an enemy's look examines, a third of them from each row
+    /// of its block, taken evenly from a crowd beyond that
+    /// (`gpuwars_kernels::sim::broad::Sample`); 0 for all (games only).
     pub sight_budget: u32,
     /// Every how many steps the bodies move to slots in the grid's order (0: never, at most
     /// [`MAX_RENUMBER_EVERY`]); `None` lets the world's size choose (see

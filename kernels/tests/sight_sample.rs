@@ -1,14 +1,15 @@
-//! A look under a budget (`CellIndex::merge_near_in` with a `Sample`) takes, of each kind,
-//! exactly every stride-th entry of the plain query's visiting order from the phase on, the
-//! stride being `⌈entries / budget⌉`, so never more than the budget; each with its stride as
-//! the weight; and, where a kind has no more entries than the budget, every entry, as the
-//! plain query does. Checked against the plain query's list over random small grids, with
-//! and without a cap.
+//! A look under a budget (`CellIndex::merge_near_in` with a `Sample`) takes, of each run of
+//! cells it reads (a row of its block, one kind), exactly every stride-th entry from the
+//! phase on, the stride being `⌈entries / ⌈budget / 3⌉⌉`, in visiting order, each with its
+//! stride as the weight: never more than `⌈budget / 3⌉` of a run, and where no run exceeds
+//! that, every entry of the plain query (`for_each_near`). Checked against the runs listed
+//! from the block's rows and columns by hand, over random small grids, with and without a
+//! cap.
 
 use glam::Vec2;
 use gpuwars_kernels::DevSlice;
 use gpuwars_kernels::sim::Space;
-use gpuwars_kernels::sim::broad::{CellIndex, Near, Sample};
+use gpuwars_kernels::sim::broad::{CellIndex, Near, Sample, kinds_mask};
 use gpuwars_kernels::warp::{Handed, Team};
 
 /// A small deterministic generator (64-bit LCG, high bits).
@@ -105,15 +106,34 @@ fn a_sampled_look_takes_every_strided_entry_of_each_kind_within_the_budget() {
             reach: None,
             mask: 1 + rng.below((1 << kinds) - 1),
         };
-        // The plain query's entries, kind by kind, in visiting order.
-        let mut listed: Vec<Vec<(u32, u32)>> = vec![Vec::new(); kinds as usize];
-        grid.for_each_near(&space, near, |slot, kind, _, entry| {
-            listed[kind as usize].push((slot, entry));
+        // The runs the look reads, in visiting order, cut at the cap.
+        let (rows, columns) = space.neighbourhood(near.pos);
+        let mut runs = Vec::new();
+        let mut left = if cap == 0 { u32::MAX } else { cap };
+        'kinds: for kind in 0..kinds {
+            if near.mask & kinds_mask(kinds) & (1 << kind) == 0 {
+                continue;
+            }
+            for k in 0..rows.count {
+                let row = kind * cells + rows.at(k) * cols;
+                for r in 0..columns.runs() {
+                    let (first, last) = columns.run(r);
+                    let begin = start[(row + first) as usize];
+                    let end = start[(row + last + 1) as usize].min(begin.saturating_add(left));
+                    if begin < end {
+                        runs.push((begin, end));
+                    }
+                    left -= end.saturating_sub(begin);
+                    if left == 0 {
+                        break 'kinds;
+                    }
+                }
+            }
+        }
+        let mut plain = Taken::default();
+        grid.for_each_near(&space, near, |slot, _, _, entry| {
+            plain = plain.add(1, slot, entry)
         });
-        // The cap cuts the visiting order; a kind's stride counts its whole block.
-        let mut whole: Vec<u32> = vec![0; kinds as usize];
-        let uncapped = CellIndex { cap: 0, ..grid };
-        uncapped.for_each_near(&space, near, |_, kind, _, _| whole[kind as usize] += 1);
         for budget in [0, 1, 2, 5, 17, 64, 200] {
             let phase = rng.below(1000);
             let sample = Sample { budget, phase };
@@ -125,30 +145,29 @@ fn a_sampled_look_takes_every_strided_entry_of_each_kind_within_the_budget() {
                 |taken, weight, slot, _, _, entry| taken.add(weight, slot, entry),
                 |a, _| a,
             );
+            let share = budget.div_ceil(3);
             let mut expected = Taken::default();
-            for (kind, list) in listed.iter().enumerate() {
-                let n = whole[kind];
+            let mut crowded = false;
+            for &(begin, end) in &runs {
+                let len = end - begin;
                 let stride = match budget {
                     0 => 1,
-                    b => n.div_ceil(b).max(1),
+                    _ => len.div_ceil(share).max(1),
                 };
-                let mut taken = 0u32;
-                for (i, &(slot, entry)) in list.iter().enumerate() {
-                    if i as u32 % stride == phase % stride {
-                        expected = expected.add(stride, slot, entry);
+                crowded |= stride > 1;
+                let mut taken = 0;
+                for entry in begin..end {
+                    if (entry - begin) % stride == phase % stride {
+                        expected = expected.add(stride, slots[entry as usize], entry);
                         taken += 1;
                     }
                 }
                 if budget != 0 {
-                    assert!(taken <= budget, "case {case}: kind {kind} took {taken}");
+                    assert!(taken <= share, "case {case}: {taken} of a run of {len}");
                 }
-                if budget >= n || budget == 0 {
-                    assert_eq!(
-                        taken as usize,
-                        list.len(),
-                        "case {case}: kind {kind} within budget"
-                    );
-                }
+            }
+            if !crowded {
+                assert_eq!(got, plain, "case {case}, budget {budget}: the plain look");
             }
             assert_eq!(got, expected, "case {case}, budget {budget}, cap {cap}");
         }

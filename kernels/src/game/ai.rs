@@ -120,12 +120,14 @@ pub fn threat(d: Vec2, rel: Vec2, radius: f32) -> Option<(f32, Vec2)> {
 struct Seen {
     /// The ship's grid entry plus one once it is seen, else 0.
     ship_seen: u32,
-    /// Bodies of its own kind seen (of those a crowd's sample takes).
+    /// Bodies of its own kind seen, each of a crowd's sample counted as many as it stands
+    /// for (its weight).
     similar: u32,
-    /// The sum of the offsets to them, in units of `1 / scale` (see [`fixed_scale`]).
+    /// The sum of the offsets to them, weighted likewise, in units of `1 / scale` (see
+    /// [`fixed_scale`]).
     sum: [i64; 2],
-    /// The sum of the unit offsets to those inside its personal space, each weighted by the
-    /// stride of its kind's sample, in units of [`UNIT_SCALE`]`⁻¹`.
+    /// The sum of the unit offsets to those inside its personal space, weighted likewise,
+    /// in units of [`UNIT_SCALE`]`⁻¹`.
     crowd: [i64; 2],
     /// The soonest threat's seconds to its closest approach (as bits) above its slot;
     /// `u64::MAX` for none. Ties go to the lower slot.
@@ -216,6 +218,18 @@ fn add_fixed(a: [i64; 2], b: [i64; 2]) -> [i64; 2] {
     [a[0].wrapping_add(b[0]), a[1].wrapping_add(b[1])]
 }
 
+/// `v` counted `weight` times (exact: a component below 2³⁰ times a weight below 2³² fits).
+/// A weight of 1, every body outside a crowd, skips the 64-bit products, which the GPU
+/// makes of several instructions.
+#[inline(always)]
+fn weighted(v: [i64; 2], weight: u32) -> [i64; 2] {
+    if weight == 1 {
+        return v;
+    }
+    let w = i64::from(weight);
+    [v[0].wrapping_mul(w), v[1].wrapping_mul(w)]
+}
+
 /// `v` back from fixed point at `scale`.
 #[inline(always)]
 fn unfixed(v: [i64; 2], scale: f32) -> Vec2 {
@@ -302,7 +316,7 @@ pub fn look<const MOVING: bool>(
         reach: None,
         mask,
     };
-    // Each kind's crowd within the budget, taken from a share that depends on the slot.
+    // A crowd within the budget, each body taking a share that depends on its slot.
     let sample = Sample {
         budget: brain.sight_budget,
         phase: slot,
@@ -324,13 +338,12 @@ pub fn look<const MOVING: bool>(
             if other == args.ship {
                 seen.ship_seen = entry + 1;
             } else if social && kind == brain.kind {
-                seen.similar = seen.similar.wrapping_add(1);
-                seen.sum = add_fixed(seen.sum, fixed(offset, scale));
+                // A neighbour of a crowd's sample stands for `weight` of them.
+                seen.similar = seen.similar.wrapping_add(weight);
+                seen.sum = add_fixed(seen.sum, weighted(fixed(offset, scale), weight));
                 if dist2 < personal * personal {
-                    // A sampled neighbour stands for `weight` of them.
-                    let [x, y] = fixed(offset.normalize_or_zero(), UNIT_SCALE);
-                    let weight = i64::from(weight);
-                    seen.crowd = add_fixed(seen.crowd, [x * weight, y * weight]);
+                    let away = fixed(offset.normalize_or_zero(), UNIT_SCALE);
+                    seen.crowd = add_fixed(seen.crowd, weighted(away, weight));
                 }
             } else if dodges
                 && kind == args.shot_kind

@@ -89,7 +89,7 @@ pub struct Brain {
     pub recover_every: u32,
     /// 1: shots coming its way are perceived and avoided; 0: ignored.
     pub avoid_bullets: u32,
-    /// The most bodies of one kind a look examines, taken evenly from a crowd (see
-    /// [`crate::sim::broad::Sample`]); 0 for all.
+    /// The most bodies of one kind a look examines, a third from each row of its block,
+    /// taken evenly from a crowd (see [`crate::sim::broad::Sample`]); 0 for all.
     pub sight_budget: u32,
 }

@@ -390,16 +390,18 @@ pub struct Near {
     pub mask: u32,
 }
 
-/// How much of a crowded block a query looks at: at most `budget` entries of each kind (0:
-/// all), taken evenly. A kind with `n` entries in the block gets a stride of
-/// `⌈n / budget⌉`; the query takes every stride-th entry of the kind's runs in visiting
-/// order, starting `phase` (modulo the stride) entries in, and hands each with the stride
-/// as its weight, so that sums scaled by it estimate the whole block's. Where a kind has
-/// no more entries than the budget, the stride is 1 and the query is the plain one, bit
-/// for bit. Everything depends on the grid and the phase only, so it is deterministic.
+/// How much of a crowd a look takes: of each run of cells it reads (a row of its 3×3 block,
+/// one kind; two runs where the block wraps around the field's edge), at most
+/// `⌈budget / 3⌉` entries (0: all), evenly: a run of `n` entries gets a stride of
+/// `⌈n / ⌈budget / 3⌉⌉`, the look takes every stride-th entry from `phase` (modulo the
+/// stride) on, and hands each with the stride as its weight, so that sums weighted by it
+/// estimate the whole run's. A look so takes at most `budget` entries of a kind (twice that
+/// where the block wraps), decided from the bounds of each run, which it loads anyway;
+/// where no run exceeds its share it is the plain look, bit for bit. It depends on the grid
+/// and the phase alone, so it is deterministic.
 #[derive(Clone, Copy, Debug)]
 pub struct Sample {
-    /// The most entries of one kind taken; 0 for all.
+    /// The most entries of one kind taken from the block's three rows; 0 for all.
     pub budget: u32,
     /// Which entries of a stride are taken (bodies that look from the same block with
     /// different phases see different shares of the crowd).
@@ -407,48 +409,16 @@ pub struct Sample {
 }
 
 impl Sample {
-    /// Every entry.
-    pub const ALL: Sample = Sample {
-        budget: 0,
-        phase: 0,
-    };
-
-    /// The stride for a kind of `entries()` entries in the block (counted only under a
-    /// budget).
+    /// The stride and the first entry taken of a run of `len` entries: `(1, 0)` within its
+    /// share, `⌈budget / 3⌉` entries.
     #[inline(always)]
-    fn stride(&self, entries: impl FnOnce() -> u32) -> u32 {
-        match self.budget {
-            0 => 1,
-            budget => entries().div_ceil(budget).max(1),
+    fn of_run(&self, len: u32) -> (u32, u32) {
+        let share = self.budget.div_ceil(3);
+        if self.budget == 0 || len <= share {
+            return (1, 0);
         }
-    }
-}
-
-/// Where a sampled walk is in one kind's entries: the stride, and how many entries of the
-/// next run to pass over before the first it takes.
-#[derive(Clone, Copy, Debug)]
-struct Stride {
-    every: u32,
-    skip: u32,
-}
-
-impl Stride {
-    /// A kind's start: every `every`-th entry from `phase`.
-    #[inline(always)]
-    fn new(every: u32, phase: u32) -> Stride {
-        Stride {
-            every,
-            skip: phase % every,
-        }
-    }
-
-    /// Past a run of `len` entries.
-    #[inline(always)]
-    fn pass(&mut self, len: u32) {
-        self.skip = match len.checked_sub(self.skip) {
-            None => self.skip - len,
-            Some(after) => (self.every - after % self.every) % self.every,
-        };
+        let every = len.div_ceil(share);
+        (every, self.phase % every)
     }
 }
 
@@ -497,22 +467,6 @@ impl CellIndex {
         near: Near,
         mut visit: impl FnMut(u32, u32, Vec2, u32),
     ) {
-        self.sample_near(space, near, Sample::ALL, |_, slot, kind, at, entry| {
-            visit(slot, kind, at, entry)
-        });
-    }
-
-    /// [`CellIndex::for_each_near`] under `sample`: `visit(weight, slot, kind, position,
-    /// entry)` for the entries the sample takes, in the same order, `weight` being its
-    /// kind's stride. The cap counts the entries passed over too.
-    #[inline(always)]
-    fn sample_near(
-        &self,
-        space: &Space,
-        near: Near,
-        sample: Sample,
-        mut visit: impl FnMut(u32, u32, u32, Vec2, u32),
-    ) {
         let block = self.block(space, near);
         let mut rest = near.mask & kinds_mask(self.kinds);
         // Entries the cap still allows.
@@ -520,31 +474,23 @@ impl CellIndex {
         while rest != 0 {
             let kind = rest.trailing_zeros();
             rest &= rest - 1;
-            let every = sample.stride(|| self.entries_in(space, block, kind));
-            let mut stride = Stride::new(every, sample.phase);
             for k in 0..block.rows.count {
                 let row = kind * self.cells + block.rows.at(k) * space.cols;
                 for run in 0..block.cols.runs() {
                     let (first, last) = block.cols.run(run);
                     let start = self.start.get(row + first);
-                    let full = self.start.get(row + last + 1);
-                    let end = full.min(start.saturating_add(left));
-                    if every == 1 && start < end {
+                    let end = self
+                        .start
+                        .get(row + last + 1)
+                        .min(start.saturating_add(left));
+                    if start < end {
                         // Each entry is asked for while the one before is visited.
                         let mut ahead = self.entry(start, end);
                         for entry in start..end {
                             let (slot, at) = ahead;
                             ahead = self.entry(entry + 1, end);
-                            visit(1, slot, kind, at, entry);
+                            visit(slot, kind, at, entry);
                         }
-                    } else if every > 1 {
-                        let mut entry = start.saturating_add(stride.skip);
-                        while entry < end {
-                            let (slot, at) = self.entry(entry, end);
-                            visit(every, slot, kind, at, entry);
-                            entry += every;
-                        }
-                        stride.pass(full.saturating_sub(start));
                     }
                     left -= end.saturating_sub(start);
                     if left == 0 {
@@ -553,21 +499,6 @@ impl CellIndex {
                 }
             }
         }
-    }
-
-    /// The entries of `kind` in `block`.
-    #[inline(always)]
-    fn entries_in(&self, space: &Space, block: NearBlock, kind: u32) -> u32 {
-        let mut entries = 0u32;
-        for k in 0..block.rows.count {
-            let row = kind * self.cells + block.rows.at(k) * space.cols;
-            for run in 0..block.cols.runs() {
-                let (first, last) = block.cols.run(run);
-                let (start, end) = (self.start.get(row + first), self.start.get(row + last + 1));
-                entries = entries.wrapping_add(end.saturating_sub(start));
-            }
-        }
-        entries
     }
 
     /// The block a query reads: the whole 3×3 block without a reach or under a cap.
@@ -616,7 +547,7 @@ impl CellIndex {
             });
             return;
         }
-        self.walk_runs_in(team, space, near, Sample::ALL, |kind, start, end, _| {
+        self.walk_runs_in(team, space, near, |kind, start, end| {
             let mut first = start;
             while first < end {
                 let entry = first + lane;
@@ -634,7 +565,7 @@ impl CellIndex {
     /// [`CellIndex::for_each_near`] under `sample` (see [`Sample`]) shared by a `team` of
     /// lanes for a result that does not depend on the order in which the bodies come: each
     /// lane `add`s every team-width-th entry the sample takes of each run to its own value
-    /// (from `init`), with its kind's stride as the weight, and the lanes' values are merged
+    /// (from `init`), with the run's stride as the weight, and the lanes' values are merged
     /// across the team (see [`Team::merge`]). Where `add` and `merge` are free of order
     /// (exact integer sums, least keys), every lane gets what one thread adding every entry
     /// taken gets, bit for bit, without handing each body found to every lane. Every lane
@@ -652,65 +583,88 @@ impl CellIndex {
         let (lane, width) = team.stride();
         let mut value = init;
         if width == 1 {
-            self.sample_near(space, near, sample, |weight, slot, kind, at, entry| {
-                value = add(value, weight, slot, kind, at, entry);
+            self.for_each_run(space, near, |kind, start, end| {
+                let (every, skip) = sample.of_run(end - start);
+                // Each entry is asked for while the one before is visited.
+                let mut entry = start + skip;
+                let mut ahead = self.entry(entry, end);
+                while entry < end {
+                    let (slot, at) = ahead;
+                    ahead = self.entry(entry + every, end);
+                    value = add(value, every, slot, kind, at, entry);
+                    entry += every;
+                }
             });
             return value;
         }
-        self.walk_runs_in(team, space, near, sample, |kind, start, end, stride| {
-            let mut entry = start
-                .saturating_add(stride.skip)
-                .saturating_add(lane * stride.every);
+        // Each lane's share of a run: every team-width-th entry the sample takes.
+        self.walk_runs_in(team, space, near, |kind, start, end| {
+            let (every, skip) = sample.of_run(end - start);
+            let mut entry = start + skip + lane * every;
             while entry < end {
-                value = add(
-                    value,
-                    stride.every,
-                    self.slots.get(entry),
-                    kind,
-                    self.pos.get(entry),
-                    entry,
-                );
-                entry = entry.saturating_add(width * stride.every);
+                let (slot, at) = (self.slots.get(entry), self.pos.get(entry));
+                value = add(value, every, slot, kind, at, entry);
+                entry += width * every;
             }
         });
         team.merge(value, merge)
     }
 
-    /// Hands `run(kind, start, end, stride)` every run of entries of `near` in visiting
-    /// order, cut at the cap, with where `sample` stands in its kind, in every lane of
-    /// `team` (wider than one lane): the lanes load the runs' bounds side by side, so the
-    /// team waits for memory once for up to a team width of runs, not once a run.
+    /// Hands `run(kind, start, end)` every run of entries of `near` in visiting order, cut
+    /// at the cap, one after another (the one-thread walk of [`CellIndex::for_each_near`]).
+    #[inline(always)]
+    fn for_each_run(&self, space: &Space, near: Near, mut run: impl FnMut(u32, u32, u32)) {
+        let block = self.block(space, near);
+        let mut rest = near.mask & kinds_mask(self.kinds);
+        let mut left = if self.cap == 0 { u32::MAX } else { self.cap };
+        while rest != 0 {
+            let kind = rest.trailing_zeros();
+            rest &= rest - 1;
+            for k in 0..block.rows.count {
+                let row = kind * self.cells + block.rows.at(k) * space.cols;
+                for r in 0..block.cols.runs() {
+                    let (first, last) = block.cols.run(r);
+                    let start = self.start.get(row + first);
+                    let end = self
+                        .start
+                        .get(row + last + 1)
+                        .min(start.saturating_add(left));
+                    if start < end {
+                        run(kind, start, end);
+                    }
+                    left -= end.saturating_sub(start);
+                    if left == 0 {
+                        return;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Hands `run(kind, start, end)` every run of entries of `near` in visiting order, cut
+    /// at the cap, in every lane of `team` (wider than one lane): the lanes load the runs'
+    /// bounds side by side, so the team waits for memory once for up to a team width of
+    /// runs, not once a run.
     #[inline(always)]
     fn walk_runs_in(
         &self,
         team: Team,
         space: &Space,
         near: Near,
-        sample: Sample,
-        mut run: impl FnMut(u32, u32, u32, Stride),
+        mut run: impl FnMut(u32, u32, u32),
     ) {
         let (lane, width) = team.stride();
         let runs = self.near_runs(space, near);
         let count = runs.count();
         let mut left = if self.cap == 0 { u32::MAX } else { self.cap };
-        // The kind being walked (none yet) and where its sample stands.
-        let mut walking = u32::MAX;
-        let mut stride = Stride::new(1, 0);
         let mut base = 0;
         while base < count {
             let (kind, start, end) = runs.get(self, space, base + lane);
             for j in 0..width.min(count - base) {
                 let kind = team.share(kind, j);
                 let start = team.share(start, j);
-                let full = team.share(end, j);
-                if kind != walking {
-                    walking = kind;
-                    let every = sample.stride(|| self.entries_in(space, runs.block, kind));
-                    stride = Stride::new(every, sample.phase);
-                }
-                let end = full.min(start.saturating_add(left));
-                run(kind, start, end, stride);
-                stride.pass(full.saturating_sub(start));
+                let end = team.share(end, j).min(start.saturating_add(left));
+                run(kind, start, end);
                 left -= end.saturating_sub(start);
                 if left == 0 {
                     return;
