@@ -189,9 +189,15 @@ pub enum BenchCommand {
         /// Seed of the game.
         #[arg(long, default_value_t = 1, value_parser = whole(0, u32::MAX))]
         seed: u32,
-        /// Draw the frames in `play`'s window (vsync off) instead of offscreen.
+        /// Draw the frames in `play`'s window (vsync off) instead of offscreen, as `play`
+        /// shows them (the ship followed).
         #[arg(long)]
         window: bool,
+        /// What the offscreen frames show: the whole field, as the paper's experiment and
+        /// earlier runs drew it (field), or the ship followed at the default zoom with the
+        /// radar, the view a player sees (follow).
+        #[arg(long, value_enum, default_value_t = CameraMode::Field, conflicts_with = "window")]
+        camera: CameraMode,
         /// Where the files go, and how the summary is printed.
         #[command(flatten)]
         out: BenchOut,

@@ -10,6 +10,7 @@ use gpuwars::benchmark::compare;
 use gpuwars::benchmark::paper::{self, PaperOptions, PaperSummary};
 use gpuwars::benchmark::scale::{self, ScaleOptions, ScaleSummary};
 use gpuwars::benchmark::tradeoff::{self, TradeoffOptions, TradeoffSummary};
+use gpuwars::camera::{Camera, DEFAULT_ZOOM};
 use gpuwars::cli::{
     BenchCommand, Cli, Command, THREADS_PER_CPU, cpu_threads, default_demo, defaults,
 };
@@ -95,6 +96,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     render,
                     seed,
                     window,
+                    camera,
                     out,
                 },
         } => {
@@ -102,6 +104,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 duration: Duration::from_secs_f64(minutes * 60.0),
                 size,
                 renderer: render,
+                camera: Camera::new(camera, DEFAULT_ZOOM),
                 seed,
                 out: out.out,
                 progress: !out.json,

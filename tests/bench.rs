@@ -8,6 +8,7 @@ use std::process::Command;
 use gpuwars::benchmark::Spread;
 use gpuwars::benchmark::paper::PaperSummary;
 use gpuwars::benchmark::scale::{self, ScaleRow, ScaleSummary};
+use gpuwars::camera::CameraMode;
 use gpuwars::meter::Second;
 use proptest::prelude::*;
 
@@ -42,7 +43,12 @@ fn plot_size(path: &Path) -> (u32, u32) {
 }
 
 fn paper_run(dir: &Path, seed: &str) -> PaperSummary {
-    let out = ok(&gpuwars(&[
+    paper_run_with(dir, seed, &[])
+}
+
+/// A short `bench paper` into `dir` with `more` flags.
+fn paper_run_with(dir: &Path, seed: &str, more: &[&str]) -> PaperSummary {
+    let mut args = vec![
         "bench",
         "paper",
         "--minutes",
@@ -54,7 +60,9 @@ fn paper_run(dir: &Path, seed: &str) -> PaperSummary {
         "--out",
         dir.to_str().unwrap(),
         "--json",
-    ]));
+    ];
+    args.extend(more);
+    let out = ok(&gpuwars(&args));
     let printed: PaperSummary = serde_json::from_str(&out).unwrap();
     let written: PaperSummary =
         serde_json::from_slice(&std::fs::read(dir.join("bench-paper.json")).unwrap()).unwrap();
@@ -90,7 +98,28 @@ fn bench_paper_writes_a_table_a_plot_and_a_summary_that_agree() {
     }
     assert!(summary.sim_only_steps_per_s > 0.0);
     assert_eq!(summary.machine.backend, "cpu");
+    assert_eq!(summary.camera, CameraMode::Field);
     assert_eq!(plot_size(&dir.path().join("bench-paper.png")), (1280, 720));
+}
+
+/// The view a player sees by default, the ship followed with the radar, measured when
+/// asked; a window's frames are `play`'s, so the two flags are refused together.
+#[test]
+fn bench_paper_measures_the_followed_view_when_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let summary = paper_run_with(dir.path(), "1", &["--camera", "follow"]);
+    assert_eq!(summary.camera, CameraMode::Follow);
+    assert!(
+        summary.frames > 0 && summary.render_us.median > 0.0,
+        "{summary:?}"
+    );
+    let out = gpuwars(&["bench", "paper", "--camera", "follow", "--window"]);
+    assert!(!out.status.success());
+    let text = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        text.contains("--camera") && text.contains("--window"),
+        "{text}"
+    );
 }
 
 #[test]

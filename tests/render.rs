@@ -1228,7 +1228,39 @@ fn the_backdrop_grid_lies_on_the_worlds_multiples(device: &Device) {
     );
 }
 
+/// A frame drawn again with the same lens replays the frame's recorded launches (a CUDA
+/// graph on the GPU, from the third frame on): every frame of a game drawn that way is the
+/// frame a game that changes its lens in between (so that it never replays) draws, pixel
+/// for pixel, the view followed and the whole field alike.
+fn a_replayed_frame_is_the_frame_drawn_afresh(device: &Device) {
+    let scene = paper();
+    for camera in [Camera::default(), Camera::field()] {
+        let (mut replayed, mut fresh) = (
+            Game::new(device, &scene, 1).unwrap(),
+            Game::new(device, &scene, 1).unwrap(),
+        );
+        for frame in 0..5 {
+            for _ in 0..40 {
+                replayed.submit(None).unwrap();
+                fresh.submit(None).unwrap();
+            }
+            // The other size between frames: `fresh` never draws the same lens twice running.
+            fresh.draw(64, 36, &camera).unwrap();
+            let (a, b) = (
+                replayed.draw(640, 360, &camera).unwrap(),
+                fresh.draw(640, 360, &camera).unwrap(),
+            );
+            assert!(
+                a == b,
+                "{camera:?}, frame {frame}: {} pixels differ",
+                differing(&a, &b)
+            );
+        }
+    }
+}
+
 on_both_backends!(
+    a_replayed_frame_is_the_frame_drawn_afresh,
     big_discs_are_the_pixels_of_a_host_reference,
     the_backdrop_grid_lies_on_the_worlds_multiples,
     particles_are_drawn_in_their_kinds_colour_faded_by_age,

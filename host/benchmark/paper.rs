@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 use super::plot::{legend, log_range, png};
 use super::{Outputs, Provenance, Spread, write_csv, write_json};
 use crate::Device;
-use crate::camera::{Camera, CameraMode, DEFAULT_ZOOM};
+use crate::camera::{Camera, CameraMode};
 use crate::game::scene::built_in;
 use crate::game::{Game, Options};
 use crate::graphics::Renderer;
@@ -26,12 +26,10 @@ use crate::pipeline::Profile;
 use crate::play::{Flyer, PlayOptions};
 use crate::terminal::progress;
 
-/// What the measured frames show: the whole field, as the paper's experiment drew it (and
-/// as earlier runs of this benchmark did, so that their summaries compare).
-const CAMERA: Camera = Camera {
-    mode: CameraMode::Field,
-    zoom: DEFAULT_ZOOM,
-};
+/// The camera of summaries written before frames could follow the ship.
+fn field() -> CameraMode {
+    CameraMode::Field
+}
 
 /// The paper's Figure 8: frames per second over five minutes, on its two cards.
 pub const PAPER_BANDS: [(&str, f64, f64); 2] = [
@@ -48,6 +46,10 @@ pub struct PaperOptions {
     pub size: (u32, u32),
     /// The renderer.
     pub renderer: Renderer,
+    /// What the offscreen frames show: the whole field (as the paper's experiment and
+    /// earlier runs of this benchmark drew it, so that their summaries compare) or the ship
+    /// followed.
+    pub camera: Camera,
     /// Seed of the game.
     pub seed: u32,
     /// Where the CSV, PNG and JSON go.
@@ -67,6 +69,9 @@ pub struct PaperSummary {
     pub renderer: Renderer,
     /// The frames' width and height.
     pub size: (u32, u32),
+    /// What the frames showed (the whole field in summaries from before the choice).
+    #[serde(default = "field")]
+    pub camera: CameraMode,
     /// Seconds measured (whole seconds).
     pub seconds: u32,
     /// Frames rendered in all.
@@ -116,13 +121,14 @@ impl Drawer {
         &mut self,
         game: &mut Game,
         (width, height): (u32, u32),
+        camera: &Camera,
         timed: bool,
     ) -> anyhow::Result<(f64, f64)> {
         let device = game.pipeline().device();
         let start = timed.then(|| device.mark()).transpose()?;
         match self {
             Drawer::Kernel => {
-                game.render(width, height, &CAMERA, 0.0)?;
+                game.render(width, height, camera, 0.0)?;
                 match start {
                     Some(start) => Ok((device.mark()?.seconds_since(&start)?, 0.0)),
                     None => Ok((0.0, 0.0)),
@@ -130,7 +136,7 @@ impl Drawer {
             }
             Drawer::Gl(gl) => {
                 let (gl, bodies, target) = &mut **gl;
-                let lens = game.lens(&CAMERA, width, height, 0.0);
+                let lens = game.lens(camera, width, height, 0.0);
                 bodies.update(gl.facade(), &mut game.drawing(), &lens)?;
                 let written = match start {
                     Some(start) => device.mark()?.seconds_since(&start)?,
@@ -163,11 +169,11 @@ pub fn run(device: &Device, options: &PaperOptions) -> anyhow::Result<PaperSumma
             // One step of each second is profiled stage by stage (it waits for the GPU).
             let mut profile = Profile::default();
             game.submit_profiled(None, &mut profile)?;
-            let (render, gl) = drawer.frame(&mut game, options.size, true)?;
+            let (render, gl) = drawer.frame(&mut game, options.size, &options.camera, true)?;
             counter.sampled(profile, render, gl);
         } else {
             game.submit(None)?;
-            drawer.frame(&mut game, options.size, false)?;
+            drawer.frame(&mut game, options.size, &options.camera, false)?;
         }
         while let Some(status) = game.ready_status() {
             last = status;
@@ -234,6 +240,7 @@ fn finish(
         machine,
         renderer: options.renderer,
         size: options.size,
+        camera: options.camera.mode,
         seconds: rows.len() as u32,
         frames: counter.frames(),
         frames_per_s: Spread::of(rows.iter().map(|r| r.frames_per_s)),

@@ -15,7 +15,7 @@ use gpuwars_kernels::{DevSlice, registry};
 use xxhash_rust::xxh3::xxh3_64;
 
 use super::Pipeline;
-use crate::backend::{Binder, Buffers};
+use crate::backend::{Binder, Buffers, Plan};
 use crate::files::FileError;
 use crate::primitives::threads;
 use crate::sim::state::made;
@@ -64,6 +64,23 @@ pub(super) struct Canvas {
     height: u32,
     data: CanvasData<Buffers>,
     pixels: FramePixels<Buffers>,
+    /// The looks last written to the device, so that they travel only when they change.
+    looks: Vec<Look>,
+    /// The last frame's arguments, and its plan replayed as a CUDA graph once the same
+    /// frame comes twice in a row (see [`FrameKey`]).
+    last: Option<(FrameKey, Option<Plan>)>,
+}
+
+/// What a frame's launches take that can change from one frame to the next: the lens (in
+/// the camera's arguments) and the image written (its address and length; none for the
+/// canvas's own). Everything else they take (the world's and the canvas's buffers) lasts
+/// as long as the canvas. Frames of a constant lens (a benchmark, a headless run, a window
+/// whose frame time is steady) replay one graph; a lens that changes every frame runs its
+/// launches one by one, as recording a graph for one replay would cost more than it saves.
+#[derive(Clone, Copy, PartialEq)]
+struct FrameKey {
+    lens: [u32; std::mem::size_of::<Lens>() / 4],
+    image: Option<(u64, u32)>,
 }
 
 /// Most threads the large bodies' launch has: a warp each for a thousand bodies at once,
@@ -273,9 +290,9 @@ impl Pipeline<'_> {
         unsafe { self.render_to(lens, looks, Some(image.range(0, pixels as u32))) }
     }
 
-    /// Checks `lens` and `looks`, makes or resizes the canvas, writes the looks, and
-    /// returns the frame's first ops: the camera, then the radar's counts.
-    fn prepare(&mut self, lens: &Lens, looks: &[Look]) -> Result<Vec<Op>, Error> {
+    /// Checks `lens` and `looks`, makes or resizes the canvas, and writes the looks if they
+    /// changed.
+    fn ready(&mut self, lens: &Lens, looks: &[Look]) -> Result<(), Error> {
         check_lens(lens)?;
         let kinds = self.world.spec.kinds.len();
         if looks.len() != kinds {
@@ -293,6 +310,7 @@ impl Pipeline<'_> {
                 // The camera's state outlives a change of size.
                 (c.width, c.height) = (width, height);
                 c.pixels = FramePixels::build(&mut device.zeroed(), pixels)?;
+                c.last = None;
             }
             None => {
                 let slots = self.world.layout.slots as usize;
@@ -301,11 +319,22 @@ impl Pipeline<'_> {
                     height,
                     data: CanvasData::build(&mut device.zeroed(), kinds, slots)?,
                     pixels: FramePixels::build(&mut device.zeroed(), pixels)?,
+                    looks: Vec::new(),
+                    last: None,
                 })
             }
         }
         let canvas = self.canvas.as_mut().expect("made above");
-        device.write(&mut canvas.data.looks, looks)?;
+        if canvas.looks != looks {
+            device.write(&mut canvas.data.looks, looks)?;
+            canvas.looks = looks.to_vec();
+        }
+        Ok(())
+    }
+
+    /// A frame's first ops, once the canvas is ready: the camera, then the radar's counts.
+    fn first_ops(&self, lens: &Lens) -> Vec<Op> {
+        let canvas = self.canvas.as_ref().expect("made ready");
         let (world, slots) = (&self.world, self.world.layout.slots);
         // SAFETY (both binders): the views go into the op made with each.
         let mut b = unsafe { Binder::new() };
@@ -343,7 +372,7 @@ impl Pipeline<'_> {
                 )
             });
         }
-        Ok(ops)
+        ops
     }
 
     /// # Safety
@@ -354,8 +383,36 @@ impl Pipeline<'_> {
         looks: &[Look],
         image: Option<DevSlice<u32>>,
     ) -> Result<(), Error> {
-        let mut ops = self.prepare(lens, looks)?;
-        let canvas = self.canvas.as_ref().expect("made by prepare");
+        let key = FrameKey {
+            lens: bytemuck::cast(*lens),
+            image: image.map(|image| (image.addr(), image.len())),
+        };
+        self.ready(lens, looks)?;
+        let device = self.device;
+        let last = self.canvas.as_mut().expect("made ready").last.take();
+        let (plan, graph) = match last {
+            Some((last, Some(plan))) if last == key => (plan, true),
+            last => {
+                let repeat = last.is_some_and(|(last, _)| last == key);
+                let mut ops = self.first_ops(lens);
+                // SAFETY: forwarded from the caller.
+                ops.extend(unsafe { self.frame_ops(lens, image) });
+                (device.plan(ops, repeat)?, repeat)
+            }
+        };
+        let ran = device.run(&plan);
+        self.canvas.as_mut().expect("made ready").last = Some((key, graph.then_some(plan)));
+        ran
+    }
+
+    /// A frame's launches after [`Pipeline::first_ops`]: the splats and the resolve, into
+    /// `image` if given.
+    ///
+    /// # Safety
+    /// As for [`Pipeline::render_into`], for `image` when given.
+    unsafe fn frame_ops(&self, lens: &Lens, image: Option<DevSlice<u32>>) -> Vec<Op> {
+        let mut ops = Vec::new();
+        let canvas = self.canvas.as_ref().expect("made ready");
         let (world, slots) = (&self.world, self.world.layout.slots);
         let splat = |b: &mut Binder| SplatArgs {
             bodies: world.state.bodies(b),
@@ -422,8 +479,7 @@ impl Pipeline<'_> {
                 12 * u64::from(pixels),
             ));
         }
-        let device = self.device;
-        device.run(&device.plan(ops, false)?)
+        ops
     }
 }
 
@@ -481,8 +537,9 @@ impl Pipeline<'_> {
                 "a vertex buffer of {len} vertices for {count} (of {slots} slots)",
             )));
         }
-        let mut ops = self.prepare(lens, looks)?;
-        let (canvas, world) = (self.canvas.as_ref().expect("made by prepare"), &self.world);
+        self.ready(lens, looks)?;
+        let mut ops = self.first_ops(lens);
+        let (canvas, world) = (self.canvas.as_ref().expect("made ready"), &self.world);
         // SAFETY (both binders): the views go into the op made with each. (Both ops): the
         // world's and the canvas's buffers; the caller vouches for `vertices`, which holds
         // them all (checked above).
