@@ -218,9 +218,8 @@ fn add_fixed(a: [i64; 2], b: [i64; 2]) -> [i64; 2] {
     [a[0].wrapping_add(b[0]), a[1].wrapping_add(b[1])]
 }
 
-/// `v` counted `weight` times (exact: a component below 2³⁰ times a weight below 2³² fits).
-/// A weight of 1, every body outside a crowd, skips the 64-bit products, which the GPU
-/// makes of several instructions.
+/// `v` counted `weight` times (exact: a component below 2³⁰ times a weight below 2³² fits);
+/// a weight of 1, every body outside a crowd, needs no product.
 #[inline(always)]
 fn weighted(v: [i64; 2], weight: u32) -> [i64; 2] {
     if weight == 1 {
