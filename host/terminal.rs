@@ -31,29 +31,28 @@ impl Progress {
         if self.told || self.done == 0 || seconds < Self::MEASURED {
             return;
         }
-        self.told = true;
         let rate = self.done as f64 / seconds;
         let left = self.len.saturating_sub(self.done) as f64 / rate;
-        if left >= Self::LONG {
-            let (len, unit) = (crate::files::thousands(self.len), self.unit);
-            eprintln!(
-                "gpuwars: {}: {len} {unit} at {rate:.1} {unit}/s: about {} more",
-                self.what,
-                duration_words(left)
-            );
-        }
+        let unit = self.unit;
+        self.tell(&format!(" at {rate:.1} {unit}/s"), left, " more");
     }
 
     /// Says on stderr that the whole run will take about `seconds`, if that is long, before
     /// its speed is known from the units done (which then says nothing more).
     pub(crate) fn announce(&mut self, seconds: f64) {
+        self.tell("", seconds, "");
+    }
+
+    /// The one notice of a run: `seconds` (`after` them) are left, if that is long; `how`
+    /// says how it knows.
+    fn tell(&mut self, how: &str, seconds: f64, after: &str) {
         self.told = true;
         if seconds >= Self::LONG {
             let (len, unit) = (crate::files::thousands(self.len), self.unit);
+            let left = duration_words(seconds);
             eprintln!(
-                "gpuwars: {}: {len} {unit}: about {}",
-                self.what,
-                duration_words(seconds)
+                "gpuwars: {}: {len} {unit}{how}: about {left}{after}",
+                self.what
             );
         }
     }

@@ -983,24 +983,13 @@ fn a_silent_display_is_an_error_naming_it() {
     }
 }
 
-/// Long work says how long it will take once its speed is known: a demo of a million
-/// enemies for many steps announces its steps per second and what is left, on stderr,
-/// beside its JSON (stopped once it has).
-#[test]
-fn a_long_demo_says_how_long_it_will_take() {
+/// The first line of stderr of `gpuwars ARGS` that contains `needle`, the program stopped
+/// once it has come (or `None` if it ended first); stdout is dropped.
+fn first_notice(args: &[&std::ffi::OsStr], needle: &str) -> Option<String> {
     use std::io::{BufRead, BufReader};
     use std::process::Stdio;
     let mut child = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
-        .args([
-            "--backend",
-            "cpu",
-            "demo",
-            "--scene",
-            "scale-1m",
-            "--steps",
-            "100000",
-            "--json",
-        ])
+        .args(args)
         .env_remove("GPUWARS_CPU_THREADS")
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
@@ -1010,10 +999,20 @@ fn a_long_demo_says_how_long_it_will_take() {
     let notice = stderr
         .lines()
         .map_while(Result::ok)
-        .find(|line| line.contains("steps/s: about"));
+        .find(|line| line.contains(needle));
     child.kill().ok();
     child.wait().ok();
-    let notice = notice.expect("a notice before the run ends");
+    notice
+}
+
+/// Long work says how long it will take once its speed is known: a demo of a million
+/// enemies for many steps announces its steps per second and what is left, on stderr,
+/// beside its JSON (stopped once it has).
+#[test]
+fn a_long_demo_says_how_long_it_will_take() {
+    let args = "--backend cpu demo --scene scale-1m --steps 100000 --json";
+    let args: Vec<&std::ffi::OsStr> = args.split(' ').map(std::ffi::OsStr::new).collect();
+    let notice = first_notice(&args, "steps/s: about").expect("a notice before the run ends");
     assert!(notice.contains("100,000 steps"), "{notice}");
 }
 
@@ -1022,33 +1021,11 @@ fn a_long_demo_says_how_long_it_will_take() {
 /// (stopped once it has).
 #[test]
 fn a_long_tradeoff_says_how_long_it_will_take_from_the_start() {
-    use std::io::{BufRead, BufReader};
-    use std::process::Stdio;
     let dir = tempfile::tempdir().unwrap();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
-        .args([
-            "--backend",
-            "cpu",
-            "tradeoff",
-            "--quick",
-            "--scene",
-            "scale-1m",
-        ])
-        .arg("--out")
-        .arg(dir.path())
-        .env_remove("GPUWARS_CPU_THREADS")
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let stderr = BufReader::new(child.stderr.take().unwrap());
-    let notice = stderr
-        .lines()
-        .map_while(Result::ok)
-        .find(|line| line.contains("about"));
-    child.kill().ok();
-    child.wait().ok();
-    let notice = notice.expect("a notice before the run ends");
+    let args = "--backend cpu tradeoff --quick --scene scale-1m --out";
+    let mut args: Vec<&std::ffi::OsStr> = args.split(' ').map(std::ffi::OsStr::new).collect();
+    args.push(dir.path().as_os_str());
+    let notice = first_notice(&args, "about").expect("a notice before the run ends");
     assert!(notice.starts_with("gpuwars: tradeoff: "), "{notice}");
     assert!(notice.contains(" choices: about "), "{notice}");
     assert!(!notice.contains("choices/s"), "{notice}");

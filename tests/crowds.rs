@@ -5,15 +5,11 @@
 
 mod common;
 
-use common::game::{Enemy, live_of, mean_nearest, play, scene};
+use common::game::{gathering, spread_after_ten_seconds};
 use gpuwars::Device;
 use gpuwars::backend::Schedule;
 use gpuwars::game::{Game, Options, Scene};
-use gpuwars::kernels::game::control::Input;
 use gpuwars::pipeline::Lanes;
-
-/// The first enemy kind's index in the test scenes (after the ship and the shots).
-const FIRST_ENEMY: u32 = 2;
 
 /// The stress scene: 2,560 enemies of the three machines on one spot, where every body sees
 /// every other.
@@ -110,55 +106,22 @@ fn the_crowd_is_the_cpus_game(device: &Device) {
     }
 }
 
-/// 48 group enemies of wide sight, far from a still ship.
-fn gathering() -> Scene {
-    let enemies = [Enemy {
-        name: "texel",
-        machine: "group",
-        count: 48,
-        energy: 2,
-        vision: 150.0,
-        speed: 60.0,
-        extra: "",
-    }];
-    scene(1024.0, "wrap", 400.0, &enemies)
-}
-
-/// Mean distance from each enemy to its nearest fellow at the start and after 10 s.
-fn spread_after_ten_seconds(device: &Device, scene: &Scene) -> (f32, f32) {
-    let mut spread = Vec::new();
-    play(
-        device,
-        scene,
-        3,
-        600,
-        |_| Some(Input::default()),
-        |status, snap| {
-            if status.step == 1 || status.step == 600 {
-                let slots = live_of(snap, FIRST_ENEMY);
-                spread.push(mean_nearest(snap, &slots, 1024.0, true));
-            }
-        },
-    );
-    (spread[0], spread[1])
-}
-
 fn a_look_within_its_budget_is_the_plain_look(device: &Device) {
     // A budget of 192 takes up to 64 entries of a kind from each run of cells: more than
     // the 48 bodies of the kind and as many as the 64 shots.
-    let plain = hash_after(device, &budgeted(&gathering(), 0), 600);
+    let plain = hash_after(device, &budgeted(&gathering("group"), 0), 600);
     for budget in [192, 1000] {
-        let scene = budgeted(&gathering(), budget);
+        let scene = budgeted(&gathering("group"), budget);
         assert_eq!(hash_after(device, &scene, 600), plain, "budget {budget}");
     }
     // A budget some looks exceed: their samples make another game.
-    let sampled = hash_after(device, &budgeted(&gathering(), 3), 600);
+    let sampled = hash_after(device, &budgeted(&gathering("group"), 3), 600);
     assert_ne!(sampled, plain);
 }
 
 fn a_group_gathers_from_a_sample_of_its_fellows(device: &Device) {
     for budget in [0, 3] {
-        let (start, end) = spread_after_ten_seconds(device, &budgeted(&gathering(), budget));
+        let (start, end) = spread_after_ten_seconds(device, &budgeted(&gathering("group"), budget));
         println!("sight budget {budget}: mean nearest fellow {start:.1} -> {end:.1}");
         assert!(end < 0.6 * start, "budget {budget}: {start} -> {end}");
     }

@@ -2,14 +2,16 @@
 
 mod common;
 
-use common::game::{Enemy, aim_at, live_of, mean_nearest, play, scene, torus_distance};
+use common::game::{
+    Enemy, FIRST_ENEMY, aim_at, gathering, live_of, play, scene, spread_after_ten_seconds,
+    torus_distance,
+};
 use gpuwars::Device;
 use gpuwars::kernels::game::control::Input;
 use gpuwars::kernels::game::fsm::State;
 
-/// The ship's slot and the first enemy kind's index in the test scenes.
+/// The ship's slot in the test scenes.
 const SHIP: usize = 0;
-const FIRST_ENEMY: u32 = 2;
 
 fn kamikaze_that_sees_the_ship_hits_it(device: &Device) {
     let enemies = [Enemy {
@@ -71,42 +73,12 @@ fn kamikaze_that_sees_the_ship_hits_it(device: &Device) {
     );
 }
 
-/// Mean distance from each enemy to its nearest fellow, at the start and after 10 s, for 48
-/// enemies of `machine` that start far from a ship that does nothing.
-fn spread_after_ten_seconds(device: &Device, machine: &'static str) -> (f32, f32) {
-    let enemies = [Enemy {
-        name: "texel",
-        machine,
-        count: 48,
-        energy: 2,
-        vision: 150.0,
-        speed: 60.0,
-        extra: "",
-    }];
-    let scene = scene(1024.0, "wrap", 400.0, &enemies);
-    let mut spread = Vec::new();
-    play(
-        device,
-        &scene,
-        3,
-        600,
-        |_| Some(Input::default()),
-        |status, snap| {
-            if status.step == 1 || status.step == 600 {
-                let slots = live_of(snap, FIRST_ENEMY);
-                spread.push(mean_nearest(snap, &slots, 1024.0, true));
-            }
-        },
-    );
-    (spread[0], spread[1])
-}
-
 fn group_members_end_closer_to_each_other(device: &Device) {
-    let (start, end) = spread_after_ten_seconds(device, "group");
+    let (start, end) = spread_after_ten_seconds(device, &gathering("group"));
     println!("group: mean nearest fellow {start:.1} -> {end:.1}");
     assert!(end < 0.6 * start, "group: {start} -> {end}");
     // The same bodies without the group machine do not gather.
-    let (start, end) = spread_after_ten_seconds(device, "kamikaze");
+    let (start, end) = spread_after_ten_seconds(device, &gathering("kamikaze"));
     println!("kamikaze: mean nearest fellow {start:.1} -> {end:.1}");
     assert!(end > 0.75 * start, "kamikaze: {start} -> {end}");
 }

@@ -108,6 +108,44 @@ pub fn play<'d>(
     game
 }
 
+/// The first enemy kind's index in [`scene`]'s scenes (after the ship and the shots).
+pub const FIRST_ENEMY: u32 = 2;
+
+/// 48 enemies of `machine` of wide sight (150 units), born at least 400 units from the ship
+/// on a 1,024-unit torus.
+pub fn gathering(machine: &'static str) -> Scene {
+    let enemies = [Enemy {
+        name: "texel",
+        machine,
+        count: 48,
+        energy: 2,
+        vision: 150.0,
+        speed: 60.0,
+        extra: "",
+    }];
+    scene(1024.0, "wrap", 400.0, &enemies)
+}
+
+/// Mean distance from each enemy of a [`gathering`] scene to its nearest fellow, at the
+/// start and after 10 s of a ship that does nothing.
+pub fn spread_after_ten_seconds(device: &Device, scene: &Scene) -> (f32, f32) {
+    let mut spread = Vec::new();
+    play(
+        device,
+        scene,
+        3,
+        600,
+        |_| Some(Input::default()),
+        |status, snap| {
+            if status.step == 1 || status.step == 600 {
+                let slots = live_of(snap, FIRST_ENEMY);
+                spread.push(mean_nearest(snap, &slots, 1024.0, true));
+            }
+        },
+    );
+    (spread[0], spread[1])
+}
+
 /// Input that keeps the ship still and aims at `target` from the ship's slot, firing if
 /// `fire`.
 pub fn aim_at(snapshot: &Snapshot, ship: usize, target: Vec2, fire: bool) -> Input {

@@ -467,38 +467,15 @@ impl CellIndex {
         near: Near,
         mut visit: impl FnMut(u32, u32, Vec2, u32),
     ) {
-        let block = self.block(space, near);
-        let mut rest = near.mask & kinds_mask(self.kinds);
-        // Entries the cap still allows.
-        let mut left = if self.cap == 0 { u32::MAX } else { self.cap };
-        while rest != 0 {
-            let kind = rest.trailing_zeros();
-            rest &= rest - 1;
-            for k in 0..block.rows.count {
-                let row = kind * self.cells + block.rows.at(k) * space.cols;
-                for run in 0..block.cols.runs() {
-                    let (first, last) = block.cols.run(run);
-                    let start = self.start.get(row + first);
-                    let end = self
-                        .start
-                        .get(row + last + 1)
-                        .min(start.saturating_add(left));
-                    if start < end {
-                        // Each entry is asked for while the one before is visited.
-                        let mut ahead = self.entry(start, end);
-                        for entry in start..end {
-                            let (slot, at) = ahead;
-                            ahead = self.entry(entry + 1, end);
-                            visit(slot, kind, at, entry);
-                        }
-                    }
-                    left -= end.saturating_sub(start);
-                    if left == 0 {
-                        return;
-                    }
-                }
+        self.for_each_run(space, near, |kind, start, end| {
+            // Each entry is asked for while the one before is visited.
+            let mut ahead = self.entry(start, end);
+            for entry in start..end {
+                let (slot, at) = ahead;
+                ahead = self.entry(entry + 1, end);
+                visit(slot, kind, at, entry);
             }
-        }
+        });
     }
 
     /// The block a query reads: the whole 3×3 block without a reach or under a cap.
@@ -610,12 +587,13 @@ impl CellIndex {
         team.merge(value, merge)
     }
 
-    /// Hands `run(kind, start, end)` every run of entries of `near` in visiting order, cut
-    /// at the cap, one after another (the one-thread walk of [`CellIndex::for_each_near`]).
+    /// Hands `run(kind, start, end)` every nonempty run of entries of `near` in visiting
+    /// order, cut at the cap, one after another (the one-thread walk).
     #[inline(always)]
     fn for_each_run(&self, space: &Space, near: Near, mut run: impl FnMut(u32, u32, u32)) {
         let block = self.block(space, near);
         let mut rest = near.mask & kinds_mask(self.kinds);
+        // Entries the cap still allows.
         let mut left = if self.cap == 0 { u32::MAX } else { self.cap };
         while rest != 0 {
             let kind = rest.trailing_zeros();
