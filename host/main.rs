@@ -104,7 +104,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 duration: Duration::from_secs_f64(minutes * 60.0),
                 size,
                 renderer: render,
-                camera: Camera::new(camera, DEFAULT_ZOOM),
+                // A window shows `play`'s view: the ship followed.
+                camera: match window {
+                    true => Camera::default(),
+                    false => Camera::new(camera, DEFAULT_ZOOM),
+                },
                 seed,
                 out: out.out,
                 progress: !out.json,

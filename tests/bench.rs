@@ -148,6 +148,8 @@ fn bench_paper_runs_in_the_window_too() {
         .expect("xvfb-run runs (see scripts/setup)");
     let summary: PaperSummary = serde_json::from_str(&ok(&out)).unwrap();
     let seconds: Vec<Second> = rows(&dir.path().join("bench-paper.csv"));
+    // The window shows `play`'s view, and the summary says so.
+    assert_eq!(summary.camera, CameraMode::Follow);
     assert_eq!(seconds.len() as u32, summary.seconds);
     assert!(
         summary.seconds >= 2 && summary.frames_per_s.median > 0.0,
