@@ -83,9 +83,9 @@ struct FrameKey {
     image: Option<(u64, u32)>,
 }
 
-/// Most threads the large bodies' launch has: a warp each for a thousand bodies at once,
-/// more than a frame shows close up.
-const LARGE_THREADS: u32 = 32 * 1024;
+/// Most threads the large bodies' launch has: a group of threads each for a thousand
+/// bodies at once, more than a frame shows close up.
+const LARGE_THREADS: u32 = LARGE_LANES * 1024;
 
 /// Pixels of the largest radar's inside.
 const RADAR_CELLS: usize = (radar::MAX_SIDE * radar::MAX_SIDE) as usize;

@@ -354,8 +354,10 @@ kernel_args! {
 /// A sprite spanning more rows than this on the image is drawn by [`splat_large`], a warp
 /// of threads a body, instead of by its own thread.
 pub const LARGE_ROWS: u32 = 8;
-/// Threads that draw one large body together, each every `LARGE_LANES`-th row.
-pub const LARGE_LANES: u32 = 32;
+/// Threads that draw one large body together (four warps), each every `LARGE_LANES`-th
+/// pixel of its box: the ship's halo close up is some 2,600 pixels, and a thread's loop is
+/// bound by latency.
+pub const LARGE_LANES: u32 = 128;
 
 /// A live body ready to draw: its sprite, the half extents of the pixels it may cover, its
 /// kind and its layer.
@@ -395,11 +397,12 @@ fn drawn(args: &SplatArgs, shown: &Shown, slot: u32) -> Option<Drawn> {
     })
 }
 
-/// Draws every `step`-th row of `body`'s pixels from its `first` (0-based) into the keys.
+/// Draws every `step`-th pixel of `body`'s box (row-major) from its `first` (0-based) into
+/// the keys.
 #[inline(always)]
 fn plot(args: &SplatArgs, view: &Framing, body: &Drawn, first: u32, step: u32) {
     let sprite = &body.sprite;
-    cover_rows(
+    cover_part(
         view,
         sprite.centre,
         body.reach,
@@ -443,21 +446,21 @@ pub fn splat_bodies(t: Thread, args: &SplatArgs) {
     plot(args, &shown.view, &body, 0, 1);
 }
 
-/// The bodies [`splat_bodies`] listed as large, each drawn by [`LARGE_LANES`] threads (a
-/// warp), thread `l` of them drawing rows `l`, `l + LARGE_LANES`, …; the warps take the
-/// list's bodies in turn, however many the launch has.
+/// The bodies [`splat_bodies`] listed as large, each drawn by [`LARGE_LANES`] threads,
+/// thread `l` of them drawing the pixels `l`, `l + LARGE_LANES`, … of its box; the groups
+/// of threads take the list's bodies in turn, however many the launch has.
 #[inline(always)]
 pub fn splat_large(t: Thread, args: &SplatArgs) {
     let shown = args.shown.get(0);
-    let (warp, lane) = (t.global() / LARGE_LANES, t.global() % LARGE_LANES);
-    let warps = (t.grid_dim * t.block_dim) / LARGE_LANES;
+    let (group, lane) = (t.global() / LARGE_LANES, t.global() % LARGE_LANES);
+    let groups = (t.grid_dim * t.block_dim) / LARGE_LANES;
     let listed = args.large_count.get(0).min(args.large.len());
-    let mut at = warp;
+    let mut at = group;
     while at < listed {
         if let Some(body) = drawn(args, &shown, args.large.get(at)) {
             plot(args, &shown.view, &body, lane, LARGE_LANES);
         }
-        at += warps;
+        at += groups;
     }
 }
 
@@ -478,7 +481,7 @@ fn near_image(view: &Framing, centre: Vec2, bound: f32) -> bool {
 /// covers however small it is). Nothing for a `centre` far off the image.
 #[inline(always)]
 fn cover(view: &Framing, centre: Vec2, reach: Vec2, f: impl FnMut(u32, Vec2, bool)) {
-    cover_rows(view, centre, reach, 0, 1, f);
+    cover_part(view, centre, reach, 0, 1, f);
 }
 
 /// The rows of `view`'s image within `reach.y` of `centre` (see [`cover`]): first and last.
@@ -499,9 +502,9 @@ fn rows(view: &Framing, centre: Vec2, reach: Vec2) -> u32 {
     (y1 + 1).saturating_sub(y0)
 }
 
-/// [`cover`] for every `step`-th of its rows from its `first` (0-based) only.
+/// [`cover`] for every `step`-th of its pixels (row-major) from its `first` (0-based) only.
 #[inline(always)]
-fn cover_rows(
+fn cover_part(
     view: &Framing,
     centre: Vec2,
     reach: Vec2,
@@ -516,15 +519,24 @@ fn cover_rows(
     let x0 = (centre.x - reach.x).max(0.0) as u32;
     let x1 = ((centre.x + reach.x) as u32).min(view.width - 1);
     let (y0, y1) = row_span(view, centre, reach);
+    if x1 < x0 {
+        return;
+    }
     let on_image = centre.x >= 0.0 && centre.x < w && centre.y >= 0.0 && centre.y < h;
     let under = on_image.then_some((centre.x as u32, centre.y as u32));
-    let mut y = y0 + first;
+    let width = x1 - x0 + 1;
+    let (mut x, mut y) = (x0 + first % width, y0 + first / width);
+    let (rows, across) = (step / width, step % width);
     while y <= y1 {
-        for x in x0..=x1 {
-            let d = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) - centre;
-            f(y * view.width + x, d, under == Some((x, y)));
+        let d = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) - centre;
+        f(y * view.width + x, d, under == Some((x, y)));
+        // The next pixel `step` on in the box, row-major.
+        x += across;
+        y += rows;
+        if x > x1 {
+            x -= width;
+            y += 1;
         }
-        y += step;
     }
 }
 
