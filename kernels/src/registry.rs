@@ -156,7 +156,7 @@ kernels! {
     RADAR_IMAGE = radar_image(radar::RadarImageArgs) => radar::radar_image;
     /// Draws every live body's shape into the pixel keys (atomic maximum: order-free).
     SPLAT_BODIES = splat_bodies(render::SplatArgs) => render::splat_bodies;
-    /// Draws the bodies too large for one thread, a warp of threads each (after splat_bodies).
+    /// Draws the bodies too large for one thread, 128 threads each (after splat_bodies).
     SPLAT_LARGE = splat_large(render::SplatArgs) => render::splat_large;
     /// Draws every shown particle's disc into the pixel keys, under the bodies (atomic
     /// maximum: order-free).
