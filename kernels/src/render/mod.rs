@@ -10,9 +10,10 @@
 //!    key that says who is drawn there (layer, kind, shade). Overlaps are settled by an
 //!    atomic maximum, which does not depend on the order threads arrive in: the highest
 //!    layer wins, then the highest kind, then the higher shade. A body spanning more than
-//!    [`LARGE_ROWS`] rows is listed instead and drawn by [`splat_large`], a warp of threads
-//!    to a body: a GPU thread's loop is bound by latency, so one thread walking the ship's
-//!    halo close up set the whole frame's time (about 0.6 ms at 1080p on an H200).
+//!    [`LARGE_ROWS`] rows is listed instead and drawn by [`splat_large`], [`LARGE_LANES`]
+//!    threads to a body over the pixels of its box: a GPU thread's loop is bound by latency,
+//!    so one thread walking the ship's halo close up set the whole frame's time (about 0.6 ms
+//!    at 1080p on an H200).
 //!    With explosions, [`particles::splat_particles`] then draws each shown particle's disc
 //!    the same way, in the lowest layer.
 //! 4. [`resolve_pixels`]: each pixel turns its key into a colour from the kinds' looks (the
