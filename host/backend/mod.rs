@@ -480,7 +480,9 @@ fn check_len<T>(len: usize) -> Result<(), Error> {
 
 /// The host memory this process can still have, and the host's total: what `/proc/meminfo`
 /// says is available, less where this process's address-space or data limit (`ulimit -v`,
-/// `ulimit -d`) leaves less room than that.
+/// `ulimit -d`) leaves less room than that. `None` where the system has no `/proc` (Windows,
+/// macOS): nothing is checked before the allocations, and a shortage is then the
+/// allocations' own error in words (the host buffers reserve with `try_reserve_exact`).
 fn host_memory() -> Option<(u64, u64)> {
     let kib_field = |text: &str, name: &str| -> Option<u64> {
         let line = text.lines().find(|l| l.starts_with(name))?;
