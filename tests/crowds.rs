@@ -5,10 +5,9 @@
 
 mod common;
 
-use common::game::{gathering, spread_after_ten_seconds};
+use common::game::{gathering, hash_after, hash_with, shuffled_hashes, spread_after_ten_seconds};
 use gpuwars::Device;
-use gpuwars::backend::Schedule;
-use gpuwars::game::{Game, Options, Scene};
+use gpuwars::game::{Options, Scene};
 use gpuwars::pipeline::Lanes;
 
 /// The stress scene: 2,560 enemies of the three machines on one spot, where every body sees
@@ -28,19 +27,6 @@ fn one_spot_grouping() -> Scene {
     scene
 }
 
-/// The state hash after `steps` autopilot steps.
-fn hash_with(device: &Device, scene: &Scene, steps: u32, options: Options) -> u64 {
-    let mut game = Game::with_options(device, scene, 1, options).unwrap();
-    for _ in 0..steps {
-        game.step(None).unwrap();
-    }
-    game.state_hash().unwrap()
-}
-
-fn hash_after(device: &Device, scene: &Scene, steps: u32) -> u64 {
-    hash_with(device, scene, steps, Options::default())
-}
-
 /// `scene` with a sight budget of `budget`.
 fn budgeted(scene: &Scene, budget: u32) -> Scene {
     let mut scene = scene.clone();
@@ -52,32 +38,20 @@ fn budgeted(scene: &Scene, budget: u32) -> Scene {
 fn a_crowd_on_one_spot_is_the_same_game_on_every_schedule_and_thread_count() {
     // The short-sighted group's sample changes what it does: the budget is at work.
     let grouping = one_spot_grouping();
-    let plain = hash_after(common::cpu(), &budgeted(&grouping, 0), 40);
-    assert_ne!(hash_after(common::cpu(), &grouping, 40), plain);
+    let plain = hash_after(common::cpu(), &budgeted(&grouping, 0), 1, 40);
+    assert_ne!(hash_after(common::cpu(), &grouping, 1, 40), plain);
     for scene in [one_spot(), grouping] {
-        let reference = hash_after(common::cpu(), &scene, 40);
+        let reference = hash_after(common::cpu(), &scene, 1, 40);
         for threads in [1, 3] {
             let device = Device::cpu(Some(threads), "tests").unwrap();
             assert_eq!(
-                hash_after(&device, &scene, 40),
+                hash_after(&device, &scene, 1, 40),
                 reference,
                 "{threads} threads"
             );
         }
-        for seed in [1, 2] {
-            let device =
-                Device::cpu_scheduled(Some(2), Schedule::Shuffled { seed }, "tests").unwrap();
-            for lanes in [Lanes::Auto, Lanes::Fixed(8)] {
-                let options = Options {
-                    lanes,
-                    ..Options::default()
-                };
-                assert_eq!(
-                    hash_with(&device, &scene, 40, options),
-                    reference,
-                    "shuffle seed {seed}, {lanes:?}"
-                );
-            }
+        for (label, hash) in shuffled_hashes(&scene, 40) {
+            assert_eq!(hash, reference, "{label}");
         }
     }
 }
@@ -86,7 +60,7 @@ fn a_crowd_on_one_spot_is_the_same_game_on_every_schedule_and_thread_count() {
 /// the sample: the same game as the CPU's one thread a body, crowd or not.
 fn the_crowd_is_the_cpus_game(device: &Device) {
     for scene in [one_spot(), one_spot_grouping()] {
-        let reference = hash_after(common::cpu(), &scene, 60);
+        let reference = hash_after(common::cpu(), &scene, 1, 60);
         for lanes in [
             Lanes::Auto,
             Lanes::Fixed(1),
@@ -98,7 +72,7 @@ fn the_crowd_is_the_cpus_game(device: &Device) {
                 ..Options::default()
             };
             assert_eq!(
-                hash_with(device, &scene, 60, options),
+                hash_with(device, &scene, 1, 60, options),
                 reference,
                 "{lanes:?}"
             );
@@ -109,13 +83,13 @@ fn the_crowd_is_the_cpus_game(device: &Device) {
 fn a_look_within_its_budget_is_the_plain_look(device: &Device) {
     // A budget of 192 takes up to 64 entries of a kind from each run of cells: more than
     // the 48 bodies of the kind and as many as the 64 shots.
-    let plain = hash_after(device, &budgeted(&gathering("group"), 0), 600);
+    let plain = hash_after(device, &budgeted(&gathering("group"), 0), 1, 600);
     for budget in [192, 1000] {
         let scene = budgeted(&gathering("group"), budget);
-        assert_eq!(hash_after(device, &scene, 600), plain, "budget {budget}");
+        assert_eq!(hash_after(device, &scene, 1, 600), plain, "budget {budget}");
     }
     // A budget some looks exceed: their samples make another game.
-    let sampled = hash_after(device, &budgeted(&gathering("group"), 3), 600);
+    let sampled = hash_after(device, &budgeted(&gathering("group"), 3), 1, 600);
     assert_ne!(sampled, plain);
 }
 

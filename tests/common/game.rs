@@ -3,9 +3,11 @@
 
 use glam::Vec2;
 use gpuwars::Device;
-use gpuwars::game::Game;
+use gpuwars::backend::Schedule;
 use gpuwars::game::Scene;
+use gpuwars::game::{Game, Options};
 use gpuwars::kernels::game::control::{Input, Status};
+use gpuwars::pipeline::Lanes;
 use gpuwars::sim::Snapshot;
 
 /// One enemy kind of a test scene.
@@ -144,6 +146,38 @@ pub fn spread_after_ten_seconds(device: &Device, scene: &Scene) -> (f32, f32) {
         },
     );
     (spread[0], spread[1])
+}
+
+/// Plays `steps` autopilot steps of `scene` and returns the game's state hash.
+pub fn hash_after(device: &Device, scene: &Scene, seed: u32, steps: u32) -> u64 {
+    hash_with(device, scene, seed, steps, Options::default())
+}
+
+/// [`hash_after`], the game run as `options` say.
+pub fn hash_with(device: &Device, scene: &Scene, seed: u32, steps: u32, options: Options) -> u64 {
+    let mut game = Game::with_options(device, scene, seed, options).unwrap();
+    for _ in 0..steps {
+        game.step(None).unwrap();
+    }
+    game.state_hash().unwrap()
+}
+
+/// [`hash_after`] (seed 1) on the CPU emulation's shuffled schedules (two workers, shuffle
+/// seeds 1 and 2), with teams chosen as usual and of 8 lanes: each hash with its label.
+pub fn shuffled_hashes(scene: &Scene, steps: u32) -> Vec<(String, u64)> {
+    let mut hashes = Vec::new();
+    for seed in [1, 2] {
+        let device = Device::cpu_scheduled(Some(2), Schedule::Shuffled { seed }, "tests").unwrap();
+        for lanes in [Lanes::Auto, Lanes::Fixed(8)] {
+            let options = Options {
+                lanes,
+                ..Options::default()
+            };
+            let label = format!("shuffle seed {seed}, {lanes:?}");
+            hashes.push((label, hash_with(&device, scene, 1, steps, options)));
+        }
+    }
+    hashes
 }
 
 /// Input that keeps the ship still and aims at `target` from the ship's slot, firing if
