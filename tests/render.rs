@@ -678,7 +678,7 @@ fn silhouettes_cover_the_pixels_of_their_shapes(device: &Device) {
     }
 }
 
-/// Big discs drawn row by row (more than `render::LARGE_ROWS` rows each) are the pixels a
+/// Big discs drawn row by row (more than `render::LARGE_PIXELS` pixels each) are the pixels a
 /// plain host reference computes: a pixel shows the top (layer, then kind) of the discs
 /// whose radius (at most `MAX_RADIUS_PX`) reaches its centre, or that lie over it.
 fn big_discs_are_the_pixels_of_a_host_reference(device: &Device) {

@@ -9,7 +9,7 @@ use gpuwars_kernels::render::camera::{self, CameraArgs, CameraState, Lens};
 use gpuwars_kernels::render::particles::{ParticleSplatArgs, ParticleVertexArgs};
 use gpuwars_kernels::render::radar::{self, RadarArgs, RadarBox, RadarCounts, RadarImageArgs};
 use gpuwars_kernels::render::{
-    BodyVertex, LARGE_LANES, Look, NO_SHIP, ResolveArgs, Shown, SplatArgs, VertexArgs,
+    self, BodyVertex, LARGE_LANES, Look, NO_SHIP, ResolveArgs, Shown, SplatArgs, VertexArgs,
 };
 use gpuwars_kernels::{DevSlice, registry};
 use xxhash_rust::xxh3::xxh3_64;
@@ -286,7 +286,7 @@ impl Pipeline<'_> {
                 lens.height
             )));
         }
-        // SAFETY: forwarded; `resolve_pixels` writes one pixel per thread of the frame.
+        // SAFETY: forwarded; `resolve_pixels` writes the frame's pixels, and no others.
         unsafe { self.render_to(lens, looks, Some(image.range(0, pixels as u32))) }
     }
 
@@ -473,7 +473,7 @@ impl Pipeline<'_> {
             let pixels = lens.width * lens.height;
             ops.push(threads(
                 registry::RESOLVE_PIXELS,
-                pixels,
+                render::resolve_threads(pixels),
                 resolve,
                 b,
                 12 * u64::from(pixels),

@@ -59,22 +59,52 @@ fn mark(origin: f32, scale: f32, field: f32, lines: bool, p: f32) -> Mark {
     }
 }
 
-/// The backdrop's colour at image pixel `(x, y)` (row 0 at the top) of `view` over a
-/// `field`-sized world: [`BORDER`] on the field's border, [`LINE`] on a grid line (when
-/// lines are at least [`MIN_GAP_PX`] apart), `None` elsewhere and outside the field.
+/// What an image row lies on (see [`row`]): the part of a pixel's backdrop that its
+/// column does not change, worked out once for a row's pixels.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub struct Row(Mark);
+
+impl Row {
+    /// A row outside the field: nothing of the backdrop on it.
+    pub const OUT: Row = Row(Mark::Out);
+}
+
+/// Whether lines are drawn in `view`: only when they are at least [`MIN_GAP_PX`] apart.
 #[inline(always)]
-pub fn on_grid(view: &Framing, field: Vec2, x: u32, y: u32) -> Option<u32> {
-    let lines = SPACING * view.scale >= MIN_GAP_PX;
+fn lines(view: &Framing) -> bool {
+    SPACING * view.scale >= MIN_GAP_PX
+}
+
+/// What image row `y` (row 0 at the top) of `view` over a `field`-sized world lies on.
+#[inline(always)]
+pub fn row(view: &Framing, field: Vec2, y: u32) -> Row {
     // Rows from the bottom, as the world's y runs.
-    let row = (view.height - 1 - y) as f32;
-    let across = mark(view.origin.x, view.scale, field.x, lines, x as f32);
-    let up = mark(view.origin.y, view.scale, field.y, lines, row);
-    match (across, up) {
+    let up = (view.height - 1 - y) as f32;
+    Row(mark(view.origin.y, view.scale, field.y, lines(view), up))
+}
+
+/// The backdrop's colour at pixel `x` of a row of `view` that lies on `row` (see
+/// [`on_grid`]).
+#[inline(always)]
+pub fn on_row(view: &Framing, field: Vec2, row: Row, x: u32) -> Option<u32> {
+    if row.0 == Mark::Out {
+        return None;
+    }
+    let across = mark(view.origin.x, view.scale, field.x, lines(view), x as f32);
+    match (across, row.0) {
         (Mark::Out, _) | (_, Mark::Out) => None,
         (Mark::Border, _) | (_, Mark::Border) => Some(BORDER),
         (Mark::Line, _) | (_, Mark::Line) => Some(LINE),
         _ => None,
     }
+}
+
+/// The backdrop's colour at image pixel `(x, y)` (row 0 at the top) of `view` over a
+/// `field`-sized world: [`BORDER`] on the field's border, [`LINE`] on a grid line (when
+/// lines are at least [`MIN_GAP_PX`] apart), `None` elsewhere and outside the field.
+#[inline(always)]
+pub fn on_grid(view: &Framing, field: Vec2, x: u32, y: u32) -> Option<u32> {
+    on_row(view, field, row(view, field, y), x)
 }
 
 #[cfg(test)]

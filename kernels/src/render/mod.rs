@@ -9,11 +9,11 @@
 //! 3. [`splat_bodies`]: each body covers the pixels of its silhouette ([`shapes`]) with a
 //!    key that says who is drawn there (layer, kind, shade). Overlaps are settled by an
 //!    atomic maximum, which does not depend on the order threads arrive in: the highest
-//!    layer wins, then the highest kind, then the higher shade. A body spanning more than
-//!    [`LARGE_ROWS`] rows is listed instead and drawn by [`splat_large`], [`LARGE_LANES`]
-//!    threads to a body over the pixels of its box: a GPU thread's loop is bound by latency,
-//!    so one thread walking the ship's halo close up set the whole frame's time (about 0.6 ms
-//!    at 1080p on an H200).
+//!    layer wins, then the highest kind, then the higher shade. A body whose box covers more
+//!    than [`LARGE_PIXELS`] pixels of the image is listed instead and drawn by
+//!    [`splat_large`], [`LARGE_LANES`] threads to a body over the pixels of its box: a GPU
+//!    thread's loop is bound by latency, so one thread walking the ship's halo close up set
+//!    the whole frame's time (about 0.6 ms at 1080p on an H200).
 //!    With explosions, [`particles::splat_particles`] then draws each shown particle's disc
 //!    the same way, in the lowest layer.
 //! 4. [`resolve_pixels`]: each pixel turns its key into a colour from the kinds' looks (the
@@ -39,6 +39,7 @@ use glam::Vec2;
 
 use crate::sim::kinds::SHAPE_RECT;
 use crate::sim::{Bodies, KindInfo};
+use crate::warp::WARP;
 use crate::{DevSlice, Thread, kernel_args};
 use radar::{RadarBox, RadarCounts};
 use shapes::{DISC, RECT};
@@ -352,9 +353,12 @@ kernel_args! {
     }
 }
 
-/// A sprite spanning more rows than this on the image is drawn by [`splat_large`], a warp
-/// of threads a body, instead of by its own thread.
-pub const LARGE_ROWS: u32 = 8;
+/// A sprite whose box covers more pixels of the image than this is drawn by
+/// [`splat_large`], [`LARGE_LANES`] threads a body, instead of by its own thread. Pixels,
+/// not rows: a large body cut by the image's top or bottom edge spans few rows but may
+/// still be a hundred pixels wide, and one thread walking those took a followed frame's
+/// `splat_bodies` from a few microseconds to 60.
+pub const LARGE_PIXELS: u32 = 64;
 /// Threads that draw one large body together (four warps), each every `LARGE_LANES`-th
 /// pixel of its box: the ship's halo close up is some 2,600 pixels, and a thread's loop is
 /// bound by latency.
@@ -429,8 +433,8 @@ fn plot(args: &SplatArgs, view: &Framing, body: &Drawn, first: u32, step: u32) {
 /// silhouette (and at least the pixel under its centre), the facing side in its nose colour.
 ///
 /// A GPU thread's loop is bound by latency, so the frame takes as long as its longest
-/// thread: a body spanning more than [`LARGE_ROWS`] rows (close up, or the ship's halo) is
-/// not drawn here but listed for [`splat_large`]. The list's order depends on which thread
+/// thread: a body covering more than [`LARGE_PIXELS`] pixels (close up, or the ship's
+/// halo) is not drawn here but listed for [`splat_large`]. The list's order depends on which thread
 /// arrives first; the picture does not, since every pixel keeps the maximum of its keys.
 #[inline(always)]
 pub fn splat_bodies(t: Thread, args: &SplatArgs) {
@@ -439,7 +443,8 @@ pub fn splat_bodies(t: Thread, args: &SplatArgs) {
     let Some(body) = drawn(args, &shown, slot) else {
         return;
     };
-    if rows(&shown.view, body.sprite.centre, body.reach) > LARGE_ROWS {
+    let covered = Span::of(&shown.view, body.sprite.centre, body.reach).map_or(0, |s| s.pixels());
+    if covered > LARGE_PIXELS {
         let at = args.large_count.atomic_add(0, 1);
         args.large.set(at, slot);
         return;
@@ -485,22 +490,36 @@ fn cover(view: &Framing, centre: Vec2, reach: Vec2, f: impl FnMut(u32, Vec2, boo
     cover_part(view, centre, reach, 0, 1, f);
 }
 
-/// The rows of `view`'s image within `reach.y` of `centre` (see [`cover`]): first and last.
-#[inline(always)]
-fn row_span(view: &Framing, centre: Vec2, reach: Vec2) -> (u32, u32) {
-    let y0 = (centre.y - reach.y).max(0.0) as u32;
-    let y1 = ((centre.y + reach.y) as u32).min(view.height - 1);
-    (y0, y1)
+/// The pixels of an image within some reach of a centre (see [`cover`]): columns `x0..=x1`
+/// of rows `y0..=y1`, never empty.
+#[derive(Clone, Copy)]
+struct Span {
+    x0: u32,
+    x1: u32,
+    y0: u32,
+    y1: u32,
 }
 
-/// How many rows [`cover`] walks for `centre` and `reach` (0 off the image).
-#[inline(always)]
-fn rows(view: &Framing, centre: Vec2, reach: Vec2) -> u32 {
-    if !near_image(view, centre, reach.max_element()) {
-        return 0;
+impl Span {
+    /// The pixels of `view`'s image within `reach` (half extents) of `centre`; `None` when
+    /// there are none.
+    #[inline(always)]
+    fn of(view: &Framing, centre: Vec2, reach: Vec2) -> Option<Span> {
+        if !near_image(view, centre, reach.max_element()) {
+            return None;
+        }
+        let x0 = (centre.x - reach.x).max(0.0) as u32;
+        let x1 = ((centre.x + reach.x) as u32).min(view.width - 1);
+        let y0 = (centre.y - reach.y).max(0.0) as u32;
+        let y1 = ((centre.y + reach.y) as u32).min(view.height - 1);
+        (x0 <= x1 && y0 <= y1).then_some(Span { x0, x1, y0, y1 })
     }
-    let (y0, y1) = row_span(view, centre, reach);
-    (y1 + 1).saturating_sub(y0)
+
+    /// How many pixels it holds.
+    #[inline(always)]
+    fn pixels(&self) -> u32 {
+        (self.x1 - self.x0 + 1) * (self.y1 - self.y0 + 1)
+    }
 }
 
 /// [`cover`] for every `step`-th of its pixels (row-major) from its `first` (0-based) only.
@@ -513,16 +532,10 @@ fn cover_part(
     step: u32,
     mut f: impl FnMut(u32, Vec2, bool),
 ) {
-    if !near_image(view, centre, reach.max_element()) {
+    let Some(Span { x0, x1, y0, y1 }) = Span::of(view, centre, reach) else {
         return;
-    }
+    };
     let (w, h) = (view.width as f32, view.height as f32);
-    let x0 = (centre.x - reach.x).max(0.0) as u32;
-    let x1 = ((centre.x + reach.x) as u32).min(view.width - 1);
-    let (y0, y1) = row_span(view, centre, reach);
-    if x1 < x0 {
-        return;
-    }
     let on_image = centre.x >= 0.0 && centre.x < w && centre.y >= 0.0 && centre.y < h;
     let under = on_image.then_some((centre.x as u32, centre.y as u32));
     let width = x1 - x0 + 1;
@@ -561,32 +574,63 @@ kernel_args! {
     }
 }
 
-/// Thread `p` colours pixel `p` from its key, or from the radar where it lies, and clears
-/// the key.
+/// Pixels one thread of [`resolve_pixels`] colours: a warp takes `32 ×` this many pixels
+/// in a row-major run, each lane every 32nd of them (so that each load of the warp's is one
+/// span of memory), and reads the frame's [`Shown`] once for them all.
+pub const RESOLVED_A_THREAD: u32 = 4;
+
+/// Threads [`resolve_pixels`] needs for a frame of `pixels`: whole warps, each for a run
+/// of `32 ×` [`RESOLVED_A_THREAD`] pixels.
+#[inline]
+pub fn resolve_threads(pixels: u32) -> u32 {
+    pixels.div_ceil(WARP * RESOLVED_A_THREAD) * WARP
+}
+
+/// Each thread colours its pixels (see [`RESOLVED_A_THREAD`]) from their keys, or from the
+/// radar where it lies, and clears the keys.
 #[inline(always)]
 pub fn resolve_pixels(t: Thread, args: &ResolveArgs) {
-    let pixel = t.global();
-    if pixel >= args.image.len() {
+    let pixels = args.image.len();
+    let (warp, lane) = (t.global() / WARP, t.global() % WARP);
+    let first = warp as u64 * u64::from(WARP * RESOLVED_A_THREAD) + u64::from(lane);
+    if first >= u64::from(pixels) {
         return;
     }
     let shown = args.shown.get(0);
-    let background = shown.view.background;
-    let key = args.keys.get(pixel);
-    let (x, y) = (pixel % shown.view.width, pixel / shown.view.width);
-    let radar = radar::radar_colour(&shown, &args.radar, &args.looks, args.stride, x, y);
-    let colour = match radar {
-        Some(colour) => colour,
-        None if key == EMPTY && shown.backdrop != 0 => {
-            backdrop::on_grid(&shown.view, shown.field, x, y).unwrap_or(background)
+    let (width, background) = (shown.view.width, shown.view.background);
+    let mut pixel = first as u32;
+    let (mut x, mut y) = (pixel % width, pixel / width);
+    // The backdrop's mark of the row last met: a run spans a row or two.
+    let mut row = (u32::MAX, backdrop::Row::OUT);
+    for _ in 0..RESOLVED_A_THREAD {
+        let key = args.keys.get(pixel);
+        let radar = radar::radar_colour(&shown, &args.radar, &args.looks, args.stride, x, y);
+        let colour = match radar {
+            Some(colour) => colour,
+            None if key == EMPTY && shown.backdrop != 0 => {
+                if row.0 != y {
+                    row = (y, backdrop::row(&shown.view, shown.field, y));
+                }
+                backdrop::on_row(&shown.view, shown.field, row.1, x).unwrap_or(background)
+            }
+            None if key == EMPTY => background,
+            None => {
+                let (kind, shade) = unkey(key);
+                args.looks.get(kind).colour_of(shade, background)
+            }
+        };
+        args.image.set(pixel, colour);
+        args.keys.set(pixel, EMPTY);
+        if pixels - pixel <= WARP {
+            return;
         }
-        None if key == EMPTY => background,
-        None => {
-            let (kind, shade) = unkey(key);
-            args.looks.get(kind).colour_of(shade, background)
+        pixel += WARP;
+        x += WARP;
+        while x >= width {
+            x -= width;
+            y += 1;
         }
-    };
-    args.image.set(pixel, colour);
-    args.keys.set(pixel, EMPTY);
+    }
 }
 
 /// [`BodyVertex::flags`]: a body lives in this slot (the others are not drawn).
