@@ -22,7 +22,7 @@ use gpuwars::kernels::registry;
 use gpuwars::kernels::render::camera::{CameraState, Lens};
 use gpuwars::kernels::render::radar::{self, radar_box};
 use gpuwars::kernels::render::shapes::{self, DISC};
-use gpuwars::kernels::render::{Framing, Look, NO_SHIP, Shown, backdrop, fade};
+use gpuwars::kernels::render::{FOLD_CAMERA_SLOTS, Framing, Look, NO_SHIP, Shown, backdrop, fade};
 use gpuwars::pipeline::Drawing;
 use gpuwars::pipeline::Simulation;
 use gpuwars::pipeline::draw::Frame;
@@ -505,7 +505,19 @@ fn the_camera_glides_to_the_ship_and_snaps_at_frame_time_zero() {
 }
 
 fn the_device_camera_is_the_hosts_bit_for_bit(device: &Device) {
-    let mut game = Game::new(device, &paper(), 1).unwrap();
+    // `paper`'s frames work the camera out in every thread of their first launch; a world
+    // of more slots than `FOLD_CAMERA_SLOTS` runs it as a launch of its own.
+    let mut large = paper();
+    large.world.kinds[2].capacity += FOLD_CAMERA_SLOTS;
+    for scene in [paper(), large] {
+        device_camera_is_the_hosts(device, &scene);
+    }
+}
+
+/// The camera of 12 frames of `scene` (gliding, zoomed, snapped, overview) is the host's
+/// own, bit for bit.
+fn device_camera_is_the_hosts(device: &Device, scene: &Scene) {
+    let mut game = Game::new(device, scene, 1).unwrap();
     let ship = game.pipeline().ship() as usize;
     let mut camera = Camera::default();
     let mut state = CameraState::default();

@@ -9,7 +9,8 @@ use gpuwars_kernels::render::camera::{self, CameraArgs, CameraState, Lens};
 use gpuwars_kernels::render::particles::{ParticleSplatArgs, ParticleVertexArgs};
 use gpuwars_kernels::render::radar::{self, RadarArgs, RadarBox, RadarCounts, RadarImageArgs};
 use gpuwars_kernels::render::{
-    self, BodyVertex, LARGE_LANES, Look, NO_SHIP, ResolveArgs, Shown, SplatArgs, VertexArgs,
+    self, BodyVertex, FirstSplatArgs, LARGE_LANES, Look, NO_SHIP, ResolveArgs, Shown, SplatArgs,
+    VertexArgs,
 };
 use gpuwars_kernels::{DevSlice, registry};
 use xxhash_rust::xxh3::xxh3_64;
@@ -31,8 +32,9 @@ gpuwars_kernels::device_data! {
     pub struct CanvasData(kinds, slots) {
         /// Each kind's look.
         looks: [Look; kinds],
-        /// The camera between frames.
-        camera: [CameraState; 1],
+        /// The camera between frames, and after the frame being drawn (see
+        /// `gpuwars_kernels::render::FirstSplatArgs::camera`).
+        camera: [CameraState; 2],
         /// What the last frame showed.
         shown: [Shown; 1],
         /// The radar's pixels, its frame included.
@@ -332,11 +334,12 @@ impl Pipeline<'_> {
         Ok(())
     }
 
-    /// A frame's first ops, once the canvas is ready: the camera, then the radar's counts.
-    fn first_ops(&self, lens: &Lens) -> Vec<Op> {
+    /// The camera's own launch (see `gpuwars_kernels::render::camera::camera`), once the
+    /// canvas is ready.
+    fn camera_op(&self, lens: &Lens) -> Op {
         let canvas = self.canvas.as_ref().expect("made ready");
-        let (world, slots) = (&self.world, self.world.layout.slots);
-        // SAFETY (both binders): the views go into the op made with each.
+        let world = &self.world;
+        // SAFETY: the views go into the op made with the binder.
         let mut b = unsafe { Binder::new() };
         let input = world.game.as_ref().map(|g| &g.data.input);
         let camera = CameraArgs {
@@ -346,12 +349,21 @@ impl Pipeline<'_> {
             shown: b.view(&canvas.data.shown),
             lens: *lens,
         };
-        // SAFETY (both ops): the world's and the canvas's buffers, sized for the world's
-        // slots, one camera state and one `Shown`, and the largest radar.
-        let mut ops = vec![unsafe { threads(registry::CAMERA, 1, camera, b, 64) }];
+        // SAFETY: the world's and the canvas's buffers, sized for the world's slots, two
+        // camera states and one `Shown`.
+        unsafe { threads(registry::CAMERA, 1, camera, b, 64) }
+    }
+
+    /// The first ops of a frame of vertices, once the canvas is ready: the camera, then the
+    /// radar's counts (the kernel renderer's first launch counts them itself).
+    fn vertex_camera_ops(&self, lens: &Lens) -> Vec<Op> {
+        let canvas = self.canvas.as_ref().expect("made ready");
+        let (world, slots) = (&self.world, self.world.layout.slots);
+        let mut ops = vec![self.camera_op(lens)];
         // A frame without a radar (the whole field) has nothing to count.
         if lens.radar != 0 {
             let stride = radar::stride(slots);
+            // SAFETY: the views go into the op below only.
             let mut b = unsafe { Binder::new() };
             let radar = RadarArgs {
                 bodies: world.state.bodies(&mut b),
@@ -362,6 +374,8 @@ impl Pipeline<'_> {
                 reserved: 0,
             };
             let samples = slots.div_ceil(stride);
+            // SAFETY: the views go into this op only; the world's and the canvas's buffers,
+            // sized for the world's slots and the largest radar.
             ops.push(unsafe {
                 threads(
                     registry::RADAR_BODIES,
@@ -394,9 +408,8 @@ impl Pipeline<'_> {
             Some((last, Some(plan))) if last == key => (plan, true),
             last => {
                 let repeat = last.is_some_and(|(last, _)| last == key);
-                let mut ops = self.first_ops(lens);
                 // SAFETY: forwarded from the caller.
-                ops.extend(unsafe { self.frame_ops(lens, image) });
+                let ops = unsafe { self.frame_ops(lens, image) };
                 (device.plan(ops, repeat)?, repeat)
             }
         };
@@ -405,8 +418,8 @@ impl Pipeline<'_> {
         ran
     }
 
-    /// A frame's launches after [`Pipeline::first_ops`]: the splats and the resolve, into
-    /// `image` if given.
+    /// A frame's launches: the splats (the first with the camera and the radar's counts)
+    /// and the resolve, into `image` if given.
     ///
     /// # Safety
     /// As for [`Pipeline::render_into`], for `image` when given.
@@ -427,17 +440,31 @@ impl Pipeline<'_> {
         // below): the world's and the canvas's buffers, sized for the world's slots and the
         // frame's pixels, or the caller's image (see `render_into`).
         unsafe {
+            // A large world's threads would cost more working the camera out each than a
+            // launch of its own does.
+            let camera_ready = slots > render::FOLD_CAMERA_SLOTS;
+            if camera_ready {
+                ops.push(self.camera_op(lens));
+            }
             let mut b = Binder::new();
-            let large_count = b.view(&canvas.data.large_count);
-            ops.push(Op::clear(large_count, b));
-            let mut b = Binder::new();
-            let args = splat(&mut b);
+            let input = world.game.as_ref().map(|g| &g.data.input);
+            let args = FirstSplatArgs {
+                splat: splat(&mut b),
+                input: input.map_or(DevSlice::EMPTY, |input| b.view(input)),
+                camera: b.view(&canvas.data.camera),
+                radar: made(canvas.data.radar.convert(&mut b)),
+                lens: *lens,
+                stride: radar::stride(slots),
+                camera_ready: u32::from(camera_ready),
+            };
+            // Thread 0 writes the camera, whatever the world's size.
+            let threads_first = slots.max(1);
             ops.push(threads(
                 registry::SPLAT_BODIES,
-                slots,
+                threads_first,
                 args,
                 b,
-                64 * u64::from(slots),
+                64 * u64::from(threads_first),
             ));
             let large = (slots * LARGE_LANES).min(LARGE_THREADS);
             let mut b = Binder::new();
@@ -467,6 +494,8 @@ impl Pipeline<'_> {
                 image: image.unwrap_or_else(|| b.view(&canvas.pixels.image)),
                 shown: b.view(&canvas.data.shown),
                 radar: made(canvas.data.radar.convert(&mut b)),
+                camera: b.view(&canvas.data.camera),
+                large_count: b.view(&canvas.data.large_count),
                 stride: radar::stride(slots),
                 reserved: 0,
             };
@@ -538,7 +567,7 @@ impl Pipeline<'_> {
             )));
         }
         self.ready(lens, looks)?;
-        let mut ops = self.first_ops(lens);
+        let mut ops = self.vertex_camera_ops(lens);
         let (canvas, world) = (self.canvas.as_ref().expect("made ready"), &self.world);
         // SAFETY (both binders): the views go into the op made with each. (Both ops): the
         // world's and the canvas's buffers; the caller vouches for `vertices`, which holds

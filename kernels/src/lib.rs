@@ -19,6 +19,7 @@
 pub mod data;
 pub mod exec;
 pub mod game;
+pub mod math;
 pub mod primitives;
 pub mod registry;
 pub mod render;

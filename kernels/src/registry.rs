@@ -148,14 +148,18 @@ kernels! {
     COLLIDE_THINK_INTEGRATE_SWEPT = collide_think_integrate_swept(ai::BodyStepArgs) => ai::collide_think_integrate_swept, waits;
     /// Sets up every slot's generator from its seed and the parameter table.
     SEED_STREAMS = seed_streams(streams::SeedArgs) => streams::seed_streams;
-    /// Points the camera: the frame's view from the ship's position (one thread).
+    /// Points the camera: the frame's view from the ship's position (one thread), for the
+    /// GL renderer's vertices and for large worlds' kernel frames.
     CAMERA = camera(camera::CameraArgs) => camera::camera;
-    /// Counts sampled bodies per radar pixel (atomic adds and maxima: order-free).
+    /// Counts sampled bodies per radar pixel (atomic adds and maxima: order-free), for the
+    /// GL renderer's radar.
     RADAR_BODIES = radar_bodies(radar::RadarArgs) => radar::radar_bodies;
     /// Writes the radar's pixels into an image of their own, and clears its counts.
     RADAR_IMAGE = radar_image(radar::RadarImageArgs) => radar::radar_image;
-    /// Draws every live body's shape into the pixel keys (atomic maximum: order-free).
-    SPLAT_BODIES = splat_bodies(render::SplatArgs) => render::splat_bodies;
+    /// Works the frame's camera out (in every thread, in worlds of up to
+    /// `render::FOLD_CAMERA_SLOTS` slots), counts the radar's samples, and draws every live
+    /// body's shape into the pixel keys (atomic maximum: order-free).
+    SPLAT_BODIES = splat_bodies(render::FirstSplatArgs) => render::splat_bodies;
     /// Draws the bodies too large for one thread, 128 threads each (after splat_bodies).
     SPLAT_LARGE = splat_large(render::SplatArgs) => render::splat_large;
     /// Draws every shown particle's disc into the pixel keys, under the bodies (atomic

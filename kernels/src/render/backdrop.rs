@@ -51,8 +51,8 @@ fn mark(origin: f32, scale: f32, field: f32, lines: bool, p: f32) -> Mark {
     }
     // The multiple nearest the pixel's centre: lines are far apart, so no rounding changes
     // which one; the pixel is on it if the multiple falls in its extent.
-    let k = libm::floorf((origin + centre / scale) / SPACING + 0.5);
-    if lines && libm::floorf((k * SPACING - origin) * scale) == p {
+    let k = crate::math::floor((origin + centre / scale) / SPACING + 0.5);
+    if lines && crate::math::floor((k * SPACING - origin) * scale) == p {
         Mark::Line
     } else {
         Mark::Clear

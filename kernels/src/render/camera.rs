@@ -1,6 +1,8 @@
-//! The camera: which part of the field a frame shows, decided on the device by a
-//! one-thread kernel ([`camera`]) that reads where the ship is, so that the host never
-//! waits for the GPU to know it.
+//! The camera: which part of the field a frame shows, decided on the device from where
+//! the ship is ([`frame`]), so that the host never waits for the GPU to know it: by a
+//! one-thread kernel ([`camera`]), or, in the kernel renderer's frames of worlds up to
+//! `FOLD_CAMERA_SLOTS` slots (see [`super`]), by every thread of its first launch for
+//! itself.
 //!
 //! The maths is in plain functions ([`target`], [`approach`], [`clamp_centre`],
 //! [`advance`]) that the host calls too: its view of a frame (to map a cursor to the
@@ -163,7 +165,8 @@ kernel_args! {
         /// The last step's input (the ship's aim), one element; empty in a world without a
         /// game.
         pub input: DevSlice<Input>,
-        /// The camera between frames (one element): read and advanced.
+        /// The camera before the frame (element 0, read and advanced) and after it (element
+        /// 1, written too).
         pub state: DevSlice<CameraState>,
         /// Output: what this frame shows (one element), for the drawing kernels.
         pub shown: DevSlice<Shown>,
@@ -173,18 +176,35 @@ kernel_args! {
 }
 
 /// Thread 0 advances the camera towards the ship (see [`advance`]) and writes the frame's
-/// [`Shown`].
+/// [`Shown`]. The state's element 0 is the camera before the frame, element 1 after it
+/// (see `FirstSplatArgs::camera` in [`super`]): alone in its launch, it writes both.
 #[inline(always)]
 pub fn camera(t: Thread, args: &CameraArgs) {
     if t.global() != 0 {
         return;
     }
-    let (b, lens) = (&args.bodies, &args.lens);
-    let ship = (lens.ship < b.slots() && b.is_alive(lens.ship))
-        .then(|| (b.pos.get(lens.ship), b.kind.get(lens.ship)));
-    let (state, view) = advance(lens, ship.map(|(pos, _)| pos), args.state.get(0));
+    let (state, shown) = frame(&args.bodies, &args.input, &args.lens, args.state.get(0));
     args.state.set(0, state);
-    args.shown.set(0, shown(lens, view, ship, aim(&args.input)));
+    args.state.set(1, state);
+    args.shown.set(0, shown);
+}
+
+/// The camera after one frame of `lens`, advanced from `state` towards the ship in `bodies`
+/// (see [`advance`]), and what the frame shows, the ship aimed as the last step's `input`
+/// says (one element; empty without a game). The [`camera`] kernel's one thread works it
+/// out; each thread of `splat_bodies` works it out for itself, to the same bits, so that a
+/// frame drawn by the kernel renderer needs no launch of its own for it.
+#[inline(always)]
+pub fn frame(
+    bodies: &Bodies,
+    input: &DevSlice<Input>,
+    lens: &Lens,
+    state: CameraState,
+) -> (CameraState, Shown) {
+    let ship = (lens.ship < bodies.slots() && bodies.is_alive(lens.ship))
+        .then(|| (bodies.pos.get(lens.ship), bodies.kind.get(lens.ship)));
+    let (state, view) = advance(lens, ship.map(|(pos, _)| pos), state);
+    (state, shown(lens, view, ship, aim(input)))
 }
 
 /// The ship's aim from the last step's input (`+x` without a game).

@@ -2,28 +2,31 @@
 //! source on the GPU and on the CPU emulation, so a frame is the same pixels on both (and
 //! can be hashed like a state).
 //!
-//! Five launches (six with explosions) and a clear, barrier-free:
-//! 1. [`camera::camera`] (one thread): where the view is, from the ship's position and the
-//!    camera's state between frames, written as the frame's [`Shown`] for the others.
-//! 2. [`radar::radar_bodies`]: bodies counted per radar pixel (atomic adds and maxima).
-//! 3. [`splat_bodies`]: each body covers the pixels of its silhouette ([`shapes`]) with a
-//!    key that says who is drawn there (layer, kind, shade). Overlaps are settled by an
-//!    atomic maximum, which does not depend on the order threads arrive in: the highest
-//!    layer wins, then the highest kind, then the higher shade. A body whose box covers more
-//!    than [`LARGE_PIXELS`] pixels of the image is listed instead and drawn by
-//!    [`splat_large`], [`LARGE_LANES`] threads to a body over the pixels of its box: a GPU
-//!    thread's loop is bound by latency, so one thread walking the ship's halo close up set
-//!    the whole frame's time (about 0.6 ms at 1080p on an H200).
+//! Three launches (four with explosions), barrier-free:
+//! 1. [`splat_bodies`]: each thread first works out where the view is, from the ship's
+//!    position and the camera's state between frames ([`camera::frame`]; thread 0 writes
+//!    it as the frame's [`Shown`] for the launches after; a world of more than
+//!    [`FOLD_CAMERA_SLOTS`] slots runs [`camera::camera`] first instead, as a launch of its
+//!    own, where so many threads would cost more), and counts its body on the radar
+//!    ([`radar::count`]: atomic adds and maxima). Then each body covers the pixels of its
+//!    silhouette ([`shapes`]) with a key that says who is drawn there (layer, kind, shade).
+//!    Overlaps are settled by an atomic maximum, which does not depend on the order threads
+//!    arrive in: the highest layer wins, then the highest kind, then the higher shade.
+//! 2. [`splat_large`]: a body whose box covers more than [`LARGE_PIXELS`] pixels of the
+//!    image was listed instead, and is drawn here by [`LARGE_LANES`] threads over the
+//!    pixels of its box: a GPU thread's loop is bound by latency, so one thread walking the
+//!    ship's halo close up set the whole frame's time (about 0.6 ms at 1080p on an H200).
 //!    With explosions, [`particles::splat_particles`] then draws each shown particle's disc
 //!    the same way, in the lowest layer.
-//! 4. [`resolve_pixels`]: each pixel turns its key into a colour from the kinds' looks (the
+//! 3. [`resolve_pixels`]: each pixel turns its key into a colour from the kinds' looks (the
 //!    backdrop's, [`backdrop::on_grid`], or the background where nothing was drawn), or the
 //!    radar's colour in its corner, and clears the key for the next frame.
 //!
 //! The GL renderer (the paper's way) draws from [`BodyVertex`]es instead, which
 //! [`write_vertices`] writes straight into the vertex buffer GL draws from, in image
-//! coordinates of the same view; its shaders follow the same rules (silhouettes, shades,
-//! layers), so both renderers draw the same picture.
+//! coordinates of the same view (after [`camera::camera`] and [`radar::radar_bodies`], the
+//! same work as the first launch's above, as launches of their own); its shaders follow the
+//! same rules (silhouettes, shades, layers), so both renderers draw the same picture.
 //!
 //! Key format: layer (8 bits), kind (16 bits), a drawn bit, shade (7 bits). Shades:
 //! [`BODY`], [`NOSE`], [`HURT`], [`HALO`], and [`PARTICLE`]`..`[`PARTICLE`]` + 16` for
@@ -37,10 +40,12 @@ pub mod shapes;
 
 use glam::Vec2;
 
+use crate::game::control::Input;
 use crate::sim::kinds::SHAPE_RECT;
 use crate::sim::{Bodies, KindInfo};
 use crate::warp::WARP;
 use crate::{DevSlice, Thread, kernel_args};
+use camera::{CameraState, Lens};
 use radar::{RadarBox, RadarCounts};
 use shapes::{DISC, RECT};
 
@@ -353,6 +358,38 @@ kernel_args! {
     }
 }
 
+kernel_args! {
+    /// Arguments of [`splat_bodies`]: [`splat_large`]'s, and the camera's and the radar's,
+    /// whose work it does first.
+    pub struct FirstSplatArgs {
+        /// What [`splat_large`] takes too ([`SplatArgs::shown`] written here, by thread 0).
+        pub splat: SplatArgs,
+        /// The last step's input (the ship's aim), one element; empty in a world without a
+        /// game.
+        pub input: DevSlice<Input>,
+        /// The camera: element 0 between frames (read), element 1 after this frame
+        /// (written by thread 0; [`resolve_pixels`] moves it to element 0, once no thread
+        /// of this frame reads it).
+        pub camera: DevSlice<CameraState>,
+        /// The radar's counts (see [`radar::count`]).
+        pub radar: RadarCounts,
+        /// The host's request.
+        pub lens: Lens,
+        /// The radar counts every `stride`-th slot (see [`radar::stride`]).
+        pub stride: u32,
+        /// Nonzero: the camera ran as a launch of its own before this one
+        /// ([`camera::camera`], for a world of more than [`FOLD_CAMERA_SLOTS`] slots), and
+        /// [`SplatArgs::shown`] holds this frame's view.
+        pub camera_ready: u32,
+    }
+}
+
+/// The most slots a world may have for its frames' first launch to work the camera out in
+/// every thread rather than after a launch of its own: some 500 instructions a warp, a
+/// microsecond or two at 131,072 threads on an H200, where the launch costs more; at 16
+/// million slots they cost twice a followed frame's time.
+pub const FOLD_CAMERA_SLOTS: u32 = 1 << 17;
+
 /// A sprite whose box covers more pixels of the image than this is drawn by
 /// [`splat_large`], [`LARGE_LANES`] threads a body, instead of by its own thread. Pixels,
 /// not rows: a large body cut by the image's top or bottom edge spans few rows but may
@@ -432,24 +469,44 @@ fn plot(args: &SplatArgs, view: &Framing, body: &Drawn, first: u32, step: u32) {
 /// Thread `i` draws slot `i`'s body, if one lives there: every pixel whose centre lies in its
 /// silhouette (and at least the pixel under its centre), the facing side in its nose colour.
 ///
+/// Every thread first works out the frame's camera for itself ([`camera::frame`]: the same
+/// bits in each; in a world of up to [`FOLD_CAMERA_SLOTS`] slots), thread 0 writing it and
+/// the frame's [`Shown`] for the launches after, and counts its slot on the radar when the
+/// radar samples it: the frame needs no launch of its own for either.
+///
 /// A GPU thread's loop is bound by latency, so the frame takes as long as its longest
 /// thread: a body covering more than [`LARGE_PIXELS`] pixels (close up, or the ship's
-/// halo) is not drawn here but listed for [`splat_large`]. The list's order depends on which thread
-/// arrives first; the picture does not, since every pixel keeps the maximum of its keys.
+/// halo) is not drawn here but listed for [`splat_large`]. The list's order depends on which
+/// thread arrives first; the picture does not, since every pixel keeps the maximum of its
+/// keys.
 #[inline(always)]
-pub fn splat_bodies(t: Thread, args: &SplatArgs) {
-    let shown = args.shown.get(0);
+pub fn splat_bodies(t: Thread, args: &FirstSplatArgs) {
+    let splat = &args.splat;
     let slot = t.global();
-    let Some(body) = drawn(args, &shown, slot) else {
+    let shown = if args.camera_ready != 0 {
+        splat.shown.get(0)
+    } else {
+        let (next, shown) =
+            camera::frame(&splat.bodies, &args.input, &args.lens, args.camera.get(0));
+        if slot == 0 {
+            args.camera.set(1, next);
+            splat.shown.set(0, shown);
+        }
+        shown
+    };
+    if slot.is_multiple_of(args.stride) {
+        radar::count(&splat.bodies, &splat.looks, &shown, &args.radar, slot);
+    }
+    let Some(body) = drawn(splat, &shown, slot) else {
         return;
     };
     let covered = Span::of(&shown.view, body.sprite.centre, body.reach).map_or(0, |s| s.pixels());
     if covered > LARGE_PIXELS {
-        let at = args.large_count.atomic_add(0, 1);
-        args.large.set(at, slot);
+        let at = splat.large_count.atomic_add(0, 1);
+        splat.large.set(at, slot);
         return;
     }
-    plot(args, &shown.view, &body, 0, 1);
+    plot(splat, &shown.view, &body, 0, 1);
 }
 
 /// The bodies [`splat_bodies`] listed as large, each drawn by [`LARGE_LANES`] threads,
@@ -567,6 +624,11 @@ kernel_args! {
         pub shown: DevSlice<Shown>,
         /// The radar's counts (cleared on the way).
         pub radar: RadarCounts,
+        /// The camera: element 1, this frame's, becomes element 0 (see
+        /// [`FirstSplatArgs::camera`]).
+        pub camera: DevSlice<CameraState>,
+        /// How many bodies [`splat_bodies`] listed as large: cleared for the next frame.
+        pub large_count: DevSlice<u32>,
         /// The stride the radar was sampled with.
         pub stride: u32,
         /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
@@ -587,9 +649,14 @@ pub fn resolve_threads(pixels: u32) -> u32 {
 }
 
 /// Each thread colours its pixels (see [`RESOLVED_A_THREAD`]) from their keys, or from the
-/// radar where it lies, and clears the keys.
+/// radar where it lies, and clears the keys; thread 0 readies the camera and the list of
+/// large bodies for the next frame.
 #[inline(always)]
 pub fn resolve_pixels(t: Thread, args: &ResolveArgs) {
+    if t.global() == 0 {
+        args.camera.set(0, args.camera.get(1));
+        args.large_count.set(0, 0);
+    }
     let pixels = args.image.len();
     let (warp, lane) = (t.global() / WARP, t.global() % WARP);
     let first = warp as u64 * u64::from(WARP * RESOLVED_A_THREAD) + u64::from(lane);

@@ -146,26 +146,31 @@ kernel_args! {
 /// on the radar ([`Look::radar`]) and it is not the ship.
 #[inline(always)]
 pub fn radar_bodies(t: Thread, args: &RadarArgs) {
-    let b = &args.bodies;
-    let shown = args.shown.get(0);
     let slot = t.global() as u64 * args.stride as u64;
-    if shown.radar.width == 0 || slot >= b.slots() as u64 {
-        return;
+    if slot < args.bodies.slots() as u64 {
+        let shown = args.shown.get(0);
+        count(&args.bodies, &args.looks, &shown, &args.radar, slot as u32);
     }
-    let slot = slot as u32;
-    if !b.is_alive(slot) || slot == shown.ship {
+}
+
+/// Counts the body in `slot`, if one lives there, in the radar pixel it lies in, and keeps
+/// the highest layer's kind there (nothing without a radar, for the ship, or for a kind the
+/// radar does not show).
+#[inline(always)]
+pub fn count(b: &Bodies, looks: &DevSlice<Look>, shown: &Shown, radar: &RadarCounts, slot: u32) {
+    if shown.radar.width == 0 || slot >= b.slots() || !b.is_alive(slot) || slot == shown.ship {
         return;
     }
     let kind = b.kind.get(slot);
-    let look = args.looks.get(kind);
+    let look = looks.get(kind);
     if look.radar == 0 {
         return;
     }
     let inner = shown.radar.inner();
     let (x, y) = cell(b.pos.get(slot), shown.field, inner);
     let pixel = y as u32 * inner.0 + x as u32;
-    args.radar.counts.atomic_add(pixel, 1);
-    args.radar.top.atomic_max(pixel, key(look.layer, kind, 0));
+    radar.counts.atomic_add(pixel, 1);
+    radar.top.atomic_max(pixel, key(look.layer, kind, 0));
 }
 
 /// `colour` at brightness `level` from 1 to 8 (5 twelfths of full at 1: a lone body shows).

@@ -240,7 +240,7 @@ fn wrap(x: f32, period: f32) -> f32 {
     let x = if x >= 0.0 && x < period {
         x
     } else {
-        x - period * libm::floorf(x / period)
+        x - period * crate::math::floor(x / period)
     };
     // The subtraction can round up to `period` itself.
     if x >= 0.0 && x < period { x } else { 0.0 }
