@@ -205,8 +205,9 @@ fn a_directory_that_cannot_be_made_is_an_error() {
     std::fs::write(&blocker, "").unwrap();
     let path = file_in(&blocker.join("sub"));
     let (mut scores, warning) = HighScores::load(&path);
-    // Reading through a file is an error of its own (not a missing file).
-    assert!(warning.is_some());
+    // Reading through a file is an error of its own (not a missing file) where the system
+    // tells them apart: Unix says "not a directory", Windows "path not found".
+    assert!(warning.is_some() || cfg!(not(unix)));
     scores.record("paper", 1, None);
     let error = scores.save().unwrap_err();
     assert!(

@@ -163,16 +163,28 @@ xdotool keyup w keyup Up key Escape";
 }
 
 #[test]
+#[cfg_attr(
+    not(unix),
+    ignore = "drives the window with Linux tools (xvfb-run, xdotool): scripts/windows-check plays a Wine window instead"
+)]
 fn the_kernel_renderer_window_plays() {
     keys_move_the_ship_and_the_game_replays("kernel");
 }
 
 #[test]
+#[cfg_attr(
+    not(unix),
+    ignore = "drives the window with Linux tools (xvfb-run, xdotool): scripts/windows-check plays a Wine window instead"
+)]
 fn the_interop_renderer_window_plays() {
     keys_move_the_ship_and_the_game_replays("interop");
 }
 
 #[test]
+#[cfg_attr(
+    not(unix),
+    ignore = "drives the window with Linux tools (xvfb-run, xdotool): scripts/windows-check plays a Wine window instead"
+)]
 fn the_mouse_aims_at_the_cursor_and_fires() {
     let _one = ONE_WINDOW.lock().unwrap_or_else(|e| e.into_inner());
     let dir = tempfile::tempdir().unwrap();
@@ -225,6 +237,10 @@ xdotool key Escape";
 }
 
 #[test]
+#[cfg_attr(
+    not(unix),
+    ignore = "drives the window with Linux tools (xvfb-run, xdotool): scripts/windows-check plays a Wine window instead"
+)]
 fn the_start_screen_holds_the_game_until_a_key() {
     let _one = ONE_WINDOW.lock().unwrap_or_else(|e| e.into_inner());
     let dir = tempfile::tempdir().unwrap();
@@ -263,6 +279,10 @@ wait "$pid"
 }
 
 #[test]
+#[cfg_attr(
+    not(unix),
+    ignore = "drives the window with Linux tools (xvfb-run, xdotool): scripts/windows-check plays a Wine window instead"
+)]
 fn a_replay_plays_in_the_window_to_its_checked_end() {
     let _one = ONE_WINDOW.lock().unwrap_or_else(|e| e.into_inner());
     let dir = tempfile::tempdir().unwrap();
@@ -299,6 +319,10 @@ fn a_replay_plays_in_the_window_to_its_checked_end() {
 }
 
 #[test]
+#[cfg_attr(
+    not(unix),
+    ignore = "drives the window with Linux tools (xvfb-run, xdotool): scripts/windows-check plays a Wine window instead"
+)]
 fn leaving_the_window_pauses_the_game_until_p() {
     let _one = ONE_WINDOW.lock().unwrap_or_else(|e| e.into_inner());
     let dir = tempfile::tempdir().unwrap();

@@ -682,8 +682,11 @@ fn only_regular_files_of_a_bounded_size_are_read() {
         e.to_string(),
         format!("{folder}: cannot read: it is a folder (allowed a regular file)")
     );
-    let e = Scene::load("/dev/null").unwrap_err();
-    assert!(e.problem.contains("it is a device"), "{e}");
+    // Devices as files in a folder are Unix's (`/dev`).
+    if cfg!(unix) {
+        let e = Scene::load("/dev/null").unwrap_err();
+        assert!(e.problem.contains("it is a device"), "{e}");
+    }
     // A named pipe is refused without being opened: opening it would wait for a writer.
     let fifo = dir.path().join("pipe.toml");
     let made = std::process::Command::new("mkfifo").arg(&fifo).status();

@@ -164,11 +164,19 @@ fn survives(events: &str, end: &str) {
 }
 
 #[test]
+#[cfg_attr(
+    not(unix),
+    ignore = "drives the window with Linux tools (xvfb-run, xdotool): scripts/windows-check plays a Wine window instead"
+)]
 fn a_window_treated_roughly_and_closed_with_esc_keeps_its_game() {
     survives(ROUGH, "escape");
 }
 
 #[test]
+#[cfg_attr(
+    not(unix),
+    ignore = "drives the window with Linux tools (xvfb-run, xdotool): scripts/windows-check plays a Wine window instead"
+)]
 fn a_window_destroyed_by_the_display_keeps_its_game() {
     survives(ROUGH, "destroy");
 }
@@ -176,6 +184,10 @@ fn a_window_destroyed_by_the_display_keeps_its_game() {
 /// Random window events, from `GPUWARS_WINDOW_SEED` (a new seed each run otherwise, printed
 /// to repeat a failure).
 #[test]
+#[cfg_attr(
+    not(unix),
+    ignore = "drives the window with Linux tools (xvfb-run, xdotool): scripts/windows-check plays a Wine window instead"
+)]
 fn random_window_events_keep_the_game() {
     let seed = std::env::var("GPUWARS_WINDOW_SEED")
         .ok()
