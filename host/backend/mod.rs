@@ -480,9 +480,10 @@ fn check_len<T>(len: usize) -> Result<(), Error> {
 
 /// The host memory this process can still have, and the host's total: what `/proc/meminfo`
 /// says is available, less where this process's address-space or data limit (`ulimit -v`,
-/// `ulimit -d`) leaves less room than that. `None` where the system has no `/proc` (Windows,
-/// macOS): nothing is checked before the allocations, and a shortage is then the
-/// allocations' own error in words (the host buffers reserve with `try_reserve_exact`).
+/// `ulimit -d`) leaves less room than that. `None` where the system has no `/proc` (macOS):
+/// nothing is checked before the allocations, and a shortage is then the allocations' own
+/// error in words (the host buffers reserve with `try_reserve_exact`).
+#[cfg(not(windows))]
 fn host_memory() -> Option<(u64, u64)> {
     let kib_field = |text: &str, name: &str| -> Option<u64> {
         let line = text.lines().find(|l| l.starts_with(name))?;
@@ -516,4 +517,22 @@ fn host_memory() -> Option<(u64, u64)> {
     .flatten()
     .fold(available, u64::min);
     Some((free, total))
+}
+
+/// The host memory this process can still have, and the host's total, as Windows counts
+/// them (`GlobalMemoryStatusEx`): the physical memory available, or less where the
+/// process's own address space has less room left.
+#[cfg(windows)]
+fn host_memory() -> Option<(u64, u64)> {
+    use windows_sys::Win32::System::SystemInformation::{GlobalMemoryStatusEx, MEMORYSTATUSEX};
+    let mut status = MEMORYSTATUSEX {
+        dwLength: std::mem::size_of::<MEMORYSTATUSEX>() as u32,
+        ..Default::default()
+    };
+    // SAFETY: `status` is a MEMORYSTATUSEX whose length field says so, as the call asks.
+    if unsafe { GlobalMemoryStatusEx(&mut status) } == 0 {
+        return None;
+    }
+    let free = status.ullAvailPhys.min(status.ullAvailVirtual);
+    Some((free, status.ullTotalPhys))
 }

@@ -73,7 +73,10 @@ impl Headless {
     /// `nvidia_first` (so that CUDA can share buffers with it).
     pub fn new(nvidia_first: bool) -> Result<Self, Error> {
         let mut devices: Vec<_> = egl::device::Device::query_devices()
-            .map_err(gl_error("listing the EGL devices (is libEGL installed?)"))?
+            .map_err(gl_error(
+                "listing the EGL devices (headless GL needs libEGL, which Windows lacks; \
+                 `--render kernel` draws without GL)",
+            ))?
             .collect();
         devices.sort_by_key(|d| d.extensions().contains(NVIDIA_DEVICE) != nvidia_first);
         let mut tried = Vec::new();

@@ -167,11 +167,13 @@ impl PlayReport {
     }
 }
 
-/// Whether a display to open a window on is there (X11 or Wayland).
+/// Whether a display to open a window on is there: X11 or Wayland on Unix; on Windows
+/// always (its windows need no display server to be named).
 pub fn display_present() -> bool {
-    ["DISPLAY", "WAYLAND_DISPLAY"]
-        .iter()
-        .any(|v| std::env::var_os(v).is_some_and(|d| !d.is_empty()))
+    cfg!(windows)
+        || ["DISPLAY", "WAYLAND_DISPLAY"]
+            .iter()
+            .any(|v| std::env::var_os(v).is_some_and(|d| !d.is_empty()))
 }
 
 /// Plays `scene` in a window until Esc or the window is closed; returns the last game's
