@@ -396,9 +396,7 @@ impl Device {
                 free,
                 place: match self.kind() {
                     BackendKind::Cuda => "device",
-                    BackendKind::Cpu => {
-                        "host (what the machine has available, within this process's ulimit -v and -d)"
-                    }
+                    BackendKind::Cpu => HOST_MEMORY,
                 },
             }),
             _ => Ok(()),
@@ -520,8 +518,9 @@ fn host_memory() -> Option<(u64, u64)> {
 }
 
 /// The host memory this process can still have, and the host's total, as Windows counts
-/// them (`GlobalMemoryStatusEx`): the physical memory available, or less where the
-/// process's own address space has less room left.
+/// them (`GlobalMemoryStatusEx`): the physical memory available. `None` where the call
+/// fails or leaves no memory available at all (seen once under Wine): nothing is then
+/// checked before the allocations, which fail in words themselves.
 #[cfg(windows)]
 fn host_memory() -> Option<(u64, u64)> {
     use windows_sys::Win32::System::SystemInformation::{GlobalMemoryStatusEx, MEMORYSTATUSEX};
@@ -530,9 +529,14 @@ fn host_memory() -> Option<(u64, u64)> {
         ..Default::default()
     };
     // SAFETY: `status` is a MEMORYSTATUSEX whose length field says so, as the call asks.
-    if unsafe { GlobalMemoryStatusEx(&mut status) } == 0 {
-        return None;
-    }
-    let free = status.ullAvailPhys.min(status.ullAvailVirtual);
-    Some((free, status.ullTotalPhys))
+    let answered = unsafe { GlobalMemoryStatusEx(&mut status) } != 0;
+    (answered && status.ullAvailPhys > 0).then_some((status.ullAvailPhys, status.ullTotalPhys))
 }
+
+/// Where [`host_memory`]'s figure comes from, for a shortage's error.
+#[cfg(windows)]
+const HOST_MEMORY: &str = "host (the physical memory Windows says is available)";
+/// Where [`host_memory`]'s figure comes from, for a shortage's error.
+#[cfg(not(windows))]
+const HOST_MEMORY: &str =
+    "host (what the machine has available, within this process's ulimit -v and -d)";
