@@ -222,11 +222,12 @@ fn unavailable(what: &str) -> impl FnOnce(DriverError) -> Error + '_ {
 
 impl Gpu {
     pub(super) fn open() -> Result<Self, Error> {
-        // SAFETY: only tries to dlopen libcuda.
+        // SAFETY: only tries to load the driver's library.
         if !unsafe { sys::is_culib_present() } {
-            return Err(Error::CudaUnavailable(
-                "the NVIDIA driver library (libcuda) was not found".into(),
-            ));
+            return Err(Error::CudaUnavailable(format!(
+                "the NVIDIA driver library ({}) was not found",
+                super::CUDA_LIBRARY
+            )));
         }
         let count = CudaContext::device_count().map_err(unavailable("CUDA initialisation"))?;
         if count < 1 {

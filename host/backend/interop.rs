@@ -20,13 +20,6 @@ const WRITE_DISCARD: c_uint = 2;
 type RegisterBuffer =
     unsafe extern "C" fn(*mut sys::CUgraphicsResource, c_uint, c_uint) -> sys::CUresult;
 
-/// The NVIDIA driver's library, by the name each OS gives it.
-#[cfg(windows)]
-const CUDA_LIBRARY: &str = "nvcuda.dll";
-/// The NVIDIA driver's library, by the name each OS gives it.
-#[cfg(not(windows))]
-const CUDA_LIBRARY: &str = "libcuda.so.1";
-
 /// `cuGraphicsGLRegisterBuffer`, loaded once (with the library that holds it, kept open).
 fn register_buffer() -> Result<RegisterBuffer, Error> {
     static LOADED: OnceLock<Result<(libloading::Library, RegisterBuffer), String>> =
@@ -35,7 +28,8 @@ fn register_buffer() -> Result<RegisterBuffer, Error> {
         // SAFETY: the NVIDIA driver library, already loaded by cudarc: its initialisers have
         // run, and the symbol's type is the one `cudaGL.h` declares.
         unsafe {
-            let library = libloading::Library::new(CUDA_LIBRARY).map_err(|e| e.to_string())?;
+            let library =
+                libloading::Library::new(super::CUDA_LIBRARY).map_err(|e| e.to_string())?;
             let symbol = *library
                 .get::<RegisterBuffer>(b"cuGraphicsGLRegisterBuffer\0")
                 .map_err(|e| e.to_string())?;

@@ -7,6 +7,13 @@
 
 pub mod floor;
 
+/// The NVIDIA driver's library, by the name each OS gives it.
+#[cfg(windows)]
+const CUDA_LIBRARY: &str = "nvcuda.dll";
+/// The NVIDIA driver's library, by the name each OS gives it.
+#[cfg(not(windows))]
+const CUDA_LIBRARY: &str = "libcuda.so.1";
+
 mod buffer;
 mod cpu;
 mod cuda;
