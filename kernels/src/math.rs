@@ -1,8 +1,8 @@
 //! Floating-point functions whose results are exact, so that each target may compute them
 //! its own fastest way and still give the same bits.
 
-/// The largest integer not above `x` (NaN, infinities and zeros as they are, `-0.0` for a
-/// negative fraction's ceiling aside: exactly IEEE 754's `roundToIntegralTowardNegative`).
+/// The largest integer not above `x`: IEEE 754's `roundToIntegralTowardNegative` (NaN,
+/// infinities and signed zeros as they are).
 /// On the GPU it is one instruction (`cvt.rmi.f32.f32`), where `libm::floorf`'s bit
 /// manipulation took some twenty; natively, `libm::floorf`.
 #[inline(always)]
