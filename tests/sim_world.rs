@@ -274,10 +274,13 @@ fn a_world_takes_the_bytes_its_memory_check_counts() {
 
 /// More than the device has free is refused with the bytes needed and the bytes free.
 fn a_world_too_large_for_the_device_is_refused(device: &Device) {
-    let (free, _) = device
-        .memory()
-        .unwrap()
-        .expect("this system reports its free memory");
+    let Some((free, _)) = device.memory().unwrap() else {
+        // Wine in a container can report no available memory at all: then nothing is
+        // checked before the allocations, as `host_memory` documents.
+        println!("the free-memory check: skipped: this system does not report its free memory");
+        device.check_fits("a huge world", u64::MAX).unwrap();
+        return;
+    };
     // Twice what was free: the CPU's free memory moves with the other processes between
     // the two reads, by far less than that.
     let huge = free * 2 + 1;
