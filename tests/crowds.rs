@@ -1,7 +1,8 @@
-//! Crowds and the sight budget: a look examines at most `⌈sight_budget / 3⌉` bodies of a
-//! kind in each row of its block, taken evenly from a crowd. Within the budget a look is the plain one, bit for bit; beyond
-//! it the game stays deterministic on every schedule, thread count and backend, and a group
-//! still gathers from what it samples.
+//! Crowds and the budgets: a look examines at most `⌈sight_budget / 3⌉` bodies of a kind
+//! in each row of its block, and a body's contacts are sought among at most
+//! `⌈contact_budget / 3⌉`, taken evenly from a crowd. Within the budget a look is the plain
+//! one, bit for bit; beyond it the game stays deterministic on every schedule, thread count
+//! and backend, and a group still gathers from what it samples.
 
 mod common;
 
@@ -24,6 +25,20 @@ fn one_spot_grouping() -> Scene {
     let mut scene = one_spot();
     let texel = scene.world.kind_index("texel").unwrap();
     scene.game.behaviours[texel].as_mut().unwrap().vision = 12.0;
+    scene
+}
+
+/// The stress scene with every enemy kind colliding with the three: a pile of 2,560 bodies
+/// that push each other, under a contact budget of 384 (128 of a kind a row), which samples
+/// their contacts.
+fn pile() -> Scene {
+    let mut scene = one_spot();
+    scene.world.physics.contact_budget = 384;
+    let enemies = ["polygon", "texel", "kernel"].map(String::from);
+    for name in &enemies {
+        let k = scene.world.kind_index(name).unwrap();
+        scene.world.kinds[k].collides_with = enemies.to_vec();
+    }
     scene
 }
 
@@ -56,10 +71,32 @@ fn a_crowd_on_one_spot_is_the_same_game_on_every_schedule_and_thread_count() {
     }
 }
 
-/// On a GPU the machines' looks are shared by teams of lanes, each lane taking its share of
-/// the sample: the same game as the CPU's one thread a body, crowd or not.
+#[test]
+fn a_pile_on_one_spot_is_the_same_game_on_every_schedule_and_thread_count() {
+    let scene = pile();
+    let reference = hash_after(common::cpu(), &scene, 1, 20);
+    // The contact budget is at work: without it, another game.
+    let mut unbudgeted = scene.clone();
+    unbudgeted.world.physics.contact_budget = 0;
+    assert_ne!(hash_after(common::cpu(), &unbudgeted, 1, 20), reference);
+    for threads in [1, 3] {
+        let device = Device::cpu(Some(threads), "tests").unwrap();
+        assert_eq!(
+            hash_after(&device, &scene, 1, 20),
+            reference,
+            "{threads} threads"
+        );
+    }
+    for (label, hash) in shuffled_hashes(&scene, 20) {
+        assert_eq!(hash, reference, "{label}");
+    }
+}
+
+/// On a GPU the machines' looks and the narrow phase are shared by teams of lanes, each lane
+/// taking its share of the sample: the same game as the CPU's one thread a body, crowd or
+/// pile or not.
 fn the_crowd_is_the_cpus_game(device: &Device) {
-    for scene in [one_spot(), one_spot_grouping()] {
+    for scene in [one_spot(), one_spot_grouping(), pile()] {
         let reference = hash_after(common::cpu(), &scene, 1, 60);
         for lanes in [
             Lanes::Auto,

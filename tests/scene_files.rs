@@ -769,7 +769,7 @@ fn the_physics_table_reads_every_choice() {
     let text = with_physics(
         "integrator = \"verlet\"\nsubsteps = 4\nrelaxation = 0.5\naveraged = true\n\
          cell_scale = 2\nneighbour_cap = 16\nvision_scale = 0.75\nsight_budget = 24\n\
-         renumber_every = 4",
+         contact_budget = 48\nrenumber_every = 4",
     );
     let scene = Scene::from_toml(&text, "paper.toml").unwrap();
     assert_eq!(
@@ -783,6 +783,7 @@ fn the_physics_table_reads_every_choice() {
             neighbour_cap: 16,
             vision_scale: 0.75,
             sight_budget: 24,
+            contact_budget: 48,
             renumber_every: Some(4),
             trace_paths: false,
         }
@@ -796,7 +797,7 @@ fn the_physics_table_reads_every_choice() {
 
 #[test]
 fn bad_physics_choices_name_the_key_and_the_allowed_values() {
-    let cases: [(&str, &str, &[&str]); 10] = [
+    let cases: [(&str, &str, &[&str]); 11] = [
         ("substeps = 0", "physics.substeps", &["from 1 to 64"]),
         ("substeps = 65", "physics.substeps", &["from 1 to 64"]),
         ("substeps = 2.0", "physics.substeps", &["whole number"]),
@@ -811,6 +812,11 @@ fn bad_physics_choices_name_the_key_and_the_allowed_values() {
             "sight_budget = 1.5",
             "physics.sight_budget",
             &["whole number"],
+        ),
+        (
+            "contact_budget = 16777217",
+            "physics.contact_budget",
+            &["from 0 to 16,777,216"],
         ),
         (
             "integrator = \"rk4\"",

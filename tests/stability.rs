@@ -689,6 +689,17 @@ fn a_million_bodies_under_swept_shots_are_counted_exactly(device: &Device) {
 /// 4,096 bodies of radius 4 on one spot of a clamped 20,000 × 20,000 world, stepped `steps`
 /// times (the invariants and the cap checked after each step).
 fn crowd(device: &Device, cap: u32, averaged: bool, relaxation: f32, steps: u32) -> Snapshot {
+    budgeted_crowd(device, (cap, 0), averaged, relaxation, steps)
+}
+
+/// [`crowd`] with a contact budget as well: `bounds` is `(neighbour_cap, contact_budget)`.
+fn budgeted_crowd(
+    device: &Device,
+    (cap, budget): (u32, u32),
+    averaged: bool,
+    relaxation: f32,
+    steps: u32,
+) -> Snapshot {
     let n = 4096;
     let mut spec = world(
         Vec2::splat(20_000.0),
@@ -696,6 +707,7 @@ fn crowd(device: &Device, cap: u32, averaged: bool, relaxation: f32, steps: u32)
         vec![kind("b", circle(CROWD_RADIUS), n, &["b"])],
     );
     spec.physics.neighbour_cap = cap;
+    spec.physics.contact_budget = budget;
     spec.physics.averaged = averaged;
     spec.physics.relaxation = relaxation;
     let mut sim = Simulation::new(device, &spec, 1).unwrap();
@@ -798,6 +810,51 @@ fn a_crowded_cell_is_bounded_by_the_cap(device: &Device) {
         spread <= 10.0 * CROWD_RADIUS / 2.0,
         "after 10 steps: {spread}"
     );
+}
+
+/// Slot `slot`'s weighted count of contacts in a crowd of `n` on one spot under a contact
+/// budget of `budget`, and its averaged push, worked out from the sampling rule alone: the
+/// crowd is one run of `n` entries in slot order, of which the slot takes every
+/// `every = ⌈n / ⌈budget / 3⌉⌉`-th from `slot mod every` (itself among them), each contact
+/// standing for `every`; below it `slot / every` of them push it +r, the others −r.
+fn sampled_push(slot: u32, n: u32, budget: u32) -> (u32, f32) {
+    let every = n.div_ceil(budget.div_ceil(3));
+    let taken = (n - slot % every).div_ceil(every);
+    let below = slot / every;
+    let above = taken - 1 - below;
+    let sum = (below as f32 - above as f32) * CROWD_RADIUS * every as f32;
+    let count = every * (taken - 1);
+    (count, sum / count as f32)
+}
+
+/// Every body in one cell under the contact budget: each of the 4,096 bodies tests 128 of
+/// them (a stride of 32) instead of 4,096, and each contact found stands for 32, so the
+/// weighted count (4,064) estimates the 4,095 a brute-force pass over the pairs counts to
+/// within one stride. Each slot's count and (averaged) place are those [`sampled_push`]
+/// works out from the rule; a budget the crowd fits in is the plain narrow phase, bit for bit; and the
+/// sampled crowd is the same on every backend and schedule.
+fn a_crowded_cell_is_bounded_by_the_contact_budget(device: &Device) {
+    let n = 4096;
+    let budget = 384;
+    let s = budgeted_crowd(device, (0, budget), true, 1.0, 1);
+    for slot in 0..n {
+        let (count, push) = sampled_push(slot, n, budget);
+        let i = slot as usize;
+        assert_eq!(s.contacts[i], count, "slot {slot}'s contacts");
+        assert!(count.abs_diff(n - 1) <= 32, "slot {slot}: {count}");
+        let moved = s.bodies.pos[i] - CROWD_AT;
+        let expected = Vec2::new(push, 0.0);
+        assert!(
+            (moved - expected).length() <= 1e-3,
+            "slot {slot} moved {moved}, expected {expected}"
+        );
+    }
+    let plain = digest(&budgeted_crowd(device, (0, 0), false, 1.0, 2));
+    let roomy = digest(&budgeted_crowd(device, (0, 3 * n), false, 1.0, 2));
+    assert_eq!(roomy, plain, "a budget the crowd fits in");
+    same_everywhere(device, |device| {
+        digest(&budgeted_crowd(device, (0, budget), true, 0.5, 3))
+    });
 }
 
 // ---------------------------------------------------------------------------------------
@@ -1369,6 +1426,7 @@ on_both_backends!(
     a_million_bodies_under_swept_shots_are_counted_exactly,
     bodies_crossing_many_cells_a_step_lose_no_contact,
     a_crowded_cell_is_bounded_by_the_cap,
+    a_crowded_cell_is_bounded_by_the_contact_budget,
     contacts_on_cell_borders_and_world_edges_match_brute_force,
     where_f32_spacing_is_coarse_contacts_are_still_found,
     bodies_on_one_spot_part_deterministically,

@@ -287,6 +287,7 @@ fn read_physics(node: &Node<'_>) -> Result<Physics, SceneError> {
         "neighbour_cap",
         "vision_scale",
         "sight_budget",
+        "contact_budget",
         "renumber_every",
     ])?;
     let d = Physics::default();
@@ -306,6 +307,9 @@ fn read_physics(node: &Node<'_>) -> Result<Physics, SceneError> {
             n.real(above(0.0, MAX_VISION_SCALE))
         })?,
         sight_budget: table.or("sight_budget", d.sight_budget, |n| n.whole(0, MAX_SLOTS))?,
+        contact_budget: table.or("contact_budget", d.contact_budget, |n| {
+            n.whole(0, MAX_SLOTS)
+        })?,
         renumber_every: table.or("renumber_every", d.renumber_every, |n| {
             n.whole(0, MAX_RENUMBER_EVERY).map(Some)
         })?,

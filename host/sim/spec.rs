@@ -130,6 +130,11 @@ pub struct Physics {
     /// of its block, taken evenly from a crowd beyond that
     /// (`gpuwars_kernels::sim::broad::Sample`); 0 for all (games only).
     pub sight_budget: u32,
+    /// The most bodies of one kind a body's contacts are sought among, a third of them from
+    /// each row of its block, taken evenly from a crowd beyond that, each contact found
+    /// standing for as many as it was taken among (`gpuwars_kernels::sim::broad::Sample`);
+    /// 0 (the default) for all: every contact, as a fast swept body in a dense field needs.
+    pub contact_budget: u32,
     /// Every how many steps the bodies move to slots in the grid's order (0: never, at most
     /// [`MAX_RENUMBER_EVERY`]); `None` lets the world's size choose (see
     /// [`Physics::renumber_period`]).
@@ -150,6 +155,7 @@ impl Default for Physics {
             neighbour_cap: 0,
             vision_scale: 1.0,
             sight_budget: DEFAULT_SIGHT_BUDGET,
+            contact_budget: 0,
             renumber_every: None,
             trace_paths: false,
         }
@@ -184,6 +190,12 @@ impl Physics {
         check_up_to(
             "physics.sight_budget",
             self.sight_budget,
+            "no limit",
+            MAX_SLOTS,
+        )?;
+        check_up_to(
+            "physics.contact_budget",
+            self.contact_budget,
             "no limit",
             MAX_SLOTS,
         )?;
@@ -240,6 +252,9 @@ impl Physics {
                 0 => "sight unbudgeted".to_owned(),
                 budget => format!("sight budget {budget}"),
             });
+        }
+        if self.contact_budget != 0 {
+            parts.push(format!("contact budget {}", self.contact_budget));
         }
         if let Some(every) = self.renumber_every {
             parts.push(format!("renumber every {every}"));

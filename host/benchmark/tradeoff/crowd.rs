@@ -58,6 +58,9 @@ pub struct CrowdedRow {
     pub bodies: u32,
     /// Entries examined per query (0: all).
     pub neighbour_cap: u32,
+    /// Bodies of one kind a body's contacts are sought among (0: all).
+    #[serde(default)]
+    pub contact_budget: u32,
     /// The first step's time, the median of three worlds (ms).
     pub step_ms: f64,
     /// Its stages' ms, `stage=ms` joined by spaces.
@@ -222,13 +225,20 @@ pub(super) fn crowd_speed(
     Ok(steps as f64 / start.elapsed().as_secs_f64())
 }
 
-/// The cap of the crowded-cell rows that have one.
-pub(super) const CROWDED_CAP: u32 = 32;
+/// The crowded cell's choices, `(neighbour_cap, contact_budget)`: neither bound, a cap of
+/// 32, a contact budget of 384 (128 entries of the run).
+pub(super) const CROWDED_CHOICES: [(u32, u32); 3] = [(0, 0), (32, 0), (0, 384)];
 
-/// The first step of `bodies` balls on one spot, with `cap`: the median of three worlds.
-pub(super) fn crowded(device: &Device, bodies: u32, cap: u32) -> anyhow::Result<CrowdedRow> {
+/// The first step of `bodies` balls on one spot, with the cap and the contact budget of
+/// `choice` (see [`CROWDED_CHOICES`]): the median of three worlds.
+pub(super) fn crowded(
+    device: &Device,
+    bodies: u32,
+    (cap, budget): (u32, u32),
+) -> anyhow::Result<CrowdedRow> {
     let mut spec = crowd(bodies, DT, Physics::default());
     spec.physics.neighbour_cap = cap;
+    spec.physics.contact_budget = budget;
     spec.field = Field::default();
     let spot = spec.size / 2.0;
     let mut runs = Vec::new();
@@ -246,6 +256,7 @@ pub(super) fn crowded(device: &Device, bodies: u32, cap: u32) -> anyhow::Result<
     Ok(CrowdedRow {
         bodies,
         neighbour_cap: cap,
+        contact_budget: budget,
         step_ms: median.step_seconds() * 1e3,
         stages,
     })

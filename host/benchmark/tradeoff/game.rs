@@ -128,6 +128,7 @@ pub(super) fn game_choices(scene: &Scene) -> Vec<(String, Scene)> {
         physics(&|p| p.vision_scale = 0.5),
         physics(&|p| p.sight_budget = 16),
         physics(&|p| p.sight_budget = 0),
+        physics(&|p| p.contact_budget = 24),
     ];
     if scene.world.has_swept_pairs() {
         out.push(changed(Some("nothing swept".into()), &unswept));

@@ -34,7 +34,7 @@ use crate::sim::Physics;
 use crate::terminal::progress;
 use analytic::AnalyticRow;
 use crowd::{
-    CROWDED_CAP, crowd_choices, crowd_error, crowd_speed, crowded, mark_pareto, scattered,
+    CROWDED_CHOICES, crowd_choices, crowd_error, crowd_speed, crowded, mark_pareto, scattered,
 };
 pub use crowd::{CrowdedRow, PhysicsRow, crowd};
 pub use game::{GameAccuracy, GameRow};
@@ -279,9 +279,12 @@ pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<Tradeof
     }
     let mut crowded_rows = Vec::new();
     for bodies in sizes.crowded {
-        for cap in [0, CROWDED_CAP] {
-            bar.set_message(format!("{bodies} bodies in one cell, cap {cap}"));
-            crowded_rows.push(crowded(device, bodies, cap)?);
+        for choice in CROWDED_CHOICES {
+            let (cap, budget) = choice;
+            bar.set_message(format!(
+                "{bodies} bodies in one cell, cap {cap}, contact budget {budget}"
+            ));
+            crowded_rows.push(crowded(device, bodies, choice)?);
         }
     }
     bar.finish_and_clear();
@@ -406,16 +409,20 @@ impl TradeoffSummary {
             }
         }
         out += "\n### Every body in one cell\n\nThe first step of a world whose bodies all \
-                 start on one spot (median of three).\n\n| bodies | cap | step ms | stages (ms) |\n\
-                 |---:|---:|---:|---|\n";
+                 start on one spot (median of three).\n\n| bodies | cap | contact budget | step ms | \
+                 stages (ms) |\n|---:|---:|---:|---:|---|\n";
+        let bound = |n: u32| match n {
+            0 => "none".to_owned(),
+            n => n.to_string(),
+        };
         for r in &self.crowded {
-            let cap = match r.neighbour_cap {
-                0 => "none".to_owned(),
-                cap => cap.to_string(),
-            };
             out += &format!(
-                "| {} | {cap} | {:.2} | {} |\n",
-                r.bodies, r.step_ms, r.stages
+                "| {} | {} | {} | {:.2} | {} |\n",
+                r.bodies,
+                bound(r.neighbour_cap),
+                bound(r.contact_budget),
+                r.step_ms,
+                r.stages
             );
         }
         out

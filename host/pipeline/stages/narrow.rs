@@ -30,7 +30,7 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         contacts: world.scratch.contacts(b),
         relax: relaxation(world),
         substep,
-        reserved: 0,
+        budget: world.spec.physics.contact_budget,
     });
     let threads_needed = u32::try_from(args.teams.threads(&world.layout.ranges))
         .expect("at most 32 threads a slot of at most 2^24 slots");

@@ -51,6 +51,8 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
             field: world.spec.field,
             dt: step_dt(world),
             integrator: world.spec.physics.integrator.code(),
+            contact_budget: world.spec.physics.contact_budget,
+            reserved: 0,
         };
         // The narrow phase's bytes, the machines' and the integrator's.
         unsafe {

@@ -487,6 +487,10 @@ kernel_args! {
         pub dt: f32,
         /// The integrator (see [`crate::sim::integrate`]).
         pub integrator: u32,
+        /// The narrow phase's budget (see [`CollideArgs::budget`]).
+        pub contact_budget: u32,
+        /// Keeps the struct free of implicit padding.
+        pub reserved: u32,
     }
 }
 
@@ -532,7 +536,7 @@ fn body_step<const SWEPT: bool>(t: Thread, args: &BodyStepArgs) {
         contacts: think.contacts,
         relax: args.relax,
         substep: 0,
-        reserved: 0,
+        budget: args.contact_budget,
     };
     collide_slot::<false, true, SWEPT>(&collide, slot, team, |_| known.kind.info);
     think_slot::<true, true>(think, slot, team, Some(known));

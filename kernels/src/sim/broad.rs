@@ -390,15 +390,15 @@ pub struct Near {
     pub mask: u32,
 }
 
-/// How much of a crowd a look takes: of each run of cells it reads (a row of its 3×3 block,
-/// one kind; two runs where the block wraps around the field's edge), at most
-/// `⌈budget / 3⌉` entries (0: all), evenly: a run of `n` entries gets a stride of
-/// `⌈n / ⌈budget / 3⌉⌉`, the look takes every stride-th entry from `phase` (modulo the
-/// stride) on, and hands each with the stride as its weight, so that sums weighted by it
-/// estimate the whole run's. A look so takes at most `budget` entries of a kind (twice that
-/// where the block wraps), decided from the bounds of each run, which it loads anyway;
-/// where no run exceeds its share it is the plain look, bit for bit. It depends on the grid
-/// and the phase alone, so it is deterministic.
+/// How much of a crowd a query takes (an enemy's look, a body's contacts): of each run of
+/// cells it reads (a row of its 3×3 block, one kind; two runs where the block wraps around
+/// the field's edge), at most `⌈budget / 3⌉` entries (0: all), evenly: a run of `n` entries
+/// gets a stride of `⌈n / ⌈budget / 3⌉⌉`, the query takes every stride-th entry from
+/// `phase` (modulo the stride) on, and hands each with the stride as its weight, so that
+/// sums weighted by it estimate the whole run's. A query so takes at most `budget` entries
+/// of a kind (twice that where the block wraps), decided from the bounds of each run, which
+/// it loads anyway; where no run exceeds its share it is the plain query, bit for bit. It
+/// depends on the grid and the phase alone, so it is deterministic.
 #[derive(Clone, Copy, Debug)]
 pub struct Sample {
     /// The most entries of one kind taken from the block's three rows; 0 for all.
@@ -409,6 +409,12 @@ pub struct Sample {
 }
 
 impl Sample {
+    /// Every entry, each of weight 1: the plain query.
+    pub const ALL: Sample = Sample {
+        budget: 0,
+        phase: 0,
+    };
+
     /// The stride and the first entry taken of a run of `len` entries: `(1, 0)` within its
     /// share, `⌈budget / 3⌉` entries.
     #[inline(always)]
@@ -467,13 +473,31 @@ impl CellIndex {
         near: Near,
         mut visit: impl FnMut(u32, u32, Vec2, u32),
     ) {
+        self.for_each_taken(space, (near, Sample::ALL), |_, slot, kind, at, entry| {
+            visit(slot, kind, at, entry)
+        });
+    }
+
+    /// [`CellIndex::for_each_near`] under `sample`: `visit(weight, slot, kind, position,
+    /// entry)` for every entry the sample takes, with its run's stride as the weight, one
+    /// thread walking them all.
+    #[inline(always)]
+    fn for_each_taken(
+        &self,
+        space: &Space,
+        (near, sample): (Near, Sample),
+        mut visit: impl FnMut(u32, u32, u32, Vec2, u32),
+    ) {
         self.for_each_run(space, near, |kind, start, end| {
+            let (every, skip) = sample.of_run(end - start);
             // Each entry is asked for while the one before is visited.
-            let mut ahead = self.entry(start, end);
-            for entry in start..end {
+            let mut entry = start + skip;
+            let mut ahead = self.entry(entry, end);
+            while entry < end {
                 let (slot, at) = ahead;
-                ahead = self.entry(entry + 1, end);
-                visit(slot, kind, at, entry);
+                ahead = self.entry(entry + every, end);
+                visit(every, slot, kind, at, entry);
+                entry += every;
             }
         });
     }
@@ -499,42 +523,43 @@ impl CellIndex {
         (asked(self.slots.get(at)), asked(self.pos.get(at)))
     }
 
-    /// [`CellIndex::for_each_near`] shared by a `team` of lanes: the lanes load the bounds of
-    /// the runs of entries side by side, each lane `test`s every team-width-th entry of a run
-    /// (`Some` for the bodies that count), and every lane `fold`s the results in the order
-    /// of the plain query, so the fold ends the same bit for bit as
-    /// `for_each_near` with `test` and `fold` in one closure would. Every lane of the team
-    /// must call it with the same `near`.
+    /// [`CellIndex::for_each_near`] under `sample` (see [`Sample`]) shared by a `team` of
+    /// lanes: the lanes load the bounds of the runs of entries side by side, each lane
+    /// `test`s every team-width-th entry the sample takes of a run (`Some` for the bodies
+    /// that count), and every lane `fold`s the results, each with its run's stride as the
+    /// weight, in the order of the one-thread query, so the fold ends the same bit for bit
+    /// as one thread walking the sample with `test` and `fold` in one closure would. Every
+    /// lane of the team must call it with the same `near` and `sample`.
     #[inline(always)]
     pub fn for_each_near_in<R: Handed + Default>(
         &self,
         team: Team,
         space: &Space,
-        near: Near,
+        (near, sample): (Near, Sample),
         test: impl Fn(u32, u32, Vec2, u32) -> Option<R>,
-        mut fold: impl FnMut(R),
+        mut fold: impl FnMut(R, u32),
     ) {
         let (lane, width) = team.stride();
         if width == 1 {
-            // One thread walks every entry: the plain query.
-            self.for_each_near(space, near, |slot, kind, at, entry| {
+            self.for_each_taken(space, (near, sample), |weight, slot, kind, at, entry| {
                 if let Some(found) = test(slot, kind, at, entry) {
-                    fold(found);
+                    fold(found, weight);
                 }
             });
             return;
         }
         self.walk_runs_in(team, space, near, |kind, start, end| {
-            let mut first = start;
+            let (every, skip) = sample.of_run(end - start);
+            let mut first = start + skip;
             while first < end {
-                let entry = first + lane;
+                let entry = first + lane * every;
                 let found = if entry < end {
                     test(self.slots.get(entry), kind, self.pos.get(entry), entry)
                 } else {
                     None
                 };
-                team.fold_found(found, &mut fold);
-                first += width;
+                team.fold_found(found, |found| fold(found, every));
+                first += width * every;
             }
         });
     }
@@ -560,17 +585,8 @@ impl CellIndex {
         let (lane, width) = team.stride();
         let mut value = init;
         if width == 1 {
-            self.for_each_run(space, near, |kind, start, end| {
-                let (every, skip) = sample.of_run(end - start);
-                // Each entry is asked for while the one before is visited.
-                let mut entry = start + skip;
-                let mut ahead = self.entry(entry, end);
-                while entry < end {
-                    let (slot, at) = ahead;
-                    ahead = self.entry(entry + every, end);
-                    value = add(value, every, slot, kind, at, entry);
-                    entry += every;
-                }
+            self.for_each_taken(space, (near, sample), |weight, slot, kind, at, entry| {
+                value = add(value, weight, slot, kind, at, entry);
             });
             return value;
         }

@@ -10,7 +10,7 @@
 use glam::Vec2;
 
 use super::bodies::{Bodies, Contacts};
-use super::broad::{CellIndex, Near};
+use super::broad::{CellIndex, Near, Sample};
 use super::contact::{Swept, contact, sweep, tie_break};
 use super::kinds::{Bound, KindInfo};
 use super::space::Space;
@@ -41,8 +41,10 @@ kernel_args! {
         /// Which substep of the step this is: energy is lost, and contacts and damage are
         /// counted, in substep 0 only (contact damage is per step).
         pub substep: u32,
-        /// Keeps the struct free of implicit padding.
-        pub reserved: u32,
+        /// The most bodies of one kind a body's contacts are sought among, taken evenly from
+        /// a crowd beyond that, each contact found standing for the stride's worth (see
+        /// [`Sample`]); 0 for all.
+        pub budget: u32,
     }
 }
 
@@ -291,10 +293,15 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool, const SWEPT: bool>(
             reach: Some(info.contact_reach),
             mask: info.collides_with,
         };
+        // A crowd within the budget, each body taking a share that depends on its slot.
+        let sample = Sample {
+            budget: args.budget,
+            phase: slot,
+        };
         args.grid.for_each_near_in(
             team,
             &args.space,
-            near,
+            (near, sample),
             |other, other_kind, at, entry| {
                 if other == slot {
                     return None;
@@ -341,13 +348,16 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool, const SWEPT: bool>(
                     other,
                 })
             },
-            |touch| {
-                count += 1;
-                damage = damage.saturating_add(touch.damage);
+            |touch, weight| {
+                // A contact of a crowd's sample stands for `weight` of them (1 elsewhere,
+                // where the products are the contact's own bits).
+                let times = weight as f32;
+                count += weight;
+                damage = damage.saturating_add(touch.damage.saturating_mul(weight as i32));
                 if !touch.swept() {
-                    push += touch.push;
-                    kick += touch.kick;
-                    at_end += 1;
+                    push += touch.push * times;
+                    kick += touch.kick * times;
+                    at_end += weight;
                 } else if touch.before(&first) {
                     first = Earliest {
                         time: touch.time,
