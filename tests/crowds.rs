@@ -49,6 +49,24 @@ fn budgeted(scene: &Scene, budget: u32) -> Scene {
     scene
 }
 
+/// Asserts that `steps` steps of `scene` end in the same state on 1, 2 and 3 CPU threads
+/// and under shuffled schedules, and returns that state's hash.
+fn same_on_every_schedule(scene: &Scene, steps: u32) -> u64 {
+    let reference = hash_after(common::cpu(), scene, 1, steps);
+    for threads in [1, 3] {
+        let device = Device::cpu(Some(threads), "tests").unwrap();
+        assert_eq!(
+            hash_after(&device, scene, 1, steps),
+            reference,
+            "{threads} threads"
+        );
+    }
+    for (label, hash) in shuffled_hashes(scene, steps) {
+        assert_eq!(hash, reference, "{label}");
+    }
+    reference
+}
+
 #[test]
 fn a_crowd_on_one_spot_is_the_same_game_on_every_schedule_and_thread_count() {
     // The short-sighted group's sample changes what it does: the budget is at work.
@@ -56,40 +74,18 @@ fn a_crowd_on_one_spot_is_the_same_game_on_every_schedule_and_thread_count() {
     let plain = hash_after(common::cpu(), &budgeted(&grouping, 0), 1, 40);
     assert_ne!(hash_after(common::cpu(), &grouping, 1, 40), plain);
     for scene in [one_spot(), grouping] {
-        let reference = hash_after(common::cpu(), &scene, 1, 40);
-        for threads in [1, 3] {
-            let device = Device::cpu(Some(threads), "tests").unwrap();
-            assert_eq!(
-                hash_after(&device, &scene, 1, 40),
-                reference,
-                "{threads} threads"
-            );
-        }
-        for (label, hash) in shuffled_hashes(&scene, 40) {
-            assert_eq!(hash, reference, "{label}");
-        }
+        same_on_every_schedule(&scene, 40);
     }
 }
 
 #[test]
 fn a_pile_on_one_spot_is_the_same_game_on_every_schedule_and_thread_count() {
     let scene = pile();
-    let reference = hash_after(common::cpu(), &scene, 1, 20);
+    let reference = same_on_every_schedule(&scene, 20);
     // The contact budget is at work: without it, another game.
     let mut unbudgeted = scene.clone();
     unbudgeted.world.physics.contact_budget = 0;
     assert_ne!(hash_after(common::cpu(), &unbudgeted, 1, 20), reference);
-    for threads in [1, 3] {
-        let device = Device::cpu(Some(threads), "tests").unwrap();
-        assert_eq!(
-            hash_after(&device, &scene, 1, 20),
-            reference,
-            "{threads} threads"
-        );
-    }
-    for (label, hash) in shuffled_hashes(&scene, 20) {
-        assert_eq!(hash, reference, "{label}");
-    }
 }
 
 /// On a GPU the machines' looks and the narrow phase are shared by teams of lanes, each lane
