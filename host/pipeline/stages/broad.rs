@@ -84,9 +84,11 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
             16 * u64::from(slots) + 4 * buckets,
         )
     });
-    // With a cap, crowded buckets are ordered in runs and merged, so that their cost stays
-    // O(n log n): the passes a bucket of the largest kind's capacity needs.
-    let bounded = world.spec.physics.neighbour_cap != 0;
+    // With a cap or a contact budget (the settings that ask for bounded crowds), crowded
+    // buckets are ordered in runs and merged, so that their cost stays O(n log n): the
+    // passes a bucket of the largest kind's capacity needs.
+    let physics = &world.spec.physics;
+    let bounded = physics.neighbour_cap != 0 || physics.contact_budget != 0;
     let mut b = unsafe { Binder::new() };
     let order = OrderArgs {
         pos: b.view(pos),
