@@ -28,18 +28,12 @@ fn one_spot_grouping() -> Scene {
     scene
 }
 
-/// The stress scene with every enemy kind colliding with the three: a pile of 2,560 bodies
-/// that push each other, under a contact budget of 384 (128 of a kind a row), which samples
-/// their contacts.
+/// The pile: the stress scene's 2,560 enemies on one spot, every enemy kind colliding with
+/// the three, under a contact budget of 384 (128 of a kind a row), which samples their
+/// contacts.
 fn pile() -> Scene {
-    let mut scene = one_spot();
-    scene.world.physics.contact_budget = 384;
-    let enemies = ["polygon", "texel", "kernel"].map(String::from);
-    for name in &enemies {
-        let k = scene.world.kind_index(name).unwrap();
-        scene.world.kinds[k].collides_with = enemies.to_vec();
-    }
-    scene
+    let text = include_str!("../scenes/stress/pile.toml");
+    Scene::from_toml(text, "scenes/stress/pile.toml").unwrap()
 }
 
 /// `scene` with a sight budget of `budget`.
