@@ -215,6 +215,10 @@ pub enum BenchCommand {
         /// Size of the frames, WIDTHxHEIGHT in pixels.
         #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
         size: (u32, u32),
+        /// What the frames show: the whole field, as earlier runs drew it (field), or the
+        /// ship followed at the default zoom with the radar, the view a player sees (follow).
+        #[arg(long, value_enum, default_value_t = CameraMode::Field)]
+        camera: CameraMode,
         /// Where the files go, and how the summary is printed.
         #[command(flatten)]
         out: BenchOut,

@@ -126,6 +126,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     max,
                     seconds,
                     size,
+                    camera,
                     out,
                 },
         } => {
@@ -133,6 +134,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 max,
                 time: Duration::from_secs_f64(seconds),
                 size,
+                camera,
                 out: out.out,
                 progress: !out.json,
             };

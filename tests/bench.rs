@@ -192,6 +192,32 @@ fn bench_scale_measures_each_size_and_compare_reads_two_runs() {
         assert!((r.fraction_of_copy - rate / summary.copy_bandwidth).abs() < 1e-9);
     }
     assert_eq!(plot_size(&dir.path().join("bench-scale.png")), (1280, 720));
+    // The whole field unless asked; a summary from before the choice reads as that.
+    assert_eq!(summary.camera, CameraMode::Field);
+    let mut older: serde_json::Value = serde_json::from_str(&out).unwrap();
+    older.as_object_mut().unwrap().remove("camera");
+    let older: ScaleSummary = serde_json::from_value(older).unwrap();
+    assert_eq!(older.camera, CameraMode::Field);
+    // The view a player sees, measured as asked.
+    let followed = tempfile::tempdir().unwrap();
+    let out = ok(&gpuwars(&[
+        "bench",
+        "scale",
+        "--max",
+        "1024",
+        "--seconds",
+        "0.05",
+        "--size",
+        "320x180",
+        "--camera",
+        "follow",
+        "--out",
+        followed.path().to_str().unwrap(),
+        "--json",
+    ]));
+    let summary: ScaleSummary = serde_json::from_str(&out).unwrap();
+    assert_eq!(summary.camera, CameraMode::Follow);
+    assert!(summary.rows.iter().all(|r| r.frames_per_s > 0.0));
 
     // Compare: two runs of one benchmark, figure by figure; two benchmarks are refused.
     let other = tempfile::tempdir().unwrap();

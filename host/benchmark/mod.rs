@@ -22,6 +22,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::Device;
 use crate::backend::device_name;
+use crate::camera::CameraMode;
 use crate::files::{FileError, io_words, shown, write_atomically};
 
 /// Where and when a benchmark ran.
@@ -131,6 +132,11 @@ impl Outputs {
 }
 
 /// Writes `rows` as CSV (a header from the field names), atomically.
+/// The camera of summaries written before frames could follow the ship: the whole field.
+fn field_camera() -> CameraMode {
+    CameraMode::Field
+}
+
 fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> anyhow::Result<()> {
     let mut writer = csv::Writer::from_writer(Vec::new());
     for row in rows {

@@ -26,11 +26,6 @@ use crate::pipeline::Profile;
 use crate::play::{Flyer, PlayOptions};
 use crate::terminal::progress;
 
-/// The camera of summaries written before frames could follow the ship.
-fn field() -> CameraMode {
-    CameraMode::Field
-}
-
 /// The paper's Figure 8: frames per second over five minutes, on its two cards.
 pub const PAPER_BANDS: [(&str, f64, f64); 2] = [
     ("GeForce 8200M (paper)", 45.0, 58.0),
@@ -70,7 +65,7 @@ pub struct PaperSummary {
     /// The frames' width and height.
     pub size: (u32, u32),
     /// What the frames showed (the whole field in summaries from before the choice).
-    #[serde(default = "field")]
+    #[serde(default = "super::field_camera")]
     pub camera: CameraMode,
     /// Seconds measured (whole seconds).
     pub seconds: u32,

@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 use super::plot::{legend, log_range, png};
 use super::{Outputs, Provenance, write_csv, write_json};
 use crate::backend::floor;
-use crate::camera::Camera;
+use crate::camera::{Camera, CameraMode, DEFAULT_ZOOM};
 use crate::files::thousands;
 use crate::game::scene::built_in;
 use crate::game::{Game, Options, Scene};
@@ -40,6 +40,9 @@ pub struct ScaleOptions {
     pub time: Duration,
     /// The frames' size in pixels.
     pub size: (u32, u32),
+    /// What the frames show: the whole field, or the ship followed at the default zoom
+    /// with the radar (the view a player sees).
+    pub camera: CameraMode,
     /// Where the CSV, PNG and JSON go.
     pub out: PathBuf,
     /// Show a progress bar (on a terminal).
@@ -84,6 +87,9 @@ pub struct ScaleSummary {
     pub copy_bandwidth: f64,
     /// The frames' width and height.
     pub size: (u32, u32),
+    /// What the frames showed (the whole field in summaries from before the choice).
+    #[serde(default = "super::field_camera")]
+    pub camera: CameraMode,
     /// Why the sizes stopped where they did.
     pub stopped: String,
     /// Every size measured.
@@ -187,6 +193,7 @@ pub fn run(device: &Device, options: &ScaleOptions) -> anyhow::Result<ScaleSumma
         machine,
         copy_bandwidth,
         size: options.size,
+        camera: options.camera,
         stopped,
         rows,
     };
@@ -234,7 +241,10 @@ pub fn scaling(path: &Path, summary: &ScaleSummary) -> anyhow::Result<()> {
         let series: [(&str, RGBColor, Figure); 2] = [
             ("simulation steps/s", BLUE, |r| r.steps_per_s),
             (
-                "frames/s (a step and a kernel-rendered frame each)",
+                &format!(
+                    "frames/s (a step and a kernel-rendered frame each, camera {})",
+                    summary.camera.name()
+                ),
                 RED,
                 |r| r.frames_per_s,
             ),
@@ -299,9 +309,10 @@ fn measure(
         game.submit_profiled(None, &mut profile)?;
     }
     let (width, height) = options.size;
+    let camera = Camera::new(options.camera, DEFAULT_ZOOM);
     let frames_per_s = rate(&mut game, options.time, |game| {
         game.submit(None)?;
-        game.render(width, height, &Camera::field(), 0.0)
+        game.render(width, height, &camera, 0.0)
     })?;
     let step_s = profile.step_seconds();
     let pipeline = game.pipeline();
@@ -352,7 +363,13 @@ impl ScaleSummary {
                 r.frames_per_s
             );
         }
-        out += &format!("stopped at {}\n", self.stopped);
+        out += &format!(
+            "frames: {}x{}, camera {}; stopped at {}\n",
+            self.size.0,
+            self.size.1,
+            self.camera.name(),
+            self.stopped
+        );
         out
     }
 }
