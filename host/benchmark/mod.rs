@@ -131,12 +131,12 @@ impl Outputs {
     }
 }
 
-/// Writes `rows` as CSV (a header from the field names), atomically.
 /// The camera of summaries written before frames could follow the ship: the whole field.
 fn field_camera() -> CameraMode {
     CameraMode::Field
 }
 
+/// Writes `rows` as CSV (a header from the field names), atomically.
 fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> anyhow::Result<()> {
     let mut writer = csv::Writer::from_writer(Vec::new());
     for row in rows {
