@@ -585,8 +585,19 @@ impl CellIndex {
         let (lane, width) = team.stride();
         let mut value = init;
         if width == 1 {
-            self.for_each_taken(space, (near, sample), |weight, slot, kind, at, entry| {
-                value = add(value, weight, slot, kind, at, entry);
+            // `for_each_taken`'s walk written out: through its closure the looks of `paper`
+            // took 7% longer on the CPU emulation (470 against 440 µs a step).
+            self.for_each_run(space, near, |kind, start, end| {
+                let (every, skip) = sample.of_run(end - start);
+                // Each entry is asked for while the one before is visited.
+                let mut entry = start + skip;
+                let mut ahead = self.entry(entry, end);
+                while entry < end {
+                    let (slot, at) = ahead;
+                    ahead = self.entry(entry + every, end);
+                    value = add(value, every, slot, kind, at, entry);
+                    entry += every;
+                }
             });
             return value;
         }
