@@ -70,6 +70,25 @@ fn paper_run_with(dir: &Path, seed: &str, more: &[&str]) -> PaperSummary {
     written
 }
 
+/// A short `bench scale` up to `max` enemies into `dir` with `more` flags: what it prints.
+fn scale_run(dir: &Path, max: &str, more: &[&str]) -> String {
+    let mut args = vec![
+        "bench",
+        "scale",
+        "--max",
+        max,
+        "--seconds",
+        "0.05",
+        "--size",
+        "320x180",
+        "--out",
+        dir.to_str().unwrap(),
+        "--json",
+    ];
+    args.extend(more);
+    ok(&gpuwars(&args))
+}
+
 #[test]
 fn bench_paper_writes_a_table_a_plot_and_a_summary_that_agree() {
     let dir = tempfile::tempdir().unwrap();
@@ -166,19 +185,7 @@ fn bench_paper_runs_in_the_window_too() {
 #[test]
 fn bench_scale_measures_each_size_and_compare_reads_two_runs() {
     let dir = tempfile::tempdir().unwrap();
-    let out = ok(&gpuwars(&[
-        "bench",
-        "scale",
-        "--max",
-        "3000",
-        "--seconds",
-        "0.05",
-        "--size",
-        "320x180",
-        "--out",
-        dir.path().to_str().unwrap(),
-        "--json",
-    ]));
+    let out = scale_run(dir.path(), "3000", &[]);
     let summary: ScaleSummary = serde_json::from_str(&out).unwrap();
     let table: Vec<ScaleRow> = rows(&dir.path().join("bench-scale.csv"));
     assert_eq!(table, summary.rows);
@@ -200,21 +207,7 @@ fn bench_scale_measures_each_size_and_compare_reads_two_runs() {
     assert_eq!(older.camera, CameraMode::Field);
     // The view a player sees, measured as asked.
     let followed = tempfile::tempdir().unwrap();
-    let out = ok(&gpuwars(&[
-        "bench",
-        "scale",
-        "--max",
-        "1024",
-        "--seconds",
-        "0.05",
-        "--size",
-        "320x180",
-        "--camera",
-        "follow",
-        "--out",
-        followed.path().to_str().unwrap(),
-        "--json",
-    ]));
+    let out = scale_run(followed.path(), "1024", &["--camera", "follow"]);
     let summary: ScaleSummary = serde_json::from_str(&out).unwrap();
     assert_eq!(summary.camera, CameraMode::Follow);
     assert!(summary.rows.iter().all(|r| r.frames_per_s > 0.0));
