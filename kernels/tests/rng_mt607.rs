@@ -144,6 +144,22 @@ fn normal_pairs_follow_box_muller() {
 }
 
 #[test]
+fn the_first_normal_alone_is_the_pairs_first() {
+    let mut g = Mt607::new(PARAMS[2], 5);
+    // The smallest and largest uniforms too: the ends of the logarithm's range.
+    let mut pairs = vec![(mt607::to_unit_f32(0), 0.5), (1.0, 1.0), (1.0, 0.25)];
+    pairs.extend((0..20_000).map(|_| (g.next_f32(), g.next_f32())));
+    for (u1, u2) in pairs {
+        let (first, _) = mt607::box_muller(u1, u2);
+        assert_eq!(
+            mt607::box_muller_first(u1, u2).to_bits(),
+            first.to_bits(),
+            "u1 {u1:e}, u2 {u2:e}"
+        );
+    }
+}
+
+#[test]
 fn plain_data_layout() {
     use core::mem::{align_of, size_of};
     assert_eq!(size_of::<Mt607Params>(), 12);

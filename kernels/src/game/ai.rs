@@ -20,6 +20,7 @@ use super::control::Status;
 use super::fsm::{Machine, Percept, State, next_state};
 use super::rules::Brain;
 use crate::exec::follow_previous_launch;
+use crate::math::trunc_i32;
 use crate::sim::broad::{CellIndex, Near, Sample, kind_bit};
 use crate::sim::integrate::{Field, IntegrateArgs, integrate_slot};
 use crate::sim::narrow::{CollideArgs, Relaxation, collide_slot};
@@ -201,14 +202,14 @@ pub fn fixed_scale(bound: f32) -> f32 {
     f32::from_bits(((exponent + 127) as u32) << 23)
 }
 
-/// `v` in fixed point at `scale` (truncated; `as` saturates, and NaN becomes 0, on both
-/// targets). A component below 2³⁰ at `scale` fits an `i32`, whose conversion the GPU
-/// does at full rate (to an `i64` it costs several times more).
+/// `v` in fixed point at `scale` (truncated, saturated, NaN to 0: see
+/// [`crate::math::trunc_i32`]). A component below 2³⁰ at `scale` fits an `i32`, whose
+/// conversion the GPU does at full rate (to an `i64` it costs several times more).
 #[inline(always)]
 fn fixed(v: Vec2, scale: f32) -> [i64; 2] {
     [
-        i64::from((v.x * scale) as i32),
-        i64::from((v.y * scale) as i32),
+        i64::from(trunc_i32(v.x * scale)),
+        i64::from(trunc_i32(v.y * scale)),
     ]
 }
 
@@ -421,9 +422,11 @@ fn wanted_velocity(
         }
         State::CheckingEnergy | State::Dead => b.vel.get(slot),
         State::Wandering => {
-            let (turn, _) = b.rng.open(slot).next_normal_pair();
-            let angle = turn * WANDER_TURN;
-            let rotation = Vec2::new(libm::cosf(angle), libm::sinf(angle));
+            let turn = b.rng.open(slot).next_normal();
+            // One call for both: `sincosf` is `sinf` and `cosf` bit for bit (a test holds
+            // it over every angle a turn can take), and a call costs the GPU spills.
+            let (sin, cos) = libm::sincosf(turn * WANDER_TURN);
+            let rotation = Vec2::new(cos, sin);
             let heading = rotation.rotate(b.dir.get(slot));
             heading * (WANDER_SPEED * speed)
         }

@@ -126,9 +126,25 @@ pub fn to_unit_f32(x: u32) -> f32 {
 /// r sin phi). `u1 > 0` keeps the logarithm finite.
 #[inline]
 pub fn box_muller(u1: f32, u2: f32) -> (f32, f32) {
-    let r = libm::sqrtf(-2.0 * libm::logf(u1));
-    let phi = 2.0 * core::f32::consts::PI * u2;
+    let (r, phi) = polar(u1, u2);
     (r * libm::cosf(phi), r * libm::sinf(phi))
+}
+
+/// The first normal of [`box_muller`]'s pair alone, bit for bit: `r cos phi`, for a draw
+/// that uses one normal (its sine, a call of its own on the GPU, is not worked out).
+#[inline]
+pub fn box_muller_first(u1: f32, u2: f32) -> f32 {
+    let (r, phi) = polar(u1, u2);
+    r * libm::cosf(phi)
+}
+
+/// Box–Muller's radius and angle of two uniforms in (0, 1].
+#[inline(always)]
+fn polar(u1: f32, u2: f32) -> (f32, f32) {
+    (
+        libm::sqrtf(-2.0 * libm::logf(u1)),
+        2.0 * core::f32::consts::PI * u2,
+    )
 }
 
 /// An MT607 generator: its parameters, 19 words of state and the position of

@@ -78,6 +78,15 @@ impl SlotRng<'_> {
         let u2 = self.next_f32();
         mt607::box_muller(u1, u2)
     }
+
+    /// The first normal of [`SlotRng::next_normal_pair`], bit for bit, from the same two
+    /// draws (the generator ends where the pair leaves it), without the second's sine.
+    #[inline(always)]
+    pub fn next_normal(&mut self) -> f32 {
+        let u1 = self.next_f32();
+        let u2 = self.next_f32();
+        mt607::box_muller_first(u1, u2)
+    }
 }
 
 impl Drop for SlotRng<'_> {
