@@ -24,9 +24,10 @@ pub const BLOCK: u32 = 128;
 /// 574 -> 667).
 pub const LIGHT_BLOCK: u32 = 256;
 
-/// Threads per block of the prefix sum's launches: a thread a tile of 32 elements, so few
-/// threads (259 for 8,288 elements), spread over more of the GPU's multiprocessors in blocks
-/// of one warp (the free lists 22 -> 11 µs, the broad phase 24 -> 15 µs at 8K).
+/// Threads per block of the prefix sum's launches: a warp a tile of 1,024 elements, so few
+/// warps (9 for 8,288 elements), spread over more of the GPU's multiprocessors in blocks of
+/// one warp (with a thread a tile of 32: the free lists 22 -> 11 µs, the broad phase 24 -> 15
+/// µs at 8K).
 const SCAN_BLOCK: u32 = 32;
 
 /// A launch of `kernel` on at least `threads` threads, in blocks of [`BLOCK`]: see
@@ -213,7 +214,7 @@ impl PrefixSum {
             ops.push(unsafe {
                 threads_in(
                     registry::SCAN_REDUCE,
-                    tiles,
+                    scan::threads(n),
                     SCAN_BLOCK,
                     args,
                     reduce,
@@ -239,7 +240,7 @@ impl PrefixSum {
             registry::SCAN_TILES
         };
         // SAFETY: as above; the scan supports `input == output`.
-        ops.push(unsafe { threads_in(kernel, tiles, SCAN_BLOCK, args, b, bytes) });
+        ops.push(unsafe { threads_in(kernel, scan::threads(n), SCAN_BLOCK, args, b, bytes) });
     }
 }
 

@@ -9,8 +9,16 @@ use gpuwars::primitives::{CountingSort, PrefixSum, histogram};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 
-/// Sizes around the scan's recursion levels (tiles of 32) on top of the edge sizes.
-const SCAN_SIZES: &[usize] = &[1024, 1025, 32 * 32 * 32 + 1];
+/// Sizes around the scan's tiles (1,024 elements) and its levels (one launch of tile sums
+/// up to 1,024 tiles, a recursion past them) on top of the edge sizes.
+const SCAN_SIZES: &[usize] = &[
+    1023,
+    1024,
+    1025,
+    1024 * 1024,
+    1024 * 1024 + 1,
+    1024 * 1100 + 7,
+];
 /// Sizes around the sort's tiles of 64.
 const SORT_SIZES: &[usize] = &[63, 64, 65, 4097];
 

@@ -254,20 +254,71 @@ pub fn exclusive_sum_u32(lane: u32, value: impl Fn(u32) -> u32) -> u32 {
     #[cfg(target_arch = "nvptx64")]
     {
         let own = value(lane);
-        let mut inclusive = own;
-        let mut distance = 1;
-        while distance < WARP {
-            let before = shuffle_up(inclusive, distance);
-            if lane >= distance {
-                inclusive = inclusive.wrapping_add(before);
-            }
-            distance *= 2;
-        }
-        inclusive.wrapping_sub(own)
+        inclusive_sum(lane, own).wrapping_sub(own)
     }
     #[cfg(not(target_arch = "nvptx64"))]
     {
         (0..lane).fold(0u32, |sum, l| sum.wrapping_add(value(l)))
+    }
+}
+
+/// The wrapping sum of the lanes' `own` values up to and including `lane`'s (GPU only).
+#[cfg(target_arch = "nvptx64")]
+#[inline(always)]
+fn inclusive_sum(lane: u32, own: u32) -> u32 {
+    let mut inclusive = own;
+    let mut distance = 1;
+    while distance < WARP {
+        let before = shuffle_up(inclusive, distance);
+        if lane >= distance {
+            inclusive = inclusive.wrapping_add(before);
+        }
+        distance *= 2;
+    }
+    inclusive
+}
+
+/// The exclusive prefix sums (wrapping) of a tile of `len` values, at most `WARP²`, from
+/// `offset`: `store(i, offset + value(0) + … + value(i - 1))` for each `i < len`. Every
+/// value is read before the first is stored, so `store` may overwrite what `value` reads.
+///
+/// On the GPU the warp takes the tile row by row, lane `l` element `l` of each row of
+/// [`WARP`], so that each row is read and written in one coalesced access (where a lane
+/// walking 32 elements of its own touches 32 lines an access), and the rows' sums cross the
+/// lanes by shuffles: every lane must call it. On the CPU the calling thread walks the tile
+/// in order by itself, so there only lane 0 may call it (see [`is_copy_of_lane0`]).
+#[inline(always)]
+pub fn exclusive_scan_tile(
+    lane: u32,
+    (len, offset): (u32, u32),
+    value: impl Fn(u32) -> u32,
+    mut store: impl FnMut(u32, u32),
+) {
+    #[cfg(target_arch = "nvptx64")]
+    {
+        let at = |row: usize| row as u32 * WARP + lane;
+        let values: [u32; WARP as usize] = core::array::from_fn(|row| match at(row) < len {
+            true => value(at(row)),
+            false => 0,
+        });
+        let mut running = offset;
+        for (row, own) in values.into_iter().enumerate() {
+            let inclusive = inclusive_sum(lane, own);
+            if at(row) < len {
+                store(at(row), running.wrapping_add(inclusive.wrapping_sub(own)));
+            }
+            running = running.wrapping_add(inclusive.shuffle_from(WARP - 1, u32::MAX));
+        }
+    }
+    #[cfg(not(target_arch = "nvptx64"))]
+    {
+        let _ = lane;
+        let mut running = offset;
+        for i in 0..len {
+            let own = value(i);
+            store(i, running);
+            running = running.wrapping_add(own);
+        }
     }
 }
 

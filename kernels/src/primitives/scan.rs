@@ -1,26 +1,53 @@
-//! Exclusive prefix sum of `u32` (wrapping, i.e. modulo 2^32), in tiles.
+//! Exclusive prefix sum of `u32` (wrapping, i.e. modulo 2^32), in tiles of a warp.
 //!
 //! One pass of the multi-launch scan: [`reduce_tiles`] writes the sum of every tile of
 //! [`TILE`] elements; the host scans those sums (recursively, with the same two kernels) into
-//! per-tile starting offsets; [`scan_tiles`] then walks each tile once more from its offset.
+//! per-tile starting offsets; [`scan_tiles`] then scans each tile once more from its offset.
 //! A problem of `n` elements takes `2·⌈log_TILE n⌉ - 1` launches and no barrier.
 //!
 //! Up to [`FLAT_TILES`] tiles, [`scan_tiles_after_sums`] replaces the recursion: each warp
 //! adds up the sums of the tiles before its own (a warp collective) and scans its own, so
 //! the scan takes two launches.
+//!
+//! A warp takes a tile, row by row: each row of 32 elements is one coalesced access (see
+//! [`warp::exclusive_scan_tile`]). On the CPU the warp's lane 0 takes it alone.
 
-use crate::{DevSlice, Thread, asked, kernel_args, warp};
+use crate::warp::{WARP, is_copy_of_lane0};
+use crate::{DevSlice, Thread, kernel_args, warp};
 
-/// Elements per thread. 32 keeps a tile in one 128-byte line and leaves 2^19 threads at n = 2^24.
-pub const TILE: u32 = 32;
+/// Elements per tile: a warp's, 32 rows of 32. A million buckets are 1,024 tiles or fewer,
+/// which [`scan_tiles_after_sums`] scans in two launches.
+pub const TILE: u32 = WARP * WARP;
 
-/// Most tiles [`scan_tiles_after_sums`] takes: a thread reads at most this many tile sums.
+/// Most tiles [`scan_tiles_after_sums`] takes: a lane reads at most `FLAT_TILES / 32` tile
+/// sums.
 pub const FLAT_TILES: u32 = 1024;
 
 /// Number of tiles covering `n` elements.
 #[inline(always)]
 pub const fn tiles(n: u32) -> u32 {
     n.div_ceil(TILE)
+}
+
+/// Threads of a launch that gives each of `n` elements' tiles its warp.
+#[inline(always)]
+pub const fn threads(n: u32) -> u32 {
+    tiles(n) * WARP
+}
+
+/// The calling thread's tile (its warp's) and lane, if its warp has a tile of `n` elements
+/// and the thread does its share of it (on the CPU, lane 0 takes the whole tile).
+#[inline(always)]
+fn tile_of(t: Thread, n: u32) -> Option<(u32, u32)> {
+    let (tile, lane) = (t.global() / WARP, t.lane());
+    (tile < tiles(n) && !is_copy_of_lane0(lane)).then_some((tile, lane))
+}
+
+/// Tile `tile`'s first element and its length (of `n` elements).
+#[inline(always)]
+fn tile_range(tile: u32, n: u32) -> (u32, u32) {
+    let start = tile * TILE;
+    (start, (n - start).min(TILE))
 }
 
 kernel_args! {
@@ -37,19 +64,26 @@ kernel_args! {
     }
 }
 
-/// Thread `t` writes the wrapping sum of tile `t` of the input. Each thread writes one element.
+/// Warp `w` writes the wrapping sum of tile `w` of the input: each lane adds up a column
+/// (its element of every row, loads in flight together), and the warp the columns.
 #[inline(always)]
 pub fn reduce_tiles(t: Thread, args: &ReduceArgs) {
-    let tile = t.global();
-    if tile >= tiles(args.n) {
+    let Some((tile, lane)) = tile_of(t, args.n) else {
         return;
+    };
+    let (start, len) = tile_range(tile, args.n);
+    let input = args.input.range(start, len);
+    let column = |l: u32| {
+        let values: [u32; WARP as usize] = core::array::from_fn(|row| {
+            let i = row as u32 * WARP + l;
+            if i < len { input.get(i) } else { 0 }
+        });
+        values.into_iter().fold(0u32, u32::wrapping_add)
+    };
+    let sum = warp::sum_u32(lane, column);
+    if lane == 0 {
+        args.tile_sums.set(tile, sum);
     }
-    let start = tile * TILE;
-    let end = args.n.min(start + TILE);
-    let mut sum = 0u32;
-    args.input
-        .for_each_in::<{ TILE as usize }>(start, end, |_, v| sum = sum.wrapping_add(v));
-    args.tile_sums.set(tile, sum);
 }
 
 kernel_args! {
@@ -69,94 +103,49 @@ kernel_args! {
     }
 }
 
-/// Thread `t` writes the exclusive prefix sums of tile `t`, starting from its tile offset.
-/// Each thread reads an element before writing it and touches only its own tile, so scanning
-/// in place is safe.
+/// Warp `w` writes the exclusive prefix sums of tile `w`, starting from its tile offset.
+/// Every value of the tile is read before the first is written, and a warp touches only its
+/// own tile, so scanning in place is safe.
 #[inline(always)]
 pub fn scan_tiles(t: Thread, args: &ScanArgs) {
-    let tile = t.global();
-    if tile >= tiles(args.n) {
+    let Some((tile, lane)) = tile_of(t, args.n) else {
         return;
-    }
+    };
     let offset = if args.tile_offsets.is_empty() {
         0
     } else {
         args.tile_offsets.get(tile)
     };
-    scan_tile(args, tile, offset);
+    scan_tile(args, (tile, lane), offset);
 }
 
 /// [`scan_tiles`] where `tile_offsets` holds the tile sums themselves (of [`reduce_tiles`],
-/// at most [`FLAT_TILES`] of them, not scanned). The warp of tiles `w .. w + 32` adds up the
-/// sums before `w` together, each lane runs of four, every `4 · 32`-th (at most
-/// `FLAT_TILES / 32` reads a lane, in flight together, instead of up to `FLAT_TILES` for the
-/// last tile alone), and scans its own 32 sums across its lanes. Integer sums: the result
-/// does not depend on their order. A full tile's values are asked for first, so that the
-/// thread waits for memory once.
+/// at most [`FLAT_TILES`] of them, not scanned): the warp of tile `w` adds up the sums before
+/// `w` together, each lane every 32nd (at most `FLAT_TILES / 32` reads a lane, four in flight
+/// at a time, instead of up to `FLAT_TILES` for the last tile alone), and scans its tile from
+/// their sum. Integer sums: the result does not depend on their order.
 #[inline(always)]
 pub fn scan_tiles_after_sums(t: Thread, args: &ScanArgs) {
-    let tile = t.global();
-    let lane = t.lane();
-    // The warp's first tile: the same in all its lanes, which all take part below.
-    let first = tile - lane;
-    let count = tiles(args.n);
-    let sums = args.tile_offsets;
-    let start = tile * TILE;
-    let full = start + TILE <= args.n;
-    let values = match full {
-        true => asked(args.input.get_run::<{ TILE as usize }>(start)),
-        false => [0; TILE as usize],
-    };
-    // A warp wholly past the last tile (its block's tail) sums nothing: it writes nothing.
-    let before_end = if first < count { first } else { 0 };
-    let before = warp::sum_u32(lane, |l| {
-        let add = |sum: u32, [a, b, c, d]: [u32; 4]| {
-            sum.wrapping_add(a)
-                .wrapping_add(b)
-                .wrapping_add(c)
-                .wrapping_add(d)
-        };
-        sums.fold_runs((4 * l, before_end, 4 * warp::WARP), 0u32, add)
-    });
-    let within = warp::exclusive_sum_u32(lane, |l| {
-        if first + l < count {
-            sums.get(first + l)
-        } else {
-            0
-        }
-    });
-    if tile >= count {
+    let Some((tile, lane)) = tile_of(t, args.n) else {
         return;
-    }
-    let running = before.wrapping_add(within);
-    match full {
-        true => scan_run(args, start, values, running),
-        false => scan_tile(args, tile, running),
-    }
+    };
+    let sums = args.tile_offsets;
+    let before = warp::sum_u32(lane, |l| {
+        sums.fold_runs::<1, u32>((l, tile, WARP), 0, |sum, [v]| sum.wrapping_add(v))
+    });
+    scan_tile(args, (tile, lane), before);
 }
 
-/// Writes the exclusive prefix sums of tile `tile`, from `running`.
+/// Writes the exclusive prefix sums of tile `tile`, from `offset`, the calling thread
+/// taking lane `lane`'s share.
 #[inline(always)]
-fn scan_tile(args: &ScanArgs, tile: u32, mut running: u32) {
-    let start = tile * TILE;
-    let end = args.n.min(start + TILE);
-    if end - start == TILE {
-        scan_run(args, start, args.input.get_run(start), running);
-    } else {
-        for i in start..end {
-            let value = args.input.get(i);
-            args.output.set(i, running);
-            running = running.wrapping_add(value);
-        }
-    }
-}
-
-/// Writes the exclusive prefix sums of the full tile from `start`, whose values are
-/// `values`, from `running`.
-#[inline(always)]
-fn scan_run(args: &ScanArgs, start: u32, mut values: [u32; TILE as usize], mut running: u32) {
-    for value in &mut values {
-        (*value, running) = (running, running.wrapping_add(*value));
-    }
-    args.output.set_run(start, values);
+fn scan_tile(args: &ScanArgs, (tile, lane): (u32, u32), offset: u32) {
+    let (start, len) = tile_range(tile, args.n);
+    let (input, output) = (args.input.range(start, len), args.output.range(start, len));
+    warp::exclusive_scan_tile(
+        lane,
+        (len, offset),
+        |i| input.get(i),
+        |i, v| output.set(i, v),
+    );
 }
