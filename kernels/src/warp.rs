@@ -301,13 +301,26 @@ pub fn exclusive_scan_tile(
             true => value(at(row)),
             false => 0,
         });
-        let mut running = offset;
-        for (row, own) in values.into_iter().enumerate() {
-            let inclusive = inclusive_sum(lane, own);
-            if at(row) < len {
-                store(at(row), running.wrapping_add(inclusive.wrapping_sub(own)));
+        // The rows' scans side by side, a shuffle distance at a time: 32 independent
+        // shuffles in flight, where row after row waits on each (a small scan's warps are
+        // one chain of them: `paper`'s step 4.6% slower on an H200).
+        let mut inclusive = values;
+        let mut distance = 1;
+        while distance < WARP {
+            for sum in &mut inclusive {
+                let before = shuffle_up(*sum, distance);
+                if lane >= distance {
+                    *sum = sum.wrapping_add(before);
+                }
             }
-            running = running.wrapping_add(inclusive.shuffle_from(WARP - 1, u32::MAX));
+            distance *= 2;
+        }
+        let mut running = offset;
+        for (row, (sum, own)) in inclusive.into_iter().zip(values).enumerate() {
+            if at(row) < len {
+                store(at(row), running.wrapping_add(sum.wrapping_sub(own)));
+            }
+            running = running.wrapping_add(sum.shuffle_from(WARP - 1, u32::MAX));
         }
     }
     #[cfg(not(target_arch = "nvptx64"))]

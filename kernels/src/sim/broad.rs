@@ -490,13 +490,14 @@ impl CellIndex {
     ) {
         self.for_each_run(space, near, |kind, start, end| {
             let (every, skip) = sample.of_run(end - start);
-            let run = self.run(start, end);
-            // Each entry is asked for while the one before is visited.
+            // Each entry is asked for while the one before is visited. (Bounds checked an
+            // entry: the contacts' runs are short, and a run's views cost the narrow phase
+            // more registers than their checks save, 730 -> 762 µs at 16.76M on an H200.)
             let mut entry = start + skip;
-            let mut ahead = run.ahead(entry);
+            let mut ahead = self.entry(entry, end);
             while entry < end {
                 let (slot, at) = ahead;
-                ahead = run.ahead(entry + every);
+                ahead = self.entry(entry + every, end);
                 visit(every, slot, kind, at, entry);
                 entry += every;
             }
@@ -513,8 +514,16 @@ impl CellIndex {
         NearBlock { rows, cols }
     }
 
-    /// Entries `start .. end` (`start < end`) of a one-thread walk, their bounds checked
-    /// once for the run rather than once an entry.
+    /// Entry `entry`'s slot and position, or the last entry's past `end` (`0 < end`, and
+    /// entries `.. end` lie in the grid), asked for now (see [`Run::ahead`]).
+    #[inline(always)]
+    fn entry(&self, entry: u32, end: u32) -> (u32, Vec2) {
+        let at = entry.min(end - 1);
+        (asked(self.slots.get(at)), asked(self.pos.get(at)))
+    }
+
+    /// Entries `start .. end` (`start < end`) of a one-thread walk of the looks, their
+    /// bounds checked once for the run rather than once an entry: a look's runs are long.
     #[inline(always)]
     fn run(&self, start: u32, end: u32) -> Run {
         Run {
