@@ -448,13 +448,6 @@ impl<T: Copy> DevSlice<T> {
         }
         acc
     }
-
-    /// Writes `N` elements from `start` with a single bounds check.
-    #[inline(always)]
-    pub fn set_run<const N: usize>(&self, start: u32, values: [T; N]) {
-        // SAFETY: as in `get_run`, and the kernel's contract on writers.
-        unsafe { self.run_ptr::<N>(start).write(values) }
-    }
 }
 
 impl DevSlice<u32> {
