@@ -704,7 +704,7 @@ impl CellIndex {
     }
 }
 
-/// A run of a grid's entries that one thread walks (see [`CellIndex::for_each_near`]).
+/// A run of a grid's entries that one thread's look walks (see [`CellIndex::merge_near_in`]).
 #[derive(Clone, Copy)]
 struct Run {
     /// The first entry's index in the grid.
