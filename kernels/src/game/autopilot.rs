@@ -15,6 +15,7 @@ use glam::Vec2;
 
 use super::control::Input;
 use super::rules::Rules;
+use crate::math;
 use crate::sim::broad::{CellIndex, NO_BUCKET, Near, kind_bit};
 use crate::sim::{KindInfo, Space};
 use crate::{DevSlice, Thread, asked, kernel_args, warp};
@@ -184,7 +185,7 @@ pub fn autopilot(t: Thread, args: &AutopilotArgs) {
                     if dist2 > sight * sight || dist2 <= 0.0 {
                         continue;
                     }
-                    let (vel, dist) = (vels[k], libm::sqrtf(dist2));
+                    let (vel, dist) = (vels[k], math::sqrt(dist2));
                     // Closer enemies, and those coming at the ship, weigh more.
                     let coming = (-d.dot(vel) / dist).max(0.0) / rules.ship_speed;
                     let weight = (1.0 + coming) * (sight / dist - 1.0);
@@ -220,11 +221,11 @@ pub fn autopilot(t: Thread, args: &AutopilotArgs) {
         // Nothing near: drift back to the middle, slowly, to keep room on every side.
         (space.size * 0.5 - pos) / (space.size.x.max(space.size.y))
     };
-    let (move_x, move_y) = Input::move_towards(wish.clamp_length_max(1.0));
+    let (move_x, move_y) = Input::move_towards(math::clamp_length_max(wish, 1.0));
     let (aim, fire) = if found.nearest != u64::MAX {
         let d = space.offset(pos, grid.pos.get(found.entry));
         let vel = vel_of(found.entry);
-        let lead = libm::sqrtf(d.length_squared()) / rules.shot_speed;
+        let lead = math::length(d) / rules.shot_speed;
         let ship_vel = vel_of(ship);
         (Input::aim_towards(d + (vel - ship_vel) * lead), 1)
     } else {

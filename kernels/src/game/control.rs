@@ -6,7 +6,7 @@ use core::f32::consts::TAU;
 
 use glam::Vec2;
 
-use crate::DevSlice;
+use crate::{DevSlice, math};
 
 /// Steps of [`Input::move_x`] / [`Input::move_y`] per unit of stick deflection.
 pub const MOVE_SCALE: i32 = 1000;
@@ -33,8 +33,7 @@ impl Input {
     #[inline(always)]
     pub fn movement(&self) -> Vec2 {
         let v = Vec2::new(self.move_x as f32, self.move_y as f32) / MOVE_SCALE as f32;
-        let len2 = v.length_squared();
-        if len2 > 1.0 { v / libm::sqrtf(len2) } else { v }
+        math::clamp_length_max(v, 1.0)
     }
 
     /// Unit vector of the shooting direction.

@@ -142,7 +142,7 @@ pub fn box_muller_first(u1: f32, u2: f32) -> f32 {
 #[inline(always)]
 fn polar(u1: f32, u2: f32) -> (f32, f32) {
     (
-        libm::sqrtf(-2.0 * libm::logf(u1)),
+        crate::math::sqrt(-2.0 * libm::logf(u1)),
         2.0 * core::f32::consts::PI * u2,
     )
 }

@@ -600,15 +600,14 @@ impl CellIndex {
             self.for_each_run(space, near, |kind, start, end| {
                 let (every, skip) = sample.of_run(end - start);
                 let run = self.run(start, end);
-                // Each entry is asked for while the one before is visited.
-                let mut entry = start + skip;
-                let mut ahead = run.ahead(entry);
-                while entry < end {
-                    let (slot, at) = ahead;
-                    ahead = run.ahead(entry + every);
-                    value = add(value, every, slot, kind, at, entry);
-                    entry += every;
-                }
+                let add =
+                    |value, weight, slot, at, entry| add(value, weight, slot, kind, at, entry);
+                // A run taken whole (every run, where there is no budget) is walked with a
+                // weight known to be 1, so that `add`'s weighted sums multiply nothing.
+                value = match every {
+                    1 => run.fold(start, 1, value, add),
+                    _ => run.fold(start + skip, every, value, add),
+                };
             });
             return value;
         }
@@ -724,6 +723,29 @@ impl Run {
     fn ahead(&self, entry: u32) -> (u32, Vec2) {
         let at = (entry - self.start).min(self.slots.len() - 1);
         (asked(self.slots.get(at)), asked(self.pos.get(at)))
+    }
+
+    /// `add(value, every, slot, position, entry)` over every `every`-th entry from `first`
+    /// on, in order, each entry asked for while the one before is visited.
+    #[inline(always)]
+    fn fold<A>(
+        &self,
+        first: u32,
+        every: u32,
+        init: A,
+        add: impl Fn(A, u32, u32, Vec2, u32) -> A,
+    ) -> A {
+        let end = self.start + self.slots.len();
+        let mut value = init;
+        let mut entry = first;
+        let mut ahead = self.ahead(entry);
+        while entry < end {
+            let (slot, at) = ahead;
+            ahead = self.ahead(entry + every);
+            value = add(value, every, slot, at, entry);
+            entry += every;
+        }
+        value
     }
 }
 

@@ -9,6 +9,7 @@
 use glam::Vec2;
 
 use super::kinds::Bound;
+use crate::math::{length, sqrt};
 
 /// An overlap between bodies `a` and `b`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -53,7 +54,7 @@ fn circle_circle(reach: f32, d: Vec2, tie: Vec2) -> Option<Contact> {
     let dist2 = d.length_squared();
     // Written so that NaN fails the test.
     (dist2 < reach * reach).then(|| {
-        let dist = libm::sqrtf(dist2);
+        let dist = sqrt(dist2);
         let normal = if dist > 0.0 { d / dist } else { tie };
         Contact {
             normal,
@@ -86,7 +87,7 @@ fn circle_rect(r: f32, half: Vec2, d: Vec2, tie: Vec2) -> Option<Contact> {
     let towards = closest - p;
     let dist2 = towards.length_squared();
     (dist2 < r * r).then(|| {
-        let dist = libm::sqrtf(dist2);
+        let dist = sqrt(dist2);
         Contact {
             normal: towards / dist,
             depth: r - dist,
@@ -215,12 +216,12 @@ fn disk_entry(p0: Vec2, v: Vec2, reach: f32) -> Option<Swept> {
     if !(a > 0.0 && c > 0.0 && b < 0.0 && disc > 0.0) {
         return None;
     }
-    let time = (-b - libm::sqrtf(disc)) / a;
+    let time = (-b - sqrt(disc)) / a;
     if !(time > 0.0 && time < 1.0) {
         return None;
     }
     let at = p0 + v * time;
-    let dist = libm::sqrtf(at.length_squared());
+    let dist = length(at);
     (dist > 0.0).then(|| Swept {
         time,
         normal: at / dist,

@@ -12,6 +12,7 @@ use super::bodies::{Bodies, Contacts, Deaths};
 use super::kinds::KindInfo;
 use super::narrow::inverse_mass;
 use super::space::Space;
+use crate::math::{self, sqrt};
 use crate::{DevSlice, Thread, kernel_args};
 
 /// The paper's order, velocity then position: semi-implicit (symplectic) Euler.
@@ -51,7 +52,7 @@ impl Field {
         if self.strength == 0.0 || r2 <= 0.0 {
             self.gravity
         } else {
-            self.gravity + r * (self.strength / (r2 * libm::sqrtf(r2)))
+            self.gravity + r * (self.strength / (r2 * sqrt(r2)))
         }
     }
 }
@@ -129,7 +130,7 @@ fn finite(vel: Vec2) -> Vec2 {
 pub fn limit_speed(vel: Vec2, max_speed: f32) -> Vec2 {
     let speed2 = vel.length_squared();
     if speed2 > max_speed * max_speed {
-        vel * (max_speed / libm::sqrtf(speed2))
+        vel * (max_speed / sqrt(speed2))
     } else {
         vel
     }
@@ -216,7 +217,7 @@ pub fn integrate_slot(args: &IntegrateArgs, slot: u32) {
             .set(slot, if moves { old_pos + push } else { old_pos });
     }
     bodies.vel.set(slot, if moves { vel } else { old_vel });
-    if let Some(dir) = vel.try_normalize().filter(|_| moves) {
+    if let Some(dir) = math::try_normalize(vel).filter(|_| moves) {
         bodies.dir.set(slot, dir);
     }
 }

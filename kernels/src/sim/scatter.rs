@@ -4,6 +4,7 @@ use glam::Vec2;
 
 use super::bodies::Bodies;
 use super::space::Space;
+use crate::math::try_normalize;
 use crate::{DevSlice, Thread, kernel_args};
 
 kernel_args! {
@@ -60,7 +61,7 @@ pub fn random_place(b: &Bodies, slot: u32, space: &Space, speed: f32) -> Place {
     Place {
         pos: u * space.size,
         vel: normal * speed,
-        facing: normal.try_normalize().unwrap_or(Vec2::X),
+        facing: try_normalize(normal).unwrap_or(Vec2::X),
     }
 }
 
@@ -76,7 +77,7 @@ pub fn birth(b: &Bodies, space: &Space, slot: u32, place: Place, energy: i32) {
     }
     b.vel.set(slot, vel);
     b.force.set(slot, Vec2::ZERO);
-    b.dir.set(slot, vel.try_normalize().unwrap_or(place.facing));
+    b.dir.set(slot, try_normalize(vel).unwrap_or(place.facing));
     b.energy.set(slot, energy);
     b.state.set(slot, 0);
     b.age.set(slot, 0);
