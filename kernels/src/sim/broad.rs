@@ -504,6 +504,23 @@ impl CellIndex {
         });
     }
 
+    /// The first and the last row that hold a body of `kind`, if any does: its first and
+    /// last entry's, since a kind's buckets go in row-major cell order. The same for every
+    /// query, so a warp's lanes load them together; a kind of few bodies close together
+    /// (the ship, its shots) so costs the queries far from them one test a row, not the
+    /// loads of the row's bounds.
+    #[inline(always)]
+    fn rows_of(&self, space: &Space, kind: u32) -> Option<(u32, u32)> {
+        let [first, end] = asked([
+            self.start.get(kind * self.cells),
+            self.start.get((kind + 1) * self.cells),
+        ]);
+        (first < end).then(|| {
+            let row = |entry| space.cell_coords(self.pos.get(entry)).1;
+            (row(first), row(end - 1))
+        })
+    }
+
     /// The block a query reads: the whole 3×3 block without a reach or under a cap.
     #[inline(always)]
     fn block(&self, space: &Space, near: Near) -> NearBlock {
@@ -635,7 +652,14 @@ impl CellIndex {
         while rest != 0 {
             let kind = rest.trailing_zeros();
             rest &= rest - 1;
+            // Rows without a body of the kind have empty runs: not read.
+            let Some((low, high)) = self.rows_of(space, kind) else {
+                continue;
+            };
             for k in 0..block.rows.count {
+                if !(low..=high).contains(&block.rows.at(k)) {
+                    continue;
+                }
                 let row = kind * self.cells + block.rows.at(k) * space.cols;
                 for r in 0..block.cols.runs() {
                     let (first, last) = block.cols.run(r);
