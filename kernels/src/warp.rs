@@ -373,6 +373,13 @@ impl Team {
         }
     }
 
+    /// How many lanes share the body: 1 for a body of one thread (on the CPU too, which
+    /// runs a team's lanes as one thread).
+    #[inline(always)]
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
     /// The calling thread's place in the team, 0 to `width - 1`.
     #[inline(always)]
     pub fn lane(&self) -> u32 {

@@ -311,7 +311,7 @@ pub fn look<const MOVING: bool>(
     // since every body it counts lies within it; a team reads the whole block (reading
     // less made `think` slower for teams: `paper` 14.8 -> 17.2 µs on an H200). The sight
     // budget samples the whole block's runs, so a look under one keeps them all.
-    let alone = team.stride().1 == 1;
+    let alone = team.width() == 1;
     let near = Near {
         pos,
         reach: (alone && brain.sight_budget == 0).then_some(brain.vision),
