@@ -197,18 +197,21 @@ impl<'d> Pipeline<'d> {
         let device = self.device;
         let renumbers = self.renumbers_next();
         let mut marks = vec![device.mark()?];
+        let mut ran = Vec::with_capacity(self.plans.stages.len());
         for stage in &self.plans.stages {
             // The renumbering's time is counted in the steps that renumber only (nothing in
             // the others): its mean over the steps is its share of each.
-            if stage.stage != Stage::Renumber || renumbers {
+            let runs = stage.stage != Stage::Renumber || renumbers;
+            if runs {
                 device.run(&stage.plan)?;
             }
+            ran.push(runs);
             marks.push(device.mark()?);
         }
-        for (stage, pair) in self.plans.stages.iter().zip(marks.windows(2)) {
-            profile.add(stage, pair[1].seconds_since(&pair[0])?);
+        for ((stage, pair), ran) in self.plans.stages.iter().zip(marks.windows(2)).zip(ran) {
+            profile.add(stage, pair[1].seconds_since(&pair[0])?, ran);
         }
-        profile.steps += 1;
+        profile.end_step();
         self.steps += 1;
         Ok(())
     }

@@ -11,9 +11,16 @@ pub struct StageTimes {
     pub stage: &'static str,
     /// Kernel launches per step.
     pub launches: usize,
-    /// Bytes of device memory moved per step, by our count: every array element the
-    /// stage's kernels must read or write, once (neighbour lookups not counted).
+    /// Bytes of device memory moved per profiled step, by our count: every array element
+    /// the stage's kernels must read or write, once (neighbour lookups not counted). A
+    /// stage that runs only every few steps (the renumbering) moves them in those steps,
+    /// spread over all, as its time is.
     pub bytes: u64,
+    /// Profiled steps in which the stage ran.
+    pub runs: u64,
+    /// Bytes of one run.
+    #[serde(skip)]
+    run_bytes: u64,
     /// Seconds spent in the stage over all profiled steps.
     pub seconds: f64,
 }
@@ -28,8 +35,8 @@ pub struct Profile {
 }
 
 impl Profile {
-    /// Adds `seconds` of one step to `stage`'s entry.
-    pub(super) fn add(&mut self, stage: &StagePlan, seconds: f64) {
+    /// Adds `seconds` of one step to `stage`'s entry, which `ran` in it or not.
+    pub(super) fn add(&mut self, stage: &StagePlan, seconds: f64, ran: bool) {
         let entry = match self
             .stages
             .iter_mut()
@@ -40,13 +47,22 @@ impl Profile {
                 self.stages.push(StageTimes {
                     stage: stage.stage.name(),
                     launches: stage.launches(),
-                    bytes: stage.bytes(),
-                    seconds: 0.0,
+                    run_bytes: stage.bytes(),
+                    ..StageTimes::default()
                 });
                 self.stages.last_mut().expect("just pushed")
             }
         };
         entry.seconds += seconds;
+        entry.runs += u64::from(ran);
+    }
+
+    /// Ends a profiled step: counts it, and spreads each stage's bytes over the steps.
+    pub(super) fn end_step(&mut self) {
+        self.steps += 1;
+        for s in &mut self.stages {
+            s.bytes = s.run_bytes * s.runs / self.steps;
+        }
     }
 
     /// Mean seconds per step of all stages together.
