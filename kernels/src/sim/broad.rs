@@ -647,12 +647,7 @@ impl CellIndex {
     /// order, cut at the cap, one after another (the one-thread walk).
     #[inline(always)]
     fn for_each_run(&self, space: &Space, near: Near, mut run: impl FnMut(u32, u32, u32)) {
-        // The rows of the whole 3×3 block, which hold those of any block the query reads.
-        let around = space.neighbourhood(near.pos).0;
-        // Worked out for the first kind with a body in those rows: a query far from every
-        // body of its kinds (an enemy far from the ship and its shots) skips the reach's
-        // arithmetic too.
-        let mut block = None;
+        let block = self.block(space, near);
         let mut rest = near.mask & kinds_mask(self.kinds);
         // Entries the cap still allows.
         let mut left = if self.cap == 0 { u32::MAX } else { self.cap };
@@ -663,10 +658,6 @@ impl CellIndex {
             let Some((low, high)) = self.rows_of(space, kind) else {
                 continue;
             };
-            if !(0..around.count).any(|k| (low..=high).contains(&around.at(k))) {
-                continue;
-            }
-            let block = *block.get_or_insert_with(|| self.block(space, near));
             for k in 0..block.rows.count {
                 if !(low..=high).contains(&block.rows.at(k)) {
                     continue;
