@@ -488,7 +488,7 @@ impl CellIndex {
         (near, sample): (Near, Sample),
         mut visit: impl FnMut(u32, u32, u32, Vec2, u32),
     ) {
-        self.for_each_run(space, near, |kind, start, end| {
+        self.for_each_run(space, (near, true), |kind, start, end| {
             let (every, skip) = sample.of_run(end - start);
             // Each entry is asked for while the one before is visited. (Bounds checked an
             // entry: the contacts' runs are short, and a run's views cost the narrow phase
@@ -502,6 +502,24 @@ impl CellIndex {
                 entry += every;
             }
         });
+    }
+
+    /// Whether a body of a kind of `mask` lies in a row of the whole 3×3 block around `pos`:
+    /// where none does (an enemy far from the ship and its shots), a query reads nothing and
+    /// needs no block.
+    #[inline(always)]
+    fn any_around(&self, space: &Space, pos: Vec2, mask: u32) -> bool {
+        let around = space.neighbourhood(pos).0;
+        let mut rest = mask;
+        let mut any = false;
+        while rest != 0 {
+            let kind = rest.trailing_zeros();
+            rest &= rest - 1;
+            if let Some((low, high)) = self.rows_of(space, kind) {
+                any |= (0..around.count).any(|k| (low..=high).contains(&around.at(k)));
+            }
+        }
+        any
     }
 
     /// The first and the last row that hold a body of `kind`, if any does: its first and
@@ -614,7 +632,7 @@ impl CellIndex {
         if width == 1 {
             // `for_each_taken`'s walk written out: through its closure the looks of `paper`
             // took 7% longer on the CPU emulation (470 against 440 µs a step).
-            self.for_each_run(space, near, |kind, start, end| {
+            self.for_each_run(space, (near, false), |kind, start, end| {
                 let (every, skip) = sample.of_run(end - start);
                 let run = self.run(start, end);
                 let add =
@@ -644,11 +662,23 @@ impl CellIndex {
     }
 
     /// Hands `run(kind, start, end)` every nonempty run of entries of `near` in visiting
-    /// order, cut at the cap, one after another (the one-thread walk).
+    /// order, cut at the cap, one after another (the one-thread walk). Where its kinds are
+    /// `sparse` (the contacts': the ship and its shots), a query first asks whether any of
+    /// their bodies is around ([`CellIndex::any_around`]); the looks, whose own kind is all
+    /// around, skip the question (asked, `paper` lost 3% on an H200).
     #[inline(always)]
-    fn for_each_run(&self, space: &Space, near: Near, mut run: impl FnMut(u32, u32, u32)) {
+    fn for_each_run(
+        &self,
+        space: &Space,
+        (near, sparse): (Near, bool),
+        mut run: impl FnMut(u32, u32, u32),
+    ) {
+        let mask = near.mask & kinds_mask(self.kinds);
+        if sparse && !self.any_around(space, near.pos, mask) {
+            return;
+        }
         let block = self.block(space, near);
-        let mut rest = near.mask & kinds_mask(self.kinds);
+        let mut rest = mask;
         // Entries the cap still allows.
         let mut left = if self.cap == 0 { u32::MAX } else { self.cap };
         while rest != 0 {
