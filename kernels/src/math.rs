@@ -3,6 +3,24 @@
 
 use glam::Vec2;
 
+/// The PTX instruction `$instruction` on the 32-bit register `$x`, giving a `$result`.
+#[cfg(target_arch = "nvptx64")]
+macro_rules! one_instruction {
+    ($instruction:literal, $x:expr, $result:ty) => {{
+        let y: $result;
+        // SAFETY: a register-to-register operation; no memory, no preconditions.
+        unsafe {
+            core::arch::asm!(
+                concat!($instruction, " {y}, {x};"),
+                y = out(reg32) y,
+                x = in(reg32) $x,
+                options(pure, nomem, nostack)
+            )
+        };
+        y
+    }};
+}
+
 /// The largest integer not above `x`: IEEE 754's `roundToIntegralTowardNegative` (NaN,
 /// infinities and signed zeros as they are).
 /// On the GPU it is one instruction (`cvt.rmi.f32.f32`), where `libm::floorf`'s bit
@@ -10,19 +28,7 @@ use glam::Vec2;
 #[inline(always)]
 pub fn floor(x: f32) -> f32 {
     #[cfg(target_arch = "nvptx64")]
-    {
-        let y: f32;
-        // SAFETY: a register-to-register conversion; no memory, no preconditions.
-        unsafe {
-            core::arch::asm!(
-                "cvt.rmi.f32.f32 {y}, {x};",
-                y = out(reg32) y,
-                x = in(reg32) x,
-                options(pure, nomem, nostack)
-            )
-        };
-        y
-    }
+    return one_instruction!("cvt.rmi.f32.f32", x, f32);
     #[cfg(not(target_arch = "nvptx64"))]
     libm::floorf(x)
 }
@@ -33,19 +39,7 @@ pub fn floor(x: f32) -> f32 {
 #[inline(always)]
 pub fn trunc_i32(x: f32) -> i32 {
     #[cfg(target_arch = "nvptx64")]
-    {
-        let y: i32;
-        // SAFETY: a register-to-register conversion; no memory, no preconditions.
-        unsafe {
-            core::arch::asm!(
-                "cvt.rzi.s32.f32 {y}, {x};",
-                y = out(reg32) y,
-                x = in(reg32) x,
-                options(pure, nomem, nostack)
-            )
-        };
-        y
-    }
+    return one_instruction!("cvt.rzi.s32.f32", x, i32);
     #[cfg(not(target_arch = "nvptx64"))]
     {
         x as i32
@@ -59,19 +53,7 @@ pub fn trunc_i32(x: f32) -> i32 {
 #[inline(always)]
 pub fn sqrt(x: f32) -> f32 {
     #[cfg(target_arch = "nvptx64")]
-    {
-        let y: f32;
-        // SAFETY: a register-to-register operation; no memory, no preconditions.
-        unsafe {
-            core::arch::asm!(
-                "sqrt.rn.f32 {y}, {x};",
-                y = out(reg32) y,
-                x = in(reg32) x,
-                options(pure, nomem, nostack)
-            )
-        };
-        y
-    }
+    return one_instruction!("sqrt.rn.f32", x, f32);
     #[cfg(not(target_arch = "nvptx64"))]
     libm::sqrtf(x)
 }

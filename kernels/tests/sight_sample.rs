@@ -84,7 +84,15 @@ fn a_sampled_look_takes_every_strided_entry_of_each_kind_within_the_budget() {
         }
         let entries = *start.last().unwrap();
         let slots: Vec<u32> = (0..entries).map(|e| e * 3 + 1).collect();
-        let pos: Vec<Vec2> = (0..entries).map(|e| Vec2::splat(e as f32)).collect();
+        // Each entry in its bucket's cell, as a built grid has it (the queries skip the rows
+        // outside a kind's first and last entry's).
+        let pos: Vec<Vec2> = (0..kinds * cells)
+            .flat_map(|bucket| {
+                let cell = bucket % cells;
+                let at = Vec2::new((cell % cols) as f32 + 0.5, (cell / cols) as f32 + 0.5);
+                (start[bucket as usize]..start[bucket as usize + 1]).map(move |_| at * 10.0)
+            })
+            .collect();
         let cap = [0, 0, 1 + rng.below(150)][rng.below(3) as usize];
         let none: Vec<Vec2> = Vec::new();
         let grid = CellIndex {

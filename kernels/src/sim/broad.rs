@@ -352,7 +352,9 @@ pub fn merge_runs(t: Thread, args: &MergeArgs) {
 pub struct CellIndex {
     /// Slots by bucket, then by slot.
     pub slots: DevSlice<u32>,
-    /// The position of each entry's body when the grid was built.
+    /// The position of each entry's body when the grid was built: inside its bucket's
+    /// cell, which the queries rely on: a kind's first and last entry give the rows its
+    /// bodies lie in.
     pub pos: DevSlice<Vec2>,
     /// The velocity of each entry's body when the grid was built, in worlds whose bodies
     /// move in the launch that queries the grid (whose own velocities then change under the
