@@ -178,7 +178,10 @@ impl Report {
                 "\nstage times over {} steps (copy bandwidth {:.1} GB/s):\n{}{}\n",
                 p.profile.steps,
                 p.copy_bandwidth / 1e9,
-                p.profile.to_table(Some(p.copy_bandwidth)),
+                p.profile.to_table(
+                    Some(p.copy_bandwidth),
+                    Some(p.floor.graph_s / p.floor.launches.max(1) as f64)
+                ),
                 p.floor.describe(p.profile.step_seconds())
             );
         }

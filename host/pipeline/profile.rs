@@ -83,13 +83,18 @@ impl Profile {
 
     /// The profile as an aligned table: per stage, microseconds per step, share of the step,
     /// launches, bytes and the bandwidth they make; with `copy_bandwidth` (bytes per second,
-    /// measured in the same run), the fraction of it each stage achieves.
-    pub fn to_table(&self, copy_bandwidth: Option<f64>) -> String {
+    /// measured in the same run), the fraction of it each stage achieves; with `launch_s`
+    /// (seconds a launch of a chain of launches that do nothing takes, measured in the same
+    /// run), each stage's floor: what its launches would take a step doing nothing.
+    pub fn to_table(&self, copy_bandwidth: Option<f64>, launch_s: Option<f64>) -> String {
         let steps = self.steps.max(1) as f64;
         let total: f64 = self.stages.iter().map(|s| s.seconds).sum();
+        let floor_us =
+            |s: &StageTimes| launch_s.map(|l| s.launches as f64 * l * s.runs as f64 / steps * 1e6);
+        let shown = |us: Option<f64>| us.map_or("-".to_string(), |us| format!("{us:.2}"));
         let mut out = format!(
-            "{:<10} {:>10} {:>7} {:>8} {:>12} {:>10} {:>9}\n",
-            "stage", "us/step", "share", "launches", "bytes/step", "GB/s", "of copy"
+            "{:<10} {:>10} {:>7} {:>8} {:>10} {:>12} {:>10} {:>9}\n",
+            "stage", "us/step", "share", "launches", "floor us", "bytes/step", "GB/s", "of copy"
         );
         for s in &self.stages {
             let per_step = s.seconds / steps;
@@ -101,24 +106,66 @@ impl Profile {
             let of_copy =
                 copy_bandwidth.map_or("-".to_string(), |bw| format!("{:.1}%", 100.0 * rate / bw));
             out += &format!(
-                "{:<10} {:>10.2} {:>6.1}% {:>8} {:>12} {:>10.1} {:>9}\n",
+                "{:<10} {:>10.2} {:>6.1}% {:>8} {:>10} {:>12} {:>10.1} {:>9}\n",
                 s.stage,
                 per_step * 1e6,
                 100.0 * s.seconds / total.max(f64::MIN_POSITIVE),
                 s.launches,
+                shown(floor_us(s)),
                 s.bytes,
                 rate / 1e9,
                 of_copy
             );
         }
+        let floor = launch_s.map(|_| self.stages.iter().filter_map(floor_us).sum());
         out += &format!(
-            "{:<10} {:>10.2} {:>6.1}% {:>8} {:>12}\n",
+            "{:<10} {:>10.2} {:>6.1}% {:>8} {:>10} {:>12}\n",
             "step",
             total / steps * 1e6,
             100.0,
             self.stages.iter().map(|s| s.launches).sum::<usize>(),
+            shown(floor),
             self.stages.iter().map(|s| s.bytes).sum::<u64>()
         );
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Profile, StageTimes};
+
+    /// A stage that runs in one step of four (the renumbering) shows a quarter of its bytes
+    /// and of its launches' floor a step; a stage that runs every step, its own.
+    #[test]
+    fn a_stage_run_every_few_steps_is_spread_over_the_steps() {
+        let stage = |name, launches, runs, run_bytes, seconds| StageTimes {
+            stage: name,
+            launches,
+            runs,
+            run_bytes,
+            seconds,
+            ..StageTimes::default()
+        };
+        // Three steps in, and the fourth ends: "every" ran in all four, "seldom" in one.
+        let mut profile = Profile {
+            steps: 3,
+            stages: vec![
+                stage("every", 2, 4, 1000, 3e-6),
+                stage("seldom", 4, 1, 8000, 1e-6),
+            ],
+        };
+        profile.end_step();
+        let table = profile.to_table(None, Some(2e-6));
+        let row = |name: &str| {
+            let line = table.lines().find(|l| l.starts_with(name)).expect("a row");
+            line.split_whitespace()
+                .map(str::to_string)
+                .collect::<Vec<_>>()
+        };
+        // stage, us/step, share, launches, floor us, bytes/step, GB/s, of copy
+        assert_eq!(row("every")[4..6], ["4.00", "1000"]);
+        assert_eq!(row("seldom")[4..6], ["2.00", "2000"]);
+        assert_eq!(row("step")[4..6], ["6.00", "3000"]);
     }
 }
