@@ -7,7 +7,7 @@
 //! whole state.
 
 use super::mt607::{self, Mt607Params};
-use crate::{DevSlice, Thread, device_data, kernel_args};
+use crate::{DevSlice, Thread, asked, device_data, kernel_args};
 
 device_data! {
     /// The generators of every slot: parameters, state words and positions.
@@ -71,11 +71,44 @@ impl SlotRng<'_> {
         mt607::to_unit_f32(self.next_u32())
     }
 
+    /// The next two uniforms, as two calls of [`SlotRng::next_f32`] give them, with the five
+    /// words the two draws read asked for at once: the second draw does not read the word
+    /// the first replaces, so the thread waits for the state's memory once, not twice.
+    #[inline(always)]
+    fn next_two_f32(&mut self) -> (f32, f32) {
+        // The second draw reads the words 1, 2 and M + 1 after the first's oldest, which
+        // the first overwrites: none is it while N does not divide 1, 2 or M + 1.
+        const { assert!(mt607::N > 2 && (mt607::M + 1) % mt607::N != 0) };
+        let words = &self.streams.words;
+        let (next, middle) = mt607::neighbours(self.index);
+        let (after, middle_after) = mt607::neighbours(next);
+        let [
+            oldest,
+            next_word,
+            middle_word,
+            after_word,
+            middle_after_word,
+        ] = asked([
+            words.get(self.word(self.index)),
+            words.get(self.word(next)),
+            words.get(self.word(middle)),
+            words.get(self.word(after)),
+            words.get(self.word(middle_after)),
+        ]);
+        let a = self.params.matrix_a;
+        let first = mt607::twist(oldest, next_word, middle_word, a);
+        let second = mt607::twist(next_word, after_word, middle_after_word, a);
+        words.set(self.word(self.index), first);
+        words.set(self.word(next), second);
+        self.index = after;
+        let unit = |x| mt607::to_unit_f32(mt607::temper(x, &self.params));
+        (unit(first), unit(second))
+    }
+
     /// Two standard normals from the next two uniforms (see [`mt607::box_muller`]).
     #[inline(always)]
     pub fn next_normal_pair(&mut self) -> (f32, f32) {
-        let u1 = self.next_f32();
-        let u2 = self.next_f32();
+        let (u1, u2) = self.next_two_f32();
         mt607::box_muller(u1, u2)
     }
 
@@ -83,8 +116,7 @@ impl SlotRng<'_> {
     /// draws (the generator ends where the pair leaves it), without the second's sine.
     #[inline(always)]
     pub fn next_normal(&mut self) -> f32 {
-        let u1 = self.next_f32();
-        let u2 = self.next_f32();
+        let (u1, u2) = self.next_two_f32();
         mt607::box_muller_first(u1, u2)
     }
 }
