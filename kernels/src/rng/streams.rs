@@ -78,7 +78,7 @@ impl SlotRng<'_> {
     fn next_two_f32(&mut self) -> (f32, f32) {
         // The second draw reads the words 1, 2 and M + 1 after the first's oldest, which
         // the first overwrites: none is it while N does not divide 1, 2 or M + 1.
-        const { assert!(mt607::N > 2 && (mt607::M + 1) % mt607::N != 0) };
+        const { assert!(mt607::N > 2 && !(mt607::M + 1).is_multiple_of(mt607::N)) };
         let words = &self.streams.words;
         let (next, middle) = mt607::neighbours(self.index);
         let (after, middle_after) = mt607::neighbours(next);
