@@ -38,7 +38,7 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
             world.layout.slots,
             args,
             b,
-            88 * u64::from(world.layout.slots),
+            BYTES_A_SLOT * u64::from(world.layout.slots),
         )
     };
     // The autopilot's branch, where it reads the bodies' velocities, ends before they first
@@ -53,3 +53,7 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
 pub(super) fn step_dt(world: &World) -> f32 {
     world.spec.dt / world.spec.physics.substeps as f32
 }
+
+/// Bytes the integrator moves a slot, by our count: what a body reads of itself and its
+/// contacts, and its new place and velocity.
+pub(super) const BYTES_A_SLOT: u64 = 88;

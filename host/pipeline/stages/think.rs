@@ -4,8 +4,8 @@
 use gpuwars_kernels::game::ai::{BodyStepArgs, ThinkArgs};
 use gpuwars_kernels::registry;
 
-use super::integrate::step_dt;
-use super::narrow::relaxation;
+use super::integrate::{self, step_dt};
+use super::narrow::{self, relaxation};
 use crate::Op;
 use crate::backend::Binder;
 use crate::pipeline::access;
@@ -64,11 +64,19 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
                 threads_needed,
                 args,
                 b,
-                196 * slots,
+                (narrow::BYTES_A_SLOT + BYTES_A_SLOT + integrate::BYTES_A_SLOT) * slots,
             )
         }
     } else if teams.single() {
-        unsafe { threads(registry::THINK, threads_needed, args, b, 56 * slots) }
+        unsafe {
+            threads(
+                registry::THINK,
+                threads_needed,
+                args,
+                b,
+                BYTES_A_SLOT * slots,
+            )
+        }
     } else {
         unsafe {
             threads(
@@ -76,9 +84,21 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
                 threads_needed,
                 args,
                 b,
-                56 * slots,
+                BYTES_A_SLOT * slots,
             )
         }
     };
     vec![op]
 }
+
+/// Bytes a body's machine moves, by our count, as a wandering body moves them (a body in
+/// another state moves fewer; ncu measured 114 bytes a body of DRAM traffic at a million
+/// enemies, docs/benchmarks.md):
+/// - of its own slot, its liveness, kind, place, velocity, energy, hits, state and mass
+///   read (40 bytes), its state and force written (12), and its heading read (8);
+/// - of its generator, the parameters (12) and position (4) read and the position written
+///   (4), and the two draws' five words read and two written (28).
+///
+/// The grid's entries and cells it looks through are not counted: its neighbours read the
+/// same ones, mostly from the caches.
+pub(super) const BYTES_A_SLOT: u64 = 40 + 12 + 8 + (12 + 4 + 4 + 28);
