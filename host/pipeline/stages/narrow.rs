@@ -6,7 +6,7 @@ use crate::Op;
 use crate::backend::Binder;
 use crate::pipeline::access;
 use crate::pipeline::world::{TeamWarps, World};
-use crate::primitives::threads;
+use crate::primitives::{UNEVEN_BLOCK, threads_in};
 
 /// The narrow phase of substep `substep`, a team of threads a slot, if anything collides
 /// (and, in the first substep, the bodies do not take their step in one launch: see
@@ -36,15 +36,20 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         .expect("at most 32 threads a slot of at most 2^24 slots");
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
     vec![unsafe {
-        threads(
+        threads_in(
             kernel,
             threads_needed,
+            UNEVEN_BLOCK,
             args,
             b,
-            52 * u64::from(world.layout.slots),
+            BYTES_A_SLOT * u64::from(world.layout.slots),
         )
     }]
 }
+
+/// Bytes the narrow phase moves a slot, by our count: what a body reads of itself and
+/// writes of its contacts.
+pub(super) const BYTES_A_SLOT: u64 = 52;
 
 /// How the world's physics combines a body's pushes.
 pub(super) fn relaxation(world: &World) -> Relaxation {
