@@ -17,6 +17,7 @@
 #![warn(missing_docs)]
 
 pub mod data;
+pub mod elementary;
 pub mod exec;
 pub mod game;
 pub mod math;

@@ -19,6 +19,7 @@ use glam::Vec2;
 use super::control::Status;
 use super::fsm::{Machine, Percept, State, next_state};
 use super::rules::Brain;
+use crate::elementary;
 use crate::exec::follow_previous_launch;
 use crate::math::{self, trunc_i32};
 use crate::sim::broad::{CellIndex, Near, Sample, kind_bit};
@@ -424,9 +425,7 @@ fn wanted_velocity(
         State::CheckingEnergy | State::Dead => b.vel.get(slot),
         State::Wandering => {
             let turn = b.rng.open(slot).next_normal();
-            // One call for both: `sincosf` is `sinf` and `cosf` bit for bit (a test holds
-            // it over every angle a turn can take), and a call costs the GPU spills.
-            let (sin, cos) = libm::sincosf(turn * WANDER_TURN);
+            let (sin, cos) = elementary::sin_cos(turn * WANDER_TURN);
             let rotation = Vec2::new(cos, sin);
             let heading = rotation.rotate(b.dir.get(slot));
             heading * (WANDER_SPEED * speed)

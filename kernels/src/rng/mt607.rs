@@ -6,6 +6,8 @@
 //! The generator is a plain `Copy` struct; the free functions work on a
 //! borrowed state so a structure-of-arrays layout can use them directly.
 
+use crate::elementary::{ln, sin_cos_turns};
+
 /// Words of state: n = floor(607 / 32) + 1.
 pub const N: usize = 19;
 /// Offset of the middle word in the recurrence (`MT_MM`).
@@ -121,30 +123,27 @@ pub fn to_unit_f32(x: u32) -> f32 {
     (x as f32 + 1.0) / 4_294_967_296.0
 }
 
-/// Box–Muller transform of two uniforms in (0, 1], as the sample's
-/// `BoxMuller`: r = sqrt(-2 ln u1), phi = 2 pi u2, returns (r cos phi,
-/// r sin phi). `u1 > 0` keeps the logarithm finite.
+/// Box–Muller transform of two uniforms in (0, 1], as the sample's `BoxMuller`:
+/// r = sqrt(-2 ln u1), phi = 2 pi u2, returns (r cos phi, r sin phi). `u1 > 0` keeps the
+/// logarithm finite. The sine and cosine are of `u2` turns, and they and the logarithm are
+/// [`crate::elementary`]'s (the same bits on both targets, no call on the GPU).
 #[inline]
 pub fn box_muller(u1: f32, u2: f32) -> (f32, f32) {
-    let (r, phi) = polar(u1, u2);
-    (r * libm::cosf(phi), r * libm::sinf(phi))
+    let r = radius(u1);
+    let (sin, cos) = sin_cos_turns(u2);
+    (r * cos, r * sin)
 }
 
-/// The first normal of [`box_muller`]'s pair alone, bit for bit: `r cos phi`, for a draw
-/// that uses one normal (its sine, a call of its own on the GPU, is not worked out).
+/// The first normal of [`box_muller`]'s pair alone, bit for bit: `r cos phi`.
 #[inline]
 pub fn box_muller_first(u1: f32, u2: f32) -> f32 {
-    let (r, phi) = polar(u1, u2);
-    r * libm::cosf(phi)
+    radius(u1) * sin_cos_turns(u2).1
 }
 
-/// Box–Muller's radius and angle of two uniforms in (0, 1].
+/// Box–Muller's radius for a uniform in (0, 1].
 #[inline(always)]
-fn polar(u1: f32, u2: f32) -> (f32, f32) {
-    (
-        crate::math::sqrt(-2.0 * libm::logf(u1)),
-        2.0 * core::f32::consts::PI * u2,
-    )
+fn radius(u1: f32) -> f32 {
+    crate::math::sqrt(-2.0 * ln(u1))
 }
 
 /// An MT607 generator: its parameters, 19 words of state and the position of
