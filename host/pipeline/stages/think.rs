@@ -92,8 +92,8 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
 }
 
 /// Bytes a body's machine moves, by our count, as a wandering body moves them (a body in
-/// another state moves fewer; ncu measured 114 bytes a body of DRAM traffic at a million
-/// enemies, docs/benchmarks.md):
+/// another state moves fewer; DRAM moved more in ncu's count at a million enemies, 146
+/// bytes a body, its generator's words scattered over their arrays: docs/benchmarks.md):
 /// - of its own slot, its liveness, kind, place, velocity, energy, hits, state and mass
 ///   read (40 bytes), its state and force written (12), and its heading read (8);
 /// - of its generator, the parameters (12) and position (4) read and the position written
