@@ -3,11 +3,10 @@
 //! multiplications and one division only. Both targets round each of those the same way
 //! (IEEE 754, no fused multiply-adds), so they give the same bits. `libm`'s functions give
 //! them too, but on the GPU they are calls into double-precision code that spills the
-//! calling kernel's registers; these inline into a few dozen instructions without a branch
-//! but the reduction's selects.
+//! calling kernel's registers; these inline into a few dozen instructions.
 //!
-//! Each is within a few units in the last place of the exact value of its argument
-//! (`tests/elementary.rs` measures them against `f64`).
+//! Each is within two units in the last place of the exact value of its argument
+//! (`kernels/tests/elementary.rs` measures them against `f64`).
 
 /// 2π rounded to `f32`.
 const TAU: f32 = core::f32::consts::TAU;
