@@ -424,10 +424,13 @@ fn wanted_velocity(
         }
         State::CheckingEnergy | State::Dead => b.vel.get(slot),
         State::Wandering => {
+            // Asked for with the generator's position, not after its words are written back
+            // (which the load could not then pass): one wait for memory, not two.
+            let dir = asked(b.dir.get(slot));
             let turn = b.rng.open(slot).next_normal();
             let (sin, cos) = elementary::sin_cos(turn * WANDER_TURN);
             let rotation = Vec2::new(cos, sin);
-            let heading = rotation.rotate(b.dir.get(slot));
+            let heading = rotation.rotate(dir);
             heading * (WANDER_SPEED * speed)
         }
     }
@@ -629,9 +632,13 @@ fn think_as<const MACHINE: u32, const MOVING: bool>(
         return;
     }
     let slot = looker.slot;
-    let energy = b.energy.get(slot);
+    // The mass is asked for with the state, not after the state and the generator are
+    // written back (which its load could not then pass): one wait for memory, not two.
+    let [energy, damage] = asked([b.energy.get(slot), args.contacts.damage.get(slot)]);
+    let state = asked(b.state.get(slot));
+    let mass = asked(b.mass.get(slot));
     let percept = Percept {
-        hit: args.contacts.damage.get(slot) > 0,
+        hit: damage > 0,
         out_of_energy: energy <= 0,
         low_energy: energy <= brain.low_energy,
         full_energy: energy >= full,
@@ -639,7 +646,7 @@ fn think_as<const MACHINE: u32, const MOVING: bool>(
         sees_similar: sight.group.is_some(),
         sees_bullet: sight.dodge.is_some(),
     };
-    let state = next_state(machine, State::from_u32(b.state.get(slot)), &percept);
+    let state = next_state(machine, State::from_u32(state), &percept);
     b.state.set(slot, state as u32);
     if state == State::Dead {
         b.alive.set(slot, 0);
@@ -654,6 +661,6 @@ fn think_as<const MACHINE: u32, const MOVING: bool>(
         b.energy.set(slot, energy.saturating_add(1).min(full));
     }
     let want = wanted_velocity(args, brain, slot, state, &sight);
-    let force = (want - looker.vel) * (b.mass.get(slot) / STEER_TIME);
+    let force = (want - looker.vel) * (mass / STEER_TIME);
     b.force.set(slot, force);
 }
