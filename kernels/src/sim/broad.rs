@@ -680,6 +680,8 @@ impl CellIndex {
             return;
         }
         let block = self.block(space, near);
+        let runs = block.cols.runs();
+        let count = block.rows.count * runs;
         let mut rest = mask;
         // Entries the cap still allows.
         let mut left = if self.cap == 0 { u32::MAX } else { self.cap };
@@ -690,25 +692,34 @@ impl CellIndex {
             let Some((low, high)) = self.rows_of(space, kind) else {
                 continue;
             };
-            for k in 0..block.rows.count {
-                if !(low..=high).contains(&block.rows.at(k)) {
-                    continue;
+            // The bounds of the kind's `j`-th run of the block (row by row, run by run).
+            let bounds = |j: u32| {
+                let (k, r) = if runs == 1 { (j, 0) } else { (j / 2, j % 2) };
+                let row = block.rows.at(k);
+                if !(low..=high).contains(&row) {
+                    return [0, 0];
                 }
-                let row = kind * self.cells + block.rows.at(k) * space.cols;
-                for r in 0..block.cols.runs() {
-                    let (first, last) = block.cols.run(r);
-                    let start = self.start.get(row + first);
-                    let end = self
-                        .start
-                        .get(row + last + 1)
-                        .min(start.saturating_add(left));
-                    if start < end {
-                        run(kind, start, end);
-                    }
-                    left -= end.saturating_sub(start);
-                    if left == 0 {
-                        return;
-                    }
+                let (first, last) = block.cols.run(r);
+                let row = kind * self.cells + row * space.cols;
+                asked([self.start.get(row + first), self.start.get(row + last + 1)])
+            };
+            // A look asks for each run's bounds before it walks the run before, so that it
+            // waits for them once, not once a run (the contacts, whose runs are short and
+            // whose registers are few, read them as they go: `paper` lost 1.4% on an H200).
+            let ahead = !sparse;
+            let mut next = if ahead { bounds(0) } else { [0, 0] };
+            for j in 0..count {
+                let [start, end] = if ahead { next } else { bounds(j) };
+                if ahead && j + 1 < count {
+                    next = bounds(j + 1);
+                }
+                let end = end.min(start.saturating_add(left));
+                if start < end {
+                    run(kind, start, end);
+                }
+                left -= end.saturating_sub(start);
+                if left == 0 {
+                    return;
                 }
             }
         }
