@@ -135,12 +135,10 @@ kernels! {
     /// It reads its slots' kinds and free-list flags before it waits for the master.
     BIRTHS_AND_COUNT = births_and_count(master::BirthCountArgs) => master::births_and_count, waits;
     /// The enemies' machines, every live enemy in grid order: perceive, transition, steer.
-    /// It reads its slots' kinds and brains before it waits for the launch before it.
-    THINK = think(ai::ThinkArgs) => ai::think, waits;
+    THINK = think(ai::ThinkArgs) => ai::think;
     /// The enemies' machines with teams of threads for the bodies that expect many
-    /// neighbours. It reads its slots' kinds and brains before it waits for the launch
-    /// before it.
-    THINK_IN_TEAMS = think_in_teams(ai::ThinkArgs) => ai::think_in_teams, waits;
+    /// neighbours.
+    THINK_IN_TEAMS = think_in_teams(ai::ThinkArgs) => ai::think_in_teams;
     /// The narrow phase without rectangles, the enemies' machines and the integrator in one
     /// launch, with teams of threads (worlds small enough for teams). It finds its slot
     /// before it waits for the launch before it.

@@ -453,24 +453,9 @@ pub fn think_in_teams(t: Thread, args: &ThinkArgs) {
 
 #[inline(always)]
 fn think_with<const TEAMS: bool>(t: Thread, args: &ThinkArgs) {
-    if let (Some((slot, team)), Some(known)) = member_after_previous_launch(t, args) {
-        think_slot::<TEAMS, false>(args, slot, team, known);
+    if let Some((slot, team)) = args.teams.member(t, &args.warps) {
+        think_slot::<TEAMS, false>(args, slot, team, None);
     }
-}
-
-/// The calling thread's slot, its team and what its machine reads of the world's tables
-/// (see [`Teams::member`], [`Known`]), read while the launch before ends, then the wait for
-/// that launch ([`follow_previous_launch`]): the kind and its brain, which take two trips
-/// to memory one after the other, are then no longer in each body's own chain of waits.
-#[inline(always)]
-fn member_after_previous_launch(
-    t: Thread,
-    args: &ThinkArgs,
-) -> (Option<(u32, Team)>, Option<Known>) {
-    let member = args.teams.member(t, &args.warps);
-    let known = member.map(|(slot, _)| Known::read(args, slot));
-    follow_previous_launch();
-    (member, known)
 }
 
 /// What a slot's machine reads of the world's own tables, which no step writes: its kind
@@ -539,7 +524,12 @@ pub fn collide_think_integrate_swept(t: Thread, args: &BodyStepArgs) {
 #[inline(always)]
 fn body_step<const SWEPT: bool>(t: Thread, args: &BodyStepArgs) {
     let think = &args.think;
-    let (Some((slot, team)), Some(known)) = member_after_previous_launch(t, think) else {
+    // The thread's slot and its kind's tables are the world's: read while the grid's last
+    // launch ends.
+    let member = think.teams.member(t, &think.warps);
+    let known = member.map(|(slot, _)| Known::read(think, slot));
+    follow_previous_launch();
+    let (Some((slot, team)), Some(known)) = (member, known) else {
         return;
     };
     let collide = CollideArgs {
@@ -555,7 +545,7 @@ fn body_step<const SWEPT: bool>(t: Thread, args: &BodyStepArgs) {
         budget: args.contact_budget,
     };
     collide_slot::<false, true, SWEPT>(&collide, slot, team, |_| known.kind.info);
-    think_slot::<true, true>(think, slot, team, known);
+    think_slot::<true, true>(think, slot, team, Some(known));
     if team.leads() && slot < think.bodies.slots() {
         let integrate = IntegrateArgs {
             bodies: think.bodies,
@@ -573,28 +563,36 @@ fn body_step<const SWEPT: bool>(t: Thread, args: &BodyStepArgs) {
     }
 }
 
-/// Slot `slot`'s share of [`think`], by its `team`, given what it reads of the world's
-/// tables (`known`): if a body of a kind with a machine lives there, perceive (the team),
-/// transition and act (its first lane); `MOVING` as in [`look`].
+/// Slot `slot`'s share of [`think`], by its `team` (given what it reads of the world's
+/// tables, if read already: `known`): if a body of a kind with a machine lives there,
+/// perceive (the team), transition and act (its first lane); `MOVING` as in [`look`].
 #[inline(always)]
 fn think_slot<const TEAMS: bool, const MOVING: bool>(
     args: &ThinkArgs,
     slot: u32,
     team: Team,
-    known: Known,
+    known: Option<Known>,
 ) {
     // Without teams the width is known to be 1, and the teams' code compiles out.
     let team = if TEAMS { team } else { Team::ALONE };
     let b = &args.bodies;
     // Asked for at once, before the branches they decide: the thread waits for memory
-    // once, not once a branch.
-    let [alive, frozen, ship_kind] =
-        asked([b.alive.get(slot), b.frozen.get(0), b.kind.get(args.ship)]);
+    // once, not once a branch (and once more for its kind's tables, unless known).
+    let [alive, kind, frozen, ship_kind] = asked([
+        b.alive.get(slot),
+        b.kind.get(slot),
+        b.frozen.get(0),
+        b.kind.get(args.ship),
+    ]);
     let [pos, vel] = asked([b.pos.get(slot), b.vel.get(slot)]);
     if alive == 0 || frozen != 0 {
         return;
     }
-    let (info, brain) = (known.kind.info, known.brain);
+    // A kind's brain is the kind's (`brain.kind == kind`).
+    let (info, brain) = match known {
+        Some(known) => (known.kind.info, known.brain),
+        None => (args.kinds.get(kind), asked(args.brains.get(kind))),
+    };
     let (radius, full) = (asked(info.radius), asked(info.energy));
     let looker = Looker {
         slot,
