@@ -6,7 +6,7 @@
 //! fold what the lanes find in the order of one thread, or merge exact sums), so the choice
 //! is speed only.
 
-use gpuwars_kernels::game::ai::sight_mask;
+use gpuwars_kernels::game::ai::{others_mask, sight_mask};
 use gpuwars_kernels::game::fsm::Machine;
 use gpuwars_kernels::sim::broad::kind_bit;
 use gpuwars_kernels::sim::teams::{MAX_WIDTH, Teams};
@@ -63,10 +63,7 @@ fn widths(
     let mut widths: Vec<u32> = masks
         .iter()
         .map(|&mask| {
-            let expected: f64 = (0..kinds as u32)
-                .filter(|&k| mask & kind_bit(k) != 0)
-                .map(|k| f64::from(layout.ranges[k as usize].capacity) * share)
-                .sum();
+            let expected = expected(layout, mask, share);
             let runs = RUNS_PER_KIND * mask.count_ones();
             let lanes = ((expected / ENTRIES_PER_LANE).ceil() as u32).max(runs);
             lanes.max(1).next_power_of_two().min(MAX_WIDTH)
@@ -89,6 +86,14 @@ fn widths(
         }
     }
     widths
+}
+
+/// The bodies of the kinds of `mask` in a `share` of the world, on an even spread.
+fn expected(layout: &Layout, mask: u32, share: f64) -> f64 {
+    (0..layout.ranges.len() as u32)
+        .filter(|&k| mask & kind_bit(k) != 0)
+        .map(|k| f64::from(layout.ranges[k as usize].capacity) * share)
+        .sum()
 }
 
 /// The slots of kinds `first ..= last`, padding included.
@@ -139,4 +144,46 @@ pub(super) fn think(
         padded(layout, first, last),
         |k| widths[k as usize],
     ))
+}
+
+/// Whether the machines' launch of `teams` takes its blocks from the last
+/// (`ThinkArgs::from_the_end`): where the bodies of the later half of its slots expect more
+/// bodies within their vision than those of the earlier half (a kamikaze, which looks at
+/// the ship alone, none). The GPU starts a launch's blocks in increasing order, and the
+/// blocks of kinds that walk their neighbours take longest: started last, they would leave
+/// the GPU to a few of them at the launch's end. `scale-1m`, its kamikazes first, went from
+/// 4,058 to 4,303 steps/s on an H200 taken from the end; with its kinds listed the other
+/// way round, from 4,269 (in order) to 4,114 (from the end). The integrator's launch after
+/// it then runs the other way (see `stages::integrate`).
+pub(super) fn think_from_the_end(
+    teams: &Teams,
+    game: &GameConfig,
+    layout: &Layout,
+    space: &Space,
+) -> bool {
+    let area = f64::from(space.size.x) * f64::from(space.size.y);
+    // Bodies a body of kind `k` expects within the square of side twice its vision.
+    let seen = |k: u32| {
+        let Some(brain) = game.brains.get(k as usize) else {
+            return 0.0;
+        };
+        let machine = Machine::from_u32(brain.machine);
+        if machine == Machine::None {
+            return 0.0;
+        }
+        let reach = 2.0 * f64::from(brain.vision);
+        let share = (reach * reach / area).min(1.0);
+        expected(layout, others_mask(brain, machine, game.rules.shot_kind), share)
+    };
+    // Each half's sum over its slots.
+    let middle = (teams.first_slot + teams.end_slot) / 2;
+    let (mut early, mut late) = (0.0, 0.0);
+    for k in teams.first_kind..teams.end_kind {
+        let range = layout.ranges[k as usize];
+        let (start, end) = (range.start, range.start + range.capacity);
+        let before = end.min(middle).saturating_sub(start);
+        early += f64::from(before) * seen(k);
+        late += f64::from(range.capacity - before) * seen(k);
+    }
+    late > early
 }

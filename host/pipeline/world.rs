@@ -43,6 +43,9 @@ pub(crate) struct Config {
     /// bodies take their step in one launch, every kind's (a kind with a machine keeping
     /// its machine's width, the others taking their narrow phase's: see `Teams::within`).
     pub think_teams: Option<Teams>,
+    /// Whether the machines' own launch takes its blocks from the last (see
+    /// `teams::think_from_the_end`); never where it is the bodies' one launch.
+    pub think_from_the_end: bool,
     /// Whether one launch runs the narrow phase, the machines and the integrator
     /// (`collide_think_integrate`), whose grid then keeps its entries' velocities: in games
     /// of circles of at most [`ONE_LAUNCH_SLOTS`] slots whose machines run in teams (on the
@@ -259,6 +262,12 @@ impl World {
             think_teams: match one_launch {
                 true => think_teams.map(|teams| teams.within(&narrow_teams)),
                 false => think_teams,
+            },
+            think_from_the_end: match (one_launch, think_teams, &game) {
+                (false, Some(teams), Some(game)) => {
+                    teams::think_from_the_end(&teams, game, &layout, &space)
+                }
+                _ => false,
             },
             one_launch,
             births_in_count: game.is_some() && layout.slots <= ONE_LAUNCH_SLOTS,

@@ -42,6 +42,17 @@ impl Thread {
         self.thread % crate::warp::WARP
     }
 
+    /// The same thread with its launch's blocks taken from the last: block `grid_dim - 1 -
+    /// block`. The GPU starts a launch's blocks in increasing order, so the work of the last
+    /// blocks starts first.
+    #[inline(always)]
+    pub fn from_last_block(self) -> Thread {
+        Thread {
+            block: self.grid_dim - 1 - self.block,
+            ..self
+        }
+    }
+
     /// The calling GPU thread's coordinates, read from the special registers.
     #[cfg(target_arch = "nvptx64")]
     #[inline(always)]

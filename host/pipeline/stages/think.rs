@@ -39,6 +39,8 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         status: b.view(&game.data.status),
         ship: game.config.rules.ship.start,
         shot_kind: game.config.rules.shot_kind,
+        from_the_end: u32::from(world.config.think_from_the_end),
+        reserved: 0,
         deaths: world.deaths(b),
     });
     let threads_needed = u32::try_from(teams.threads(&world.layout.ranges))

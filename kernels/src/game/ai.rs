@@ -12,7 +12,10 @@
 //! 4.6 ms at 16 million bodies on the H200, each body's own state then read out of order).
 //! In a small world the kinds that expect many neighbours get a team of lanes a body
 //! ([`crate::sim::teams`]), which looks around together and leaves the machine to its first
-//! lane. It runs after the narrow phase, so that a hit is seen in the step it happens.
+//! lane. It runs after the narrow phase, so that a hit is seen in the step it happens. Where
+//! the kinds that walk their neighbours lie at the end of its slots, the launch takes its
+//! blocks from the last ([`ThinkArgs::from_the_end`]), so that its longest warps start first
+//! rather than leave the GPU to a few of them at its end.
 
 use glam::Vec2;
 
@@ -71,6 +74,11 @@ kernel_args! {
         pub ship: u32,
         /// The kind of the ship's shots.
         pub shot_kind: u32,
+        /// Nonzero: the launch takes its blocks from the last (see [`Thread::from_last_block`]),
+        /// so that the kinds at the end of its slots start first.
+        pub from_the_end: u32,
+        /// Keeps the struct free of implicit padding.
+        pub reserved: u32,
         /// Where the deaths are counted.
         pub deaths: Deaths,
     }
@@ -455,6 +463,10 @@ pub fn think_in_teams(t: Thread, args: &ThinkArgs) {
 
 #[inline(always)]
 fn think_with<const TEAMS: bool>(t: Thread, args: &ThinkArgs) {
+    let t = match args.from_the_end {
+        0 => t,
+        _ => t.from_last_block(),
+    };
     if let Some((slot, team)) = args.teams.member(t, &args.warps) {
         think_slot::<TEAMS, false>(args, slot, team, None);
     }
@@ -559,7 +571,7 @@ fn body_step<const SWEPT: bool>(t: Thread, args: &BodyStepArgs) {
             integrator: args.integrator,
             deaths: think.deaths,
             substep: 0,
-            reserved: 0,
+            from_the_end: 0,
         };
         integrate_slot(&integrate, slot);
     }

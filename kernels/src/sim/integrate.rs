@@ -78,8 +78,9 @@ kernel_args! {
         pub deaths: Deaths,
         /// Which substep of the step this is: bodies age and die in substep 0 only.
         pub substep: u32,
-        /// Keeps the struct free of implicit padding.
-        pub reserved: u32,
+        /// Nonzero: the launch takes its blocks from the last (see
+        /// [`Thread::from_last_block`]).
+        pub from_the_end: u32,
     }
 }
 
@@ -143,6 +144,10 @@ pub fn limit_speed(vel: Vec2, max_speed: f32) -> Vec2 {
 /// boundary rule keeps it in the world.
 #[inline(always)]
 pub fn integrate(t: Thread, args: &IntegrateArgs) {
+    let t = match args.from_the_end {
+        0 => t,
+        _ => t.from_last_block(),
+    };
     let slot = t.global();
     if slot < args.bodies.slots() {
         integrate_slot(args, slot);
