@@ -680,8 +680,7 @@ impl CellIndex {
             return;
         }
         let block = self.block(space, near);
-        let runs = block.cols.runs();
-        let count = block.rows.count * runs;
+        let count = block.rows.count * block.cols.runs();
         let mut rest = mask;
         // Entries the cap still allows.
         let mut left = if self.cap == 0 { u32::MAX } else { self.cap };
@@ -692,14 +691,12 @@ impl CellIndex {
             let Some((low, high)) = self.rows_of(space, kind) else {
                 continue;
             };
-            // The bounds of the kind's `j`-th run of the block (row by row, run by run).
+            // The bounds of the kind's `j`-th run of the block.
             let bounds = |j: u32| {
-                let (k, r) = if runs == 1 { (j, 0) } else { (j / 2, j % 2) };
-                let row = block.rows.at(k);
+                let (row, first, last) = block.run(j);
                 if !(low..=high).contains(&row) {
                     return [0, 0];
                 }
-                let (first, last) = block.cols.run(r);
                 let row = kind * self.cells + row * space.cols;
                 asked([self.start.get(row + first), self.start.get(row + last + 1)])
             };
@@ -826,6 +823,21 @@ pub struct NearBlock {
     cols: Span,
 }
 
+impl NearBlock {
+    /// The row, first and last column of the block's `j`-th run, row by row, run by run
+    /// (`j` below the rows times the columns' runs).
+    #[inline(always)]
+    fn run(&self, j: u32) -> (u32, u32, u32) {
+        // Columns wrap into a second run only on a torus: one run a row, without dividing.
+        let (k, r) = match self.cols.runs() {
+            1 => (j, 0),
+            _ => (j / 2, j % 2),
+        };
+        let (first, last) = self.cols.run(r);
+        (self.rows.at(k), first, last)
+    }
+}
+
 /// The runs of one query of the grid in visiting order: kind by kind, row by row, run by
 /// run (see [`CellIndex::near_runs`]).
 #[derive(Clone, Copy, Debug)]
@@ -856,9 +868,8 @@ impl NearRuns {
             rest &= rest - 1;
         }
         let kind = rest.trailing_zeros();
-        let within = r % per_kind;
-        let (first, last) = self.block.cols.run(within % runs);
-        let row = kind * grid.cells + self.block.rows.at(within / runs) * space.cols;
+        let (row, first, last) = self.block.run(r % per_kind);
+        let row = kind * grid.cells + row * space.cols;
         (
             kind,
             grid.start.get(row + first),
