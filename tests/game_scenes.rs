@@ -274,7 +274,46 @@ fn teams_of_any_width_play_the_game_of_one_thread_a_body(device: &Device) {
     }
 }
 
+/// A game's step remakes the free lists of the kinds whose bodies died or were born only,
+/// and keeps the others': after every step of `paper` under the autopilot (waves, kills,
+/// shots, renumbering), each kind's list is still exactly its usable slots without a live
+/// body in slot order, and its count their number (a brute force over the snapshot).
+fn a_games_free_lists_are_every_free_slot_after_every_step(device: &Device) {
+    let mut game = Game::new(device, &scene("paper"), 4).unwrap();
+    let ranges = game.pipeline().layout().ranges.clone();
+    let (mut kept, mut remade) = (0, 0);
+    let mut last = game.snapshot().unwrap().free.count;
+    for step in 0..600 {
+        game.step(None).unwrap();
+        let s = game.snapshot().unwrap();
+        for (k, range) in ranges.iter().enumerate() {
+            let free: Vec<u32> = (range.start..range.end())
+                .filter(|&i| s.bodies.alive[i as usize] == 0)
+                .collect();
+            assert_eq!(
+                s.free.count[k] as usize,
+                free.len(),
+                "step {step}, kind {k}"
+            );
+            let start = range.start as usize;
+            assert_eq!(
+                s.free.list[start..start + free.len()],
+                free[..],
+                "step {step}, kind {k}"
+            );
+            match s.free.count[k] == last[k] {
+                true => kept += 1,
+                false => remade += 1,
+            }
+        }
+        last = s.free.count;
+    }
+    // Both kinds of step were seen: lists that changed and lists that stayed.
+    assert!(kept > 0 && remade > 0, "kept {kept}, remade {remade}");
+}
+
 on_both_backends!(
+    a_games_free_lists_are_every_free_slot_after_every_step,
     teams_of_any_width_play_the_game_of_one_thread_a_body,
     a_replay_reproduces_the_game,
     the_game_ends_at_the_same_step_whatever_the_lag,

@@ -36,10 +36,8 @@ pub(super) const INTEGRATE: &[&str] = &[
 /// The deaths a step counts, in games (kinds' and slots').
 pub(super) const DEATHS: &[&str] = &["GameData.deaths", "GameData.slot_deaths"];
 
-/// The tally: the kinds' deaths it clears, the status, the mailbox's post and the frozen
-/// flag of a game that ended.
+/// The tally: the status, the mailbox's post and the frozen flag of a game that ended.
 pub(super) const TALLY: &[&str] = &[
-    "GameData.deaths",
     "GameData.status",
     "GameData.tallied",
     "Mailbox.statuses",

@@ -134,10 +134,15 @@ impl<'d> Pipeline<'d> {
             if ops.is_empty() {
                 continue;
             }
-            // The same ops serve the stage's own plan (for the profile) and the whole step.
+            // The same ops serve the stage's own plan (for the profile) and the whole step;
+            // but the free lists of a step that does not renumber are remade only for the
+            // kinds that changed (the stage's own plan, for a world's first lists and
+            // after bodies are placed, remakes them all, as renumbering does).
             all.extend(ops.iter().cloned());
-            if stage != Stage::Renumber {
-                plain.extend(ops.iter().cloned());
+            match stage {
+                Stage::Renumber => {}
+                Stage::Free => plain.extend(stages::free::ops(&world, true)),
+                _ => plain.extend(ops.iter().cloned()),
             }
             let plan = device.plan(ops, graphs)?;
             stages.push(StagePlan { stage, plan });

@@ -94,7 +94,7 @@ impl Stage {
             Stage::Substeps => stages::substeps::ops(world),
             Stage::Effects => stages::effects::ops(world),
             Stage::Tally => stages::tally::ops(world),
-            Stage::Free => stages::free::ops(world),
+            Stage::Free => stages::free::ops(world, false),
         }
     }
 }

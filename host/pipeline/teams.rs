@@ -173,7 +173,11 @@ pub(super) fn think_from_the_end(
         }
         let reach = 2.0 * f64::from(brain.vision);
         let share = (reach * reach / area).min(1.0);
-        expected(layout, others_mask(brain, machine, game.rules.shot_kind), share)
+        expected(
+            layout,
+            others_mask(brain, machine, game.rules.shot_kind),
+            share,
+        )
     };
     // Each half's sum over its slots.
     let middle = (teams.first_slot + teams.end_slot) / 2;

@@ -3,7 +3,8 @@
 //! the GPU in worlds of small ranges, all of it in one launch.
 
 use gpuwars_kernels::registry;
-use gpuwars_kernels::sim::free_list::{FreeMarks, GatherArgs, MarkArgs, MarkGatherArgs};
+use gpuwars_kernels::sim::broad::kind_bit;
+use gpuwars_kernels::sim::free_list::{Changes, FreeMarks, GatherArgs, MarkArgs, MarkGatherArgs};
 
 use crate::Op;
 use crate::backend::Binder;
@@ -13,8 +14,23 @@ use crate::primitives::{LIGHT_BLOCK, threads, threads_in};
 
 /// Mark and gather, a thread a slot each, with the scan of the tiles' counts between them;
 /// or both in one launch where the world's ranges allow (see `Config::free_in_one_launch`).
-pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
+/// Where `tracked` (a game's step that does not renumber), only the kinds whose bodies died
+/// or were born are remade; elsewhere every kind (the lists a world starts from, those after
+/// bodies are placed or renumbered).
+pub(in crate::pipeline) fn ops(world: &World, tracked: bool) -> Vec<Op> {
     let (slots, state, marks) = (world.layout.slots, &world.state, &world.scratch.marks);
+    let changes = |b: &mut Binder| match (&world.game, tracked) {
+        (Some(game), true) => {
+            let rules = &game.config.rules;
+            Changes {
+                deaths: b.view(&game.data.deaths),
+                births: b.view(&game.data.births),
+                always: kind_bit(rules.ship_kind) | kind_bit(rules.shot_kind),
+                reserved: 0,
+            }
+        }
+        _ => Changes::ALL,
+    };
     if world.config.free_in_one_launch {
         // SAFETY: the views go into the op made with the binder.
         let mut b = unsafe { Binder::new() };
@@ -24,6 +40,7 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
             flags: b.view(&marks.flags),
             list: b.view(&state.free.list),
             count: b.view(&state.free.count),
+            changes: changes(b),
         });
         // SAFETY: the world's buffers, sized as the kernel asks (see `World`); the config
         // holds it only where every range is small enough.
@@ -45,6 +62,7 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         ranges: b.view(&state.tables.ranges),
         flags: b.view(&marks.flags),
         tiles: b.view(&marks.tiles),
+        changes: changes(b),
     });
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
     let mut ops = vec![unsafe {
@@ -57,12 +75,13 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
             12 * u64::from(slots),
         )
     }];
-    // In place, over one more element than the tiles: the last becomes the total.
+    // Over one more element than the tiles, whose sum is the total; not in place, since
+    // the kinds that keep their lists keep their tiles' counts.
     ops.extend(
         world
             .scratch
             .marks_scan
-            .ops(&marks.tiles, &marks.tiles, FreeMarks::tiles_for(slots))
+            .ops(&marks.tiles, &marks.offsets, FreeMarks::tiles_for(slots))
             .expect("the scan was made for the tiles"),
     );
     let mut b = unsafe { Binder::new() };
@@ -70,9 +89,10 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         kind: b.view(&state.bodies.kind),
         ranges: b.view(&state.tables.ranges),
         flags: b.view(&marks.flags),
-        tiles: b.view(&marks.tiles),
+        offsets: b.view(&marks.offsets),
         list: b.view(&state.free.list),
         count: b.view(&state.free.count),
+        changes: changes(b),
     });
     // SAFETY: as above.
     ops.push(unsafe {

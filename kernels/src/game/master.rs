@@ -60,8 +60,8 @@ kernel_args! {
         /// Output of [`master`]: each kind's free slots before this step's births, for
         /// [`tally`] (which runs beside the free lists' rebuild).
         pub free_before: DevSlice<u32>,
-        /// Each kind's deaths in this step's physics (see [`crate::sim::Deaths`]): read,
-        /// then set back to zero, by [`tally`].
+        /// Each kind's deaths in this step's physics (see [`crate::sim::Deaths`]): set to
+        /// zero by [`master`], read by [`tally`] and by the free lists' rebuild beside it.
         pub deaths: DevSlice<u32>,
         /// The spawn schedule.
         pub waves: DevSlice<Wave>,
@@ -109,6 +109,9 @@ pub fn master(t: Thread, args: &MasterArgs) {
         let spawned = args.spawned.get(k);
         let births = if over { 0 } else { kind.births };
         args.births.set(k, births);
+        // The step's deaths count from zero (the tally and the free lists read the last
+        // step's after it).
+        args.deaths.set(k, 0);
         args.free_before.set(k, free);
         if let (Some(speed), false) = (kind.speed, over) {
             args.birth_speed.set(k, speed);
@@ -355,11 +358,6 @@ pub fn tally(t: Thread, args: &MasterArgs) {
     let shots_alive = alive(rules.shot_kind);
     if lane != 0 {
         return;
-    }
-    // Every lane has read the deaths (the reductions above gather them): the next step's
-    // count starts from zero.
-    for k in 0..args.kinds.len() {
-        args.deaths.set(k, 0);
     }
     let mut st = before;
     let killed = counts.killed.max(st.enemies_killed);

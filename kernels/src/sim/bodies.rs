@@ -77,7 +77,8 @@ impl Bodies {
 #[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct Deaths {
     /// Each kind's deaths this step, added to atomically (their sum does not depend on the
-    /// order); the tally reads them and sets them back to zero.
+    /// order); the tally and the free lists' rebuild read them, the next step's master sets
+    /// them back to zero.
     pub per_kind: DevSlice<u32>,
     /// Each slot's deaths so far, modulo 2³², where kills burst into particles: a
     /// particle that sees its slot's count change bursts.

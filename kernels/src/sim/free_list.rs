@@ -16,6 +16,11 @@
 //!
 //! Where every range is small ([`ONE_LAUNCH_RANGE`]), [`mark_and_gather_free`] does all three
 //! in one launch: each warp counts the free slots of its range before it itself.
+//!
+//! In a game's step a kind whose bodies neither died nor were born keeps its list, flags
+//! and tile counts as the last rebuild left them ([`Changes`]): its warps return at once,
+//! and the scan adds up the counts they kept. A million enemies that seldom die then cost
+//! the launches and the scan, not a pass over every slot.
 
 use super::bodies::Bodies;
 use super::kinds::SlotRange;
@@ -34,14 +39,53 @@ device_data! {
 }
 
 device_data! {
-    /// The rebuild's own arrays, remade every step.
+    /// The rebuild's own arrays, remade every step for the kinds that changed.
     pub struct FreeMarks(slots, tiles) {
         /// [`FREE`] for a free usable slot, with its rank in its kind's list above
         /// [`RANK_SHIFT`]; else 0 (written by [`mark_free`], the ranks by [`gather_free`]).
         flags: [u32; slots],
-        /// The free slots of each tile of 32 slots, then their exclusive prefix sums in place;
-        /// one more element for the total (see [`FreeMarks::tiles_for`]).
+        /// The free slots of each tile of 32 slots, and a last element, 0, for the total
+        /// (see [`FreeMarks::tiles_for`]).
         tiles: [u32; tiles],
+        /// The exclusive prefix sums of the tiles' counts, and their total.
+        offsets: [u32; tiles],
+    }
+}
+
+kernel_args! {
+    /// Which kinds' free lists a rebuild remakes: every kind, or in a game's step those
+    /// whose bodies died or were born (the others' lists, flags and tile counts stay as the
+    /// rebuild before left them, which must have been whole).
+    pub struct Changes {
+        /// Each kind's deaths this step (see [`crate::sim::Deaths`]); empty: every kind
+        /// changed.
+        pub deaths: DevSlice<u32>,
+        /// Each kind's births the master ordered this step.
+        pub births: DevSlice<u32>,
+        /// Kinds that change in any step (bit `k`: kind `k`): those the master brings to
+        /// life itself, the ship's and its shots'.
+        pub always: u32,
+        /// Keeps the struct free of implicit padding.
+        pub reserved: u32,
+    }
+}
+
+impl Changes {
+    /// Every kind changed: a whole rebuild.
+    pub const ALL: Changes = Changes {
+        deaths: DevSlice::EMPTY,
+        births: DevSlice::EMPTY,
+        always: 0,
+        reserved: 0,
+    };
+
+    /// Whether kind `kind`'s bodies may have died or been born.
+    #[inline(always)]
+    pub fn changed(&self, kind: u32) -> bool {
+        self.deaths.is_empty()
+            || self.always & super::broad::kind_bit(kind) != 0
+            || self.deaths.get(kind) != 0
+            || self.births.get(kind) != 0
     }
 }
 
@@ -85,6 +129,8 @@ kernel_args! {
         pub flags: DevSlice<u32>,
         /// Output: the free slots of each tile of 32 slots.
         pub tiles: DevSlice<u32>,
+        /// The kinds to remake.
+        pub changes: Changes,
     }
 }
 
@@ -95,7 +141,8 @@ fn usable(slot: u32, range: SlotRange) -> bool {
 }
 
 /// Thread `i` writes `flags[i]`; lane 0 of each warp writes its tile's count. The slots
-/// come in whole warps (a multiple of [`WARP`]), so a warp returns early whole.
+/// come in whole warps (a multiple of [`WARP`]), of one kind each, so a warp returns early
+/// whole: past the slots, or where its kind did not change.
 #[inline(always)]
 pub fn mark_free(t: Thread, args: &MarkArgs) {
     let slot = t.global();
@@ -103,6 +150,10 @@ pub fn mark_free(t: Thread, args: &MarkArgs) {
         return;
     }
     let b = &args.bodies;
+    let kind = b.kind.get(slot);
+    if !args.changes.changed(kind) {
+        return;
+    }
     let free = |s: u32| usable(s, args.ranges.get(b.kind.get(s))) && !b.is_alive(s);
     let mine = free(slot);
     // The rank comes in `gather_free`.
@@ -125,38 +176,44 @@ kernel_args! {
         /// The flags of [`mark_free`].
         pub flags: DevSlice<u32>,
         /// The exclusive prefix sums of the tiles' counts of free slots, and their total.
-        pub tiles: DevSlice<u32>,
+        pub offsets: DevSlice<u32>,
         /// Output: the free slots of kind `k` at `list[start_k ..][.. count_k]`; one per slot.
         pub list: DevSlice<u32>,
         /// Output: the number of free slots of each kind. A kind without slots has no writer: its
         /// count stays the 0 it was allocated with.
         pub count: DevSlice<u32>,
+        /// The kinds to remake (as [`mark_free`]'s).
+        pub changes: Changes,
     }
 }
 
 /// Thread `i`: a free slot writes itself at its rank inside its range's list; the last usable
-/// slot of a range writes the range's count. Every element has one writer.
+/// slot of a range writes the range's count. Every element has one writer. A warp whose
+/// kind did not change returns at once.
 #[inline(always)]
 pub fn gather_free(t: Thread, args: &GatherArgs) {
     let slot = t.global();
     if slot >= args.flags.len() {
         return;
     }
+    let kind = args.kind.get(slot);
+    if !args.changes.changed(kind) {
+        return;
+    }
     let (lane, tile) = (t.lane(), slot / WARP);
-    let offset = args.tiles.get(tile);
+    let offset = args.offsets.get(tile);
     // Warp-uniform: only a tile with free slots scans its flags.
-    let before = if args.tiles.get(tile + 1) == offset {
+    let before = if args.offsets.get(tile + 1) == offset {
         0
     } else {
         warp::exclusive_sum_u32(lane, |l| args.flags.get(tile * WARP + l) & FREE)
     };
-    let kind = args.kind.get(slot);
     let range = args.ranges.get(kind);
     if !usable(slot, range) {
         return;
     }
     // A range starts a tile: the free slots before it are its first tile's offset.
-    let rank = offset + before - args.tiles.get(range.start / WARP);
+    let rank = offset + before - args.offsets.get(range.start / WARP);
     let flag = args.flags.get(slot);
     let free = flag & FREE;
     if free != 0 {
@@ -203,6 +260,8 @@ kernel_args! {
         pub list: DevSlice<u32>,
         /// Output: as [`GatherArgs::count`].
         pub count: DevSlice<u32>,
+        /// The kinds to remake (as [`mark_free`]'s).
+        pub changes: Changes,
     }
 }
 
@@ -225,6 +284,9 @@ pub fn mark_and_gather_free(t: Thread, args: &MarkGatherArgs) {
     let kind = b.kind.get(slot);
     let range = args.ranges.get(kind);
     follow_previous_launch();
+    if !args.changes.changed(kind) {
+        return;
+    }
     let free = |s: u32| usable(s, range) && !b.is_alive(s);
     let mine = free(slot) as u32;
     // Each lane reads runs of four slots, every `4 · WARP`-th: the range's start and the
