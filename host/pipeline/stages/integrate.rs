@@ -29,9 +29,7 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         integrator: physics.integrator.code(),
         deaths: world.deaths(b),
         substep,
-        // The other way from the machines' launch just before it, so that it starts on the
-        // slots they touched last.
-        from_the_end: u32::from(substep == 0 && thinks_in_order(world)),
+        from_the_end: u32::from(substep == 0 && world.config.from_the_end.1),
     });
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
     let op = unsafe {
@@ -49,11 +47,6 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         0 => vec![op.after_branches()],
         _ => vec![op],
     }
-}
-
-/// Whether the machines' own launch runs just before the integrator's first, in order.
-fn thinks_in_order(world: &World) -> bool {
-    world.config.think_teams.is_some() && !world.config.think_from_the_end
 }
 
 /// The time step of each substep.
