@@ -286,22 +286,9 @@ fn a_games_free_lists_are_every_free_slot_after_every_step(device: &Device) {
     for step in 0..600 {
         game.step(None).unwrap();
         let s = game.snapshot().unwrap();
-        for (k, range) in ranges.iter().enumerate() {
-            let free: Vec<u32> = (range.start..range.end())
-                .filter(|&i| s.bodies.alive[i as usize] == 0)
-                .collect();
-            assert_eq!(
-                s.free.count[k] as usize,
-                free.len(),
-                "step {step}, kind {k}"
-            );
-            let start = range.start as usize;
-            assert_eq!(
-                s.free.list[start..start + free.len()],
-                free[..],
-                "step {step}, kind {k}"
-            );
-            match s.free.count[k] == last[k] {
+        common::sim::checked_free_lists(&s, &ranges, step);
+        for (k, &count) in s.free.count.iter().enumerate() {
+            match count == last[k] {
                 true => kept += 1,
                 false => remade += 1,
             }

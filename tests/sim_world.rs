@@ -197,21 +197,7 @@ fn free_lists_are_every_free_slot_in_order(device: &Device) {
     for step in 0..40 {
         sim.step().unwrap();
         let s = sim.snapshot().unwrap();
-        for (k, range) in ranges.iter().enumerate() {
-            let free: Vec<u32> = (range.start..range.end())
-                .filter(|&i| s.bodies.alive[i as usize] == 0)
-                .collect();
-            assert_eq!(
-                s.free.count[k] as usize,
-                free.len(),
-                "step {step}, kind {k}"
-            );
-            let start = range.start as usize;
-            assert_eq!(
-                s.free.list[start..start + free.len()],
-                free[..],
-                "step {step}, kind {k}"
-            );
+        for free in common::sim::checked_free_lists(&s, &ranges, step) {
             // A free slot before a live one of its kind: the list is not just the range's tail.
             holes += free.windows(2).filter(|w| w[1] != w[0] + 1).count();
         }

@@ -12,12 +12,12 @@
 //! | `renumber` | every few steps, the bodies move to slots in the grid's order within their kinds' ranges (gather, settle) | worlds with a grid of 8,192 slots or more, or as the scene's physics says |
 //! | `pilot` | the autopilot's input for the next step (one warp), from the grid as it was built, beside the stages after it where they leave the grid alone and it keeps its entries' velocities (on the GPU a branch of the step's graph) | games |
 //! | `narrow` | contacts and their response (`collide_circles` without rectangles; in small games of circles whose machines run in teams, inside `think`'s launch) | worlds where something collides |
-//! | `think` | every enemy's machine, in one launch over the enemy kinds' slots (or over every kind's, with the narrow phase and the integrator: `collide_think_integrate`) | games with enemies |
+//! | `think` | every enemy's machine, in one launch over the enemy kinds' slots, on the GPU from its last block where the kinds that walk the most lie at the end (or over every kind's, with the narrow phase and the integrator: `collide_think_integrate`) | games with enemies |
 //! | `integrate` | Euler, the boundary rule, deaths (inside `think`'s launch where the narrow phase is) | always |
 //! | `substeps` | broad, narrow and integrate again for each further substep | worlds with substeps |
 //! | `effects` | kills (the deaths the physics counted in their slots) burst into particles, the others move and fade, beside the stages after it (on the GPU a branch of the step's graph) | games with explosions |
 //! | `tally` | the master after the physics (one warp): counts from the free slots the master found, its births and the physics' deaths, beside the free lists (a branch) | games |
-//! | `free` | the free lists: flags, their prefix sum, gather | always |
+//! | `free` | the free lists: flags, their prefix sum, gather (in a game's step that does not renumber, only of the kinds whose bodies died or were born) | always |
 //!
 //! The scene decides which stages exist and which kernels they launch; every step of a
 //! scene then launches the same sequence, since per-step choices (who flies, whether a wave

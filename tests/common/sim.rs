@@ -3,7 +3,7 @@
 use glam::Vec2;
 use gpuwars::kernels::sim::contact::{contact, tie_break};
 use gpuwars::kernels::sim::narrow::{inverse_mass, respond};
-use gpuwars::kernels::sim::{KindInfo, Space};
+use gpuwars::kernels::sim::{KindInfo, SlotRange, Space};
 use gpuwars::sim::layout::kind_table;
 use gpuwars::sim::{Boundary, KindSpec, Shape, Snapshot, Sweep, WorldSpec};
 
@@ -148,4 +148,29 @@ pub fn brute_force(spec: &WorldSpec, space: &Space, before: &Snapshot) -> Expect
 /// Whether `a` and `b` agree to within `tol` times the larger of 1 and their size.
 pub fn close(a: Vec2, b: Vec2, tol: f32) -> bool {
     (a - b).length() <= tol * a.length().max(b.length()).max(1.0)
+}
+
+/// Each kind's free slots, checked against `s`: its list must be exactly its usable slots of
+/// `ranges` without a live body, in slot order, and its count their number (a brute force
+/// over the snapshot; `step` names the step in a failure).
+pub fn checked_free_lists(s: &Snapshot, ranges: &[SlotRange], step: usize) -> Vec<Vec<u32>> {
+    let mut lists = Vec::new();
+    for (k, range) in ranges.iter().enumerate() {
+        let free: Vec<u32> = (range.start..range.end())
+            .filter(|&i| s.bodies.alive[i as usize] == 0)
+            .collect();
+        assert_eq!(
+            s.free.count[k] as usize,
+            free.len(),
+            "step {step}, kind {k}"
+        );
+        let start = range.start as usize;
+        assert_eq!(
+            s.free.list[start..start + free.len()],
+            free[..],
+            "step {step}, kind {k}"
+        );
+        lists.push(free);
+    }
+    lists
 }
