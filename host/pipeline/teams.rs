@@ -154,7 +154,7 @@ pub(super) fn think(
 /// the GPU to a few of them at the launch's end. `scale-1m`, its kamikazes first, went from
 /// 4,058 to 4,303 steps/s on an H200 taken from the end; with its kinds listed the other
 /// way round, from 4,269 (in order) to 4,114 (from the end). The integrator's launch after
-/// it then runs the other way (see `Config::from_the_end`).
+/// it then runs the other way (see `Config::integrate_from_the_end`).
 pub(super) fn think_from_the_end(
     teams: &Teams,
     game: &GameConfig,

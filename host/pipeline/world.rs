@@ -44,12 +44,14 @@ pub(crate) struct Config {
     /// its machine's width, the others taking their narrow phase's: see `Teams::within`).
     pub think_teams: Option<Teams>,
     /// Whether the machines' own launch takes its blocks from the last (see
-    /// `teams::think_from_the_end`), and whether the integrator's first launch, just after
-    /// it, does (the other way from it, so that it starts on the slots the machines touched
-    /// last): on the GPU only, whose blocks start in order. The CPU emulation, whose
-    /// workers walk the slots' arrays block after block, lost 17% at a million enemies
-    /// taken from the end (`scale-1m` 9.86 -> 8.16 steps/s on 2 threads).
-    pub from_the_end: (bool, bool),
+    /// `teams::think_from_the_end`): on the GPU only, whose blocks start in order. The CPU
+    /// emulation, whose workers walk the slots' arrays block after block, lost 17% at a
+    /// million enemies taken from the end (`scale-1m` 9.86 -> 8.16 steps/s on 2 threads).
+    pub think_from_the_end: bool,
+    /// Whether the integrator's first launch, just after the machines' own, does: the
+    /// other way from it, so that it starts on the slots they touched last (the GPU's
+    /// only, likewise).
+    pub integrate_from_the_end: bool,
     /// Whether one launch runs the narrow phase, the machines and the integrator
     /// (`collide_think_integrate`), whose grid then keeps its entries' velocities: in games
     /// of circles of at most [`ONE_LAUNCH_SLOTS`] slots whose machines run in teams (on the
@@ -249,6 +251,14 @@ impl World {
         let moving = moves_in_one_launch(spec, &layout, game.is_some());
         let narrow_teams = teams::narrow(lanes, resident, spec, &layout, &space);
         let one_launch = moving && think_teams.is_some_and(|teams| !teams.single());
+        let (think_from_the_end, integrate_from_the_end) =
+            match (resident, one_launch, think_teams, &game) {
+                (Some(_), false, Some(teams), Some(game)) => {
+                    let think = teams::think_from_the_end(&teams, game, &layout, &space);
+                    (think, !think)
+                }
+                _ => (false, false),
+            };
         // Only worlds with a swept pair run the swept narrow phase.
         let swept = spec.has_swept_pairs();
         let config = Config {
@@ -267,13 +277,8 @@ impl World {
                 true => think_teams.map(|teams| teams.within(&narrow_teams)),
                 false => think_teams,
             },
-            from_the_end: match (resident, one_launch, think_teams, &game) {
-                (Some(_), false, Some(teams), Some(game)) => {
-                    let think = teams::think_from_the_end(&teams, game, &layout, &space);
-                    (think, !think)
-                }
-                _ => (false, false),
-            },
+            think_from_the_end,
+            integrate_from_the_end,
             one_launch,
             births_in_count: game.is_some() && layout.slots <= ONE_LAUNCH_SLOTS,
             renumber_every: renumber_every(spec, &layout, game.is_some()),

@@ -29,7 +29,7 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         integrator: physics.integrator.code(),
         deaths: world.deaths(b),
         substep,
-        from_the_end: u32::from(substep == 0 && world.config.from_the_end.1),
+        from_the_end: u32::from(substep == 0 && world.config.integrate_from_the_end),
     });
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
     let op = unsafe {

@@ -39,7 +39,7 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         status: b.view(&game.data.status),
         ship: game.config.rules.ship.start,
         shot_kind: game.config.rules.shot_kind,
-        from_the_end: u32::from(world.config.from_the_end.0),
+        from_the_end: u32::from(world.config.think_from_the_end),
         reserved: 0,
         deaths: world.deaths(b),
     });

@@ -109,8 +109,8 @@ pub fn master(t: Thread, args: &MasterArgs) {
         let spawned = args.spawned.get(k);
         let births = if over { 0 } else { kind.births };
         args.births.set(k, births);
-        // The step's deaths count from zero (the tally and the free lists read the last
-        // step's after it).
+        // The step's deaths count from zero: the last step's were read by its tally and
+        // its free lists' rebuild, which ended before this step began.
         args.deaths.set(k, 0);
         args.free_before.set(k, free);
         if let (Some(speed), false) = (kind.speed, over) {
