@@ -259,10 +259,62 @@ pub const TRICKY: &[Rule] = &[
 /// The state after `state` for a body driven by `machine` that perceives `p`.
 #[inline(always)]
 pub fn next_state(machine: Machine, state: State, p: &Percept) -> State {
-    for rule in machine.rules() {
-        if rule.from & state.bit() != 0 && rule.when.holds(p) {
-            return rule.to;
+    // The table folded from its last rule to its first, so that the first rule that applies
+    // wins: each rule's next state is then a value chosen in registers. Returned from the
+    // first match, it was loaded from the table in memory through the matching rule's
+    // address, one more wait a body between its state's load and its action on the GPU.
+    machine.rules().iter().rev().fold(state, |next, rule| {
+        match rule.from & state.bit() != 0 && rule.when.holds(p) {
+            true => rule.to,
+            false => next,
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Machine, Percept, State, next_state};
+
+    /// The percept whose seven flags are the low bits of `bits`.
+    fn percept(bits: u32) -> Percept {
+        let on = |i: u32| bits >> i & 1 != 0;
+        Percept {
+            hit: on(0),
+            out_of_energy: on(1),
+            low_energy: on(2),
+            full_energy: on(3),
+            sees_ship: on(4),
+            sees_similar: on(5),
+            sees_bullet: on(6),
         }
     }
-    state
+
+    /// Every machine, state and percept steps as the tables read top to bottom say: the
+    /// first rule whose set holds the state and whose condition holds, else the state stays.
+    #[test]
+    fn the_first_rule_that_applies_gives_the_next_state() {
+        for machine in [
+            Machine::None,
+            Machine::Kamikaze,
+            Machine::Group,
+            Machine::Tricky,
+        ] {
+            for state in State::ALL {
+                for bits in 0..1 << 7 {
+                    let p = percept(bits);
+                    let mut first = None;
+                    for rule in machine.rules() {
+                        if first.is_none() && rule.from & state.bit() != 0 && rule.when.holds(&p) {
+                            first = Some(rule.to);
+                        }
+                    }
+                    assert_eq!(
+                        next_state(machine, state, &p),
+                        first.unwrap_or(state),
+                        "{machine:?} in {state:?} perceiving {p:?}"
+                    );
+                }
+            }
+        }
+    }
 }
