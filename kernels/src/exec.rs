@@ -120,6 +120,30 @@ pub fn asked<T: bytemuck::Pod>(value: T) -> T {
     value
 }
 
+/// `value`, which the compiler may not assume equal to the `value` it came from: on the GPU
+/// a register copy it cannot see through, so that a load indexed by it is issued where it is
+/// written, not served from a register that an earlier load of the same element filled and
+/// that would then be held (or spilled) until here. On the CPU it does nothing.
+#[inline(always)]
+pub fn unseen(value: u32) -> u32 {
+    #[cfg(target_arch = "nvptx64")]
+    {
+        let copy: u32;
+        // SAFETY: a register move; it reads and writes no memory.
+        unsafe {
+            core::arch::asm!(
+                "mov.u32 {0}, {1};",
+                out(reg32) copy,
+                in(reg32) value,
+                options(pure, nomem, nostack)
+            )
+        };
+        copy
+    }
+    #[cfg(not(target_arch = "nvptx64"))]
+    value
+}
+
 /// A kernel argument struct: plain data passed by value as the kernel's single parameter.
 ///
 /// `NoUninit` is checked at compile time by its derive: the struct is `#[repr(C)]` and has

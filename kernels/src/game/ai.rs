@@ -23,7 +23,7 @@ use super::control::Status;
 use super::fsm::{Machine, Percept, State, next_state};
 use super::rules::Brain;
 use crate::elementary;
-use crate::exec::follow_previous_launch;
+use crate::exec::{follow_previous_launch, unseen};
 use crate::math::{self, trunc_i32};
 use crate::sim::broad::{CellIndex, Near, Sample, kind_bit};
 use crate::sim::integrate::{Field, IntegrateArgs, integrate_slot};
@@ -311,7 +311,6 @@ pub fn look<const MOVING: bool>(
     let dodges = social && brain.avoid_bullets != 0;
     let scale = fixed_scale(brain.vision);
     let direct = args.grid.cap == 0;
-    let ship_from_status = args.status.get(0).ship;
     let mask = match direct {
         true => others_mask(brain, machine, args.shot_kind),
         false => sight_mask(brain, machine, ship_kind, args.shot_kind),
@@ -392,7 +391,8 @@ pub fn look<const MOVING: bool>(
         threat(offset, rel, radius).map_or(Vec2::ZERO, |(_, away)| away)
     });
     let ship = if direct {
-        let offset = args.space.offset(pos, ship_from_status);
+        // Read after the walk, not held across it (the status is one line, in the caches).
+        let offset = args.space.offset(pos, args.status.get(0).ship);
         (slot != args.ship && offset.length_squared() <= vision2).then_some(offset)
     } else {
         let at = |entry: u32| match MOVING {
@@ -607,7 +607,7 @@ fn think_slot<const TEAMS: bool, const MOVING: bool>(
         Some(known) => (known.kind.info, known.brain),
         None => (args.kinds.get(kind), asked(args.brains.get(kind))),
     };
-    let (radius, full) = (asked(info.radius), asked(info.energy));
+    let radius = asked(info.radius);
     let looker = Looker {
         slot,
         pos,
@@ -617,26 +617,24 @@ fn think_slot<const TEAMS: bool, const MOVING: bool>(
     };
     match Machine::from_u32(brain.machine) {
         Machine::Kamikaze => {
-            think_as::<{ Machine::Kamikaze as u32 }, MOVING>(args, &brain, &looker, full, team)
+            think_as::<{ Machine::Kamikaze as u32 }, MOVING>(args, &brain, &looker, team)
         }
         Machine::Group => {
-            think_as::<{ Machine::Group as u32 }, MOVING>(args, &brain, &looker, full, team)
+            think_as::<{ Machine::Group as u32 }, MOVING>(args, &brain, &looker, team)
         }
         Machine::Tricky => {
-            think_as::<{ Machine::Tricky as u32 }, MOVING>(args, &brain, &looker, full, team)
+            think_as::<{ Machine::Tricky as u32 }, MOVING>(args, &brain, &looker, team)
         }
         Machine::None => {}
     }
 }
 
-/// One body, `looker`, of a `MACHINE` kind driven by `brain`, whose bodies are born with
-/// `full` energy: perceive, transition, act.
+/// One body, `looker`, of a `MACHINE` kind driven by `brain`: perceive, transition, act.
 #[inline(always)]
 fn think_as<const MACHINE: u32, const MOVING: bool>(
     args: &ThinkArgs,
     brain: &Brain,
     looker: &Looker,
-    full: i32,
     team: Team,
 ) {
     let b = &args.bodies;
@@ -646,6 +644,11 @@ fn think_as<const MACHINE: u32, const MOVING: bool>(
         return;
     }
     let slot = looker.slot;
+    // The kind's brain and birth energy read again, asked for with the body's state: those
+    // read before the look were held across the walk, which spilled them at 56 registers.
+    let kind = unseen(brain.kind);
+    let brain = &asked(args.brains.get(kind));
+    let full = asked(args.kinds.get(kind).energy);
     // The mass is asked for with the state, not after the state and the generator are
     // written back (which its load could not then pass): one wait for memory, not two.
     let [energy, damage] = asked([b.energy.get(slot), args.contacts.damage.get(slot)]);
