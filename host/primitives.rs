@@ -190,6 +190,117 @@ impl PrefixSum {
         Ok(ops)
     }
 
+    /// The launches of [`PrefixSum::ops`] with the first level's tile sums in `sums`, one per
+    /// [`scan::TILE`] elements, rather than in this scratch: worked out there first unless
+    /// `kept` (whoever writes `input` keeps them up to date), then each tile's warp adds up
+    /// those before its own (one launch, where they are few enough: [`scan::FLAT_TILES`]),
+    /// or they are scanned on this scratch's levels first.
+    pub fn ops_with_sums(
+        &self,
+        input: &Buffer<u32>,
+        output: &Buffer<u32>,
+        n: u32,
+        (sums, kept): (&Buffer<u32>, bool),
+    ) -> Result<Vec<Op>, Error> {
+        let tiles = scan::tiles(n);
+        if n <= scan::TILE {
+            return Ok(vec![Self::tiles_op(input, output, n, None)]);
+        }
+        if n as usize > input.len().min(output.len())
+            || tiles as usize > sums.len()
+            || n as usize > self.capacity
+        {
+            return Err(Error::Invalid(format!(
+                "a prefix sum of {n} elements from {} into {} with {} tile sums (capacity {})",
+                input.len(),
+                output.len(),
+                sums.len(),
+                self.capacity
+            )));
+        }
+        let mut ops = Vec::new();
+        if !kept {
+            ops.push(Self::reduce_op(input, sums, n));
+        }
+        if tiles <= scan::FLAT_TILES {
+            ops.push(Self::tiles_op(
+                input,
+                output,
+                n,
+                Some(TileOffsets::Sums(sums)),
+            ));
+        } else {
+            let offsets = &self.levels[0];
+            self.push_ops(sums, offsets, tiles, 1, &mut ops);
+            ops.push(Self::tiles_op(
+                input,
+                output,
+                n,
+                Some(TileOffsets::Scanned(offsets)),
+            ));
+        }
+        Ok(ops)
+    }
+
+    /// The launch that writes the sum of each tile of the first `n` elements of `input` to
+    /// `sums`.
+    fn reduce_op(input: &Buffer<u32>, sums: &Buffer<u32>, n: u32) -> Op {
+        let tiles = scan::tiles(n);
+        // SAFETY: the views go into the op made with the binder.
+        let mut b = unsafe { Binder::new() };
+        let args = scan::ReduceArgs {
+            input: b.view_prefix(input, n),
+            tile_sums: b.view_prefix(sums, tiles),
+            n,
+            reserved: 0,
+        };
+        let bytes = 4 * u64::from(n + tiles);
+        // SAFETY: `n` elements in the input's view, a sum a tile (checked by the callers).
+        unsafe {
+            threads_in(
+                registry::SCAN_REDUCE,
+                scan::threads(n),
+                SCAN_BLOCK,
+                args,
+                b,
+                bytes,
+            )
+        }
+    }
+
+    /// The launch that scans each tile of the first `n` elements of `input` into `output`,
+    /// from its offset (see [`TileOffsets`]), or from zero without them (a single tile).
+    fn tiles_op(
+        input: &Buffer<u32>,
+        output: &Buffer<u32>,
+        n: u32,
+        offsets: Option<TileOffsets>,
+    ) -> Op {
+        // SAFETY: the views go into the op made with the binder.
+        let mut b = unsafe { Binder::new() };
+        let tile_offsets = match offsets {
+            Some(TileOffsets::Sums(s) | TileOffsets::Scanned(s)) => {
+                b.view_prefix(s, scan::tiles(n))
+            }
+            None => DevSlice::EMPTY,
+        };
+        let args = scan::ScanArgs {
+            input: b.view_prefix(input, n),
+            tile_offsets,
+            output: b.view_prefix(output, n),
+            n,
+            reserved: 0,
+        };
+        let bytes = 4 * u64::from(2 * n + tile_offsets.len());
+        let kernel = match offsets {
+            Some(TileOffsets::Sums(_)) => registry::SCAN_TILES_AFTER_SUMS,
+            _ => registry::SCAN_TILES,
+        };
+        // SAFETY: `n` elements in each view and a sum a tile (checked by the callers); the
+        // scan supports `input == output`.
+        unsafe { threads_in(kernel, scan::threads(n), SCAN_BLOCK, args, b, bytes) }
+    }
+
     /// The launches of [`PrefixSum::ops`] at scratch level `level`, which holds the tile sums
     /// of `n` elements.
     fn push_ops(
@@ -203,52 +314,30 @@ impl PrefixSum {
         let tiles = scan::tiles(n);
         // Few tiles: each adds up the sums before its own (two launches); else recurse.
         let flat = n > scan::TILE && tiles <= scan::FLAT_TILES;
-        // SAFETY (both binders): their views go into the op made with each.
-        let mut b = unsafe { Binder::new() };
-        let tile_offsets = if n <= scan::TILE {
-            DevSlice::EMPTY
+        let offsets = if n <= scan::TILE {
+            None
         } else {
             let sums = &self.levels[level];
-            let mut reduce = unsafe { Binder::new() };
-            let args = scan::ReduceArgs {
-                input: reduce.view_prefix(input, n),
-                tile_sums: reduce.view_prefix(sums, tiles),
-                n,
-                reserved: 0,
-            };
-            let bytes = 4 * u64::from(n + tiles);
-            // SAFETY: `n` elements in each view (checked by `ops`), the level holds `tiles`.
-            ops.push(unsafe {
-                threads_in(
-                    registry::SCAN_REDUCE,
-                    scan::threads(n),
-                    SCAN_BLOCK,
-                    args,
-                    reduce,
-                    bytes,
-                )
-            });
+            ops.push(Self::reduce_op(input, sums, n));
             if !flat {
                 self.push_ops(sums, sums, tiles, level + 1, ops);
             }
-            b.view_prefix(sums, tiles)
+            Some(match flat {
+                true => TileOffsets::Sums(sums),
+                false => TileOffsets::Scanned(sums),
+            })
         };
-        let args = scan::ScanArgs {
-            input: b.view_prefix(input, n),
-            tile_offsets,
-            output: b.view_prefix(output, n),
-            n,
-            reserved: 0,
-        };
-        let bytes = 4 * u64::from(2 * n + tile_offsets.len());
-        let kernel = if flat {
-            registry::SCAN_TILES_AFTER_SUMS
-        } else {
-            registry::SCAN_TILES
-        };
-        // SAFETY: as above; the scan supports `input == output`.
-        ops.push(unsafe { threads_in(kernel, scan::threads(n), SCAN_BLOCK, args, b, bytes) });
+        ops.push(Self::tiles_op(input, output, n, offsets));
     }
+}
+
+/// Where each tile of a scan starts from.
+#[derive(Clone, Copy)]
+enum TileOffsets<'a> {
+    /// The tiles' sums, which each tile's warp adds up before its own.
+    Sums(&'a Buffer<u32>),
+    /// Their exclusive prefix sums: each tile's offset itself.
+    Scanned(&'a Buffer<u32>),
 }
 
 /// Counts how many of the first `n` keys fall in each bin: `counts[k]` becomes the number of

@@ -60,6 +60,46 @@ fn prefix_sum_in_place_and_reused(device: &Device) {
     }
 }
 
+/// The scan from tile sums held outside its scratch: the same prefix sums whether it works
+/// the sums out itself (where it must also leave them there: the free lists' rebuild keeps
+/// them after) or is handed them kept up to date, through one launch and past it.
+fn prefix_sum_with_sums_matches_reference(device: &Device) {
+    for &n in EDGE_SIZES.iter().chain(SCAN_SIZES) {
+        let input = random_below(&mut rng_for("with_sums", n), n, u32::MAX);
+        let scan = PrefixSum::new(device, n).unwrap();
+        let tile_sums: Vec<u32> = input
+            .chunks(1024)
+            .map(|c| c.iter().fold(0u32, |a, &v| a.wrapping_add(v)))
+            .collect();
+        let src = device.upload(&input).unwrap();
+        for kept in [false, true] {
+            let start = match kept {
+                true => tile_sums.clone(),
+                false => vec![0xdead_beef; tile_sums.len()],
+            };
+            let sums = device.upload(&start.iter().copied().chain([7]).collect::<Vec<_>>());
+            let sums = sums.unwrap();
+            let dst = device.upload(&vec![0xdead_beef; n]).unwrap();
+            let ops = scan.ops_with_sums(&src, &dst, n as u32, (&sums, kept));
+            device
+                .run(&device.plan(ops.unwrap(), false).unwrap())
+                .unwrap();
+            let what = format!("{n} elements, sums kept: {kept}");
+            assert_eq!(
+                device.download(&dst).unwrap(),
+                common::exclusive_scan(&input),
+                "{what}"
+            );
+            // A single tile needs no sums and leaves them alone.
+            let left = device.download(&sums).unwrap();
+            if n > 1024 {
+                assert_eq!(left[..tile_sums.len()], tile_sums[..], "{what}");
+            }
+            assert_eq!(left[tile_sums.len()], 7, "{what}: past the sums");
+        }
+    }
+}
+
 fn prefix_sum_property(device: &Device) {
     let mut runner = TestRunner::new(Config::with_cases(48));
     let strategy = prop::collection::vec(any::<u32>(), 0..5000);
@@ -232,6 +272,7 @@ on_both_backends!(
     launch_floor_runs_every_variant,
     prefix_sum_matches_reference,
     prefix_sum_in_place_and_reused,
+    prefix_sum_with_sums_matches_reference,
     prefix_sum_property,
     histogram_matches_reference,
     counting_sort_matches_reference,

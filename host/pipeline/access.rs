@@ -65,6 +65,10 @@ pub(super) const PILOT: &[&str] = &["GameData.steered"];
 /// The free lists' marks: each slot's flag and each tile's count.
 pub(super) const MARK_FREE: &[&str] = &["FreeMarks.flags", "FreeMarks.tiles"];
 
+/// The integrator's marks of the slots whose freedom it changes: their flags, their tiles'
+/// counts and the counts' sums.
+pub(super) const MARKS: &[&str] = &["FreeMarks.flags", "FreeMarks.tiles", "FreeMarks.sums"];
+
 /// The free lists' gather: the lists and their counts.
 pub(super) const GATHER_FREE: &[&str] = &["FreeSlots.list", "FreeSlots.count"];
 

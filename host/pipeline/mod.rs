@@ -136,11 +136,13 @@ impl<'d> Pipeline<'d> {
             }
             // The same ops serve the stage's own plan (for the profile) and the whole step;
             // but the free lists of a step that does not renumber are remade only for the
-            // kinds that changed (the stage's own plan, for a world's first lists and
-            // after bodies are placed, remakes them all, as renumbering does).
+            // kinds that changed, from the integrator's marks where it makes them (the
+            // stage's own plan, for a world's first lists and after bodies are placed,
+            // remakes them all, as renumbering does).
             all.extend(ops.iter().cloned());
             match stage {
                 Stage::Renumber => {}
+                Stage::Integrate => plain.extend(stages::integrate::ops(&world, 0, true)),
                 Stage::Free => plain.extend(stages::free::ops(&world, true)),
                 _ => plain.extend(ops.iter().cloned()),
             }

@@ -90,7 +90,7 @@ impl Stage {
             Stage::Pilot => stages::pilot::ops(world),
             Stage::Narrow => stages::narrow::ops(world, 0),
             Stage::Think => stages::think::ops(world),
-            Stage::Integrate => stages::integrate::ops(world, 0),
+            Stage::Integrate => stages::integrate::ops(world, 0, false),
             Stage::Substeps => stages::substeps::ops(world),
             Stage::Effects => stages::effects::ops(world),
             Stage::Tally => stages::tally::ops(world),

@@ -72,6 +72,11 @@ pub(crate) struct Config {
     /// idle lanes little but the CPU emulation, where each thread counts for all 32 lanes,
     /// far more than the scan once a world has more than a few warps.
     pub free_in_one_launch: bool,
+    /// Whether the integrator marks the slots whose freedom it changes, so that a game's
+    /// step that does not renumber rebuilds its free lists without a launch that marks
+    /// every slot (`free_list::Marks`): in games whose integrator has a launch of its own
+    /// and whose free lists are not rebuilt in one launch.
+    pub marks_in_integrate: bool,
 }
 
 /// The most slots of a world whose bodies may take their step (but the grid) in one launch
@@ -251,6 +256,8 @@ impl World {
         let moving = moves_in_one_launch(spec, &layout, game.is_some());
         let narrow_teams = teams::narrow(lanes, resident, spec, &layout, &space);
         let one_launch = moving && think_teams.is_some_and(|teams| !teams.single());
+        let free_in_one_launch = (resident.is_some() || layout.slots <= CPU_ONE_LAUNCH_SLOTS)
+            && (layout.ranges.iter()).all(|r| r.capacity <= free_list::ONE_LAUNCH_RANGE);
         let (think_from_the_end, integrate_from_the_end) =
             match (resident, one_launch, think_teams, &game) {
                 (Some(_), false, Some(teams), Some(game)) => {
@@ -282,8 +289,8 @@ impl World {
             one_launch,
             births_in_count: game.is_some() && layout.slots <= ONE_LAUNCH_SLOTS,
             renumber_every: renumber_every(spec, &layout, game.is_some()),
-            free_in_one_launch: (resident.is_some() || layout.slots <= CPU_ONE_LAUNCH_SLOTS)
-                && (layout.ranges.iter()).all(|r| r.capacity <= free_list::ONE_LAUNCH_RANGE),
+            free_in_one_launch,
+            marks_in_integrate: game.is_some() && !one_launch && !free_in_one_launch,
         };
         device.check_fits(
             &format!(

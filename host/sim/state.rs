@@ -87,7 +87,8 @@ pub fn bytes_needed(
         per_slot(slots, moving && traces),
     ));
     let tiles = FreeMarks::tiles_for(layout.slots) as usize;
-    made(FreeMarks::<Unmade>::build(s, slots, tiles));
+    let groups = FreeMarks::groups_for(layout.slots) as usize;
+    made(FreeMarks::<Unmade>::build(s, slots, tiles, groups));
     if renumbers {
         made(Moved::<Unmade>::build(s, slots, traced));
     }
@@ -214,7 +215,12 @@ impl Scratch {
                 per_slot(slots, moving && traces),
             )?,
             grid_scan: PrefixSum::new(device, buckets)?,
-            marks: FreeMarks::build(&mut device.zeroed(), slots, tiles)?,
+            marks: FreeMarks::build(
+                &mut device.zeroed(),
+                slots,
+                tiles,
+                FreeMarks::groups_for(layout.slots) as usize,
+            )?,
             marks_scan: PrefixSum::new(device, tiles)?,
             moved: match renumbers {
                 true => Some(Moved::build(&mut device.zeroed(), slots, traced)?),

@@ -15,8 +15,9 @@ use crate::primitives::{LIGHT_BLOCK, threads, threads_in};
 /// Mark and gather, a thread a slot each, with the scan of the tiles' counts between them;
 /// or both in one launch where the world's ranges allow (see `Config::free_in_one_launch`).
 /// Where `tracked` (a game's step that does not renumber), only the kinds whose bodies died
-/// or were born are remade; elsewhere every kind (the lists a world starts from, those after
-/// bodies are placed or renumbered).
+/// or were born are remade, and the marks are the integrator's where it makes them
+/// (`Config::marks_in_integrate`); elsewhere every kind (the lists a world starts from,
+/// those after bodies are placed or renumbered).
 pub(in crate::pipeline) fn ops(world: &World, tracked: bool) -> Vec<Op> {
     let (slots, state, marks) = (world.layout.slots, &world.state, &world.scratch.marks);
     let changes = |b: &mut Binder| match (&world.game, tracked) {
@@ -55,35 +56,47 @@ pub(in crate::pipeline) fn ops(world: &World, tracked: bool) -> Vec<Op> {
         };
         return vec![op];
     }
-    // SAFETY (both binders): the views go into the op made with each.
-    let mut b = unsafe { Binder::new() };
-    let mark = declared(&mut b, access::MARK_FREE, |b| MarkArgs {
-        bodies: state.bodies(b),
-        ranges: b.view(&state.tables.ranges),
-        flags: b.view(&marks.flags),
-        tiles: b.view(&marks.tiles),
-        changes: changes(b),
-    });
-    // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
-    let mut ops = vec![unsafe {
-        threads_in(
-            registry::MARK_FREE,
-            slots,
-            LIGHT_BLOCK,
-            mark,
-            b,
-            12 * u64::from(slots),
-        )
-    }];
+    let mut ops = Vec::new();
+    // In a game's step the integrator may have marked the slots that changed already.
+    let marked = tracked && world.config.marks_in_integrate;
+    if !marked {
+        // SAFETY: the views go into the op made with the binder.
+        let mut b = unsafe { Binder::new() };
+        let mark = declared(&mut b, access::MARK_FREE, |b| MarkArgs {
+            bodies: state.bodies(b),
+            ranges: b.view(&state.tables.ranges),
+            flags: b.view(&marks.flags),
+            tiles: b.view(&marks.tiles),
+            changes: changes(b),
+        });
+        // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
+        ops.push(unsafe {
+            threads_in(
+                registry::MARK_FREE,
+                slots,
+                LIGHT_BLOCK,
+                mark,
+                b,
+                12 * u64::from(slots),
+            )
+        });
+    }
     // Over one more element than the tiles, whose sum is the total; not in place, since
-    // the kinds that keep their lists keep their tiles' counts.
+    // the kinds that keep their lists keep their tiles' counts. The counts' sums, which the
+    // integrator's marks keep, are worked out again where the marks were the free lists'.
     ops.extend(
         world
             .scratch
             .marks_scan
-            .ops(&marks.tiles, &marks.offsets, FreeMarks::tiles_for(slots))
+            .ops_with_sums(
+                &marks.tiles,
+                &marks.offsets,
+                FreeMarks::tiles_for(slots),
+                (&marks.sums, marked),
+            )
             .expect("the scan was made for the tiles"),
     );
+    // SAFETY: the views go into the op made with the binder.
     let mut b = unsafe { Binder::new() };
     let gather = b.writing(access::GATHER_FREE, |b| GatherArgs {
         kind: b.view(&state.bodies.kind),

@@ -1,6 +1,7 @@
 //! `integrate`: Euler, the boundary rule, deaths.
 
 use gpuwars_kernels::registry;
+use gpuwars_kernels::sim::free_list::Marks;
 use gpuwars_kernels::sim::integrate::IntegrateArgs;
 
 use crate::Op;
@@ -10,15 +11,23 @@ use crate::pipeline::world::World;
 use crate::primitives::threads;
 
 /// The integrator of substep `substep`, a thread a slot (in the first substep, unless the
-/// bodies take their step in one launch: see `Config::one_launch`).
-pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
+/// bodies take their step in one launch: see `Config::one_launch`). Where `marking` (a
+/// game's step that does not renumber) and the world's config says so
+/// (`Config::marks_in_integrate`), its first substep marks the slots whose freedom it
+/// changes for the free lists.
+pub(in crate::pipeline) fn ops(world: &World, substep: u32, marking: bool) -> Vec<Op> {
     if substep == 0 && world.config.one_launch {
         return Vec::new();
     }
     let (spec, physics) = (&world.spec, &world.spec.physics);
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
-    let written = access::with_deaths(world.game.is_some(), &[access::INTEGRATE]);
+    let marks = marking && substep == 0 && world.config.marks_in_integrate;
+    let lists: &[&[&str]] = match marks {
+        true => &[access::INTEGRATE, access::MARKS],
+        false => &[access::INTEGRATE],
+    };
+    let written = access::with_deaths(world.game.is_some(), lists);
     let args = b.writing(&written, |b| IntegrateArgs {
         bodies: world.state.bodies(b),
         kinds: b.view(&world.state.tables.info),
@@ -30,6 +39,18 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         deaths: world.deaths(b),
         substep,
         from_the_end: u32::from(substep == 0 && world.config.integrate_from_the_end),
+        marks: match marks {
+            true => {
+                let m = &world.scratch.marks;
+                Marks {
+                    ranges: b.view(&world.state.tables.ranges),
+                    flags: b.view(&m.flags),
+                    tiles: b.view(&m.tiles),
+                    sums: b.view(&m.sums),
+                }
+            }
+            false => Marks::NONE,
+        },
     });
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
     let op = unsafe {
@@ -38,7 +59,7 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
             world.layout.slots,
             args,
             b,
-            BYTES_A_SLOT * u64::from(world.layout.slots),
+            (BYTES_A_SLOT + 4 * u64::from(marks)) * u64::from(world.layout.slots),
         )
     };
     // The autopilot's branch, where it reads the bodies' velocities, ends before they first

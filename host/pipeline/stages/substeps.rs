@@ -10,7 +10,7 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         .flat_map(|k| {
             let mut ops = broad::ops(world, k);
             ops.extend(narrow::ops(world, k));
-            ops.extend(integrate::ops(world, k));
+            ops.extend(integrate::ops(world, k, false));
             ops
         })
         .collect()

@@ -26,6 +26,7 @@ use crate::elementary;
 use crate::exec::{follow_previous_launch, unseen};
 use crate::math::{self, trunc_i32};
 use crate::sim::broad::{CellIndex, Near, Sample, kind_bit};
+use crate::sim::free_list::Marks;
 use crate::sim::integrate::{Field, IntegrateArgs, integrate_slot};
 use crate::sim::narrow::{CollideArgs, Relaxation, collide_slot};
 use crate::sim::teams::Teams;
@@ -572,6 +573,7 @@ fn body_step<const SWEPT: bool>(t: Thread, args: &BodyStepArgs) {
             deaths: think.deaths,
             substep: 0,
             from_the_end: 0,
+            marks: Marks::NONE,
         };
         integrate_slot(&integrate, slot);
     }

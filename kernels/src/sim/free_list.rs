@@ -21,12 +21,20 @@
 //! and tile counts as the last rebuild left them ([`Changes`]): its warps return at once,
 //! and the scan adds up the counts they kept. A million enemies that seldom die then cost
 //! the launches and the scan, not a pass over every slot.
+//!
+//! In a game's step where the integrator's launch is the step's last to bring bodies to life
+//! or death, it marks the slots whose freedom it changed itself ([`Marks::note`]), with an
+//! atomic add of each change to its tile's count and to the sum of the tiles' counts a
+//! thousand at a time ([`FreeMarks::sums`], the scan's first level, which a whole rebuild
+//! writes): the step's rebuild is then the scan's last launch
+//! ([`crate::primitives::scan::scan_tiles_after_sums`]) and [`gather_free`] alone.
 
 use super::bodies::Bodies;
 use super::kinds::SlotRange;
 use crate::exec::follow_previous_launch;
+use crate::primitives::scan::{self, TILE};
 use crate::warp::{self, WARP};
-use crate::{DevSlice, Thread, device_data, kernel_args};
+use crate::{DevSlice, Thread, asked, device_data, kernel_args};
 
 device_data! {
     /// Each kind's free slots, as the free-list rebuild leaves them.
@@ -40,7 +48,7 @@ device_data! {
 
 device_data! {
     /// The rebuild's own arrays, remade every step for the kinds that changed.
-    pub struct FreeMarks(slots, tiles) {
+    pub struct FreeMarks(slots, tiles, groups) {
         /// [`FREE`] for a free usable slot, with its rank in its kind's list above
         /// [`RANK_SHIFT`]; else 0 (written by [`mark_free`], the ranks by [`gather_free`]).
         flags: [u32; slots],
@@ -49,6 +57,10 @@ device_data! {
         tiles: [u32; tiles],
         /// The exclusive prefix sums of the tiles' counts, and their total.
         offsets: [u32; tiles],
+        /// The wrapping sum of each [`TILE`] tiles' counts (see [`FreeMarks::groups_for`]):
+        /// written by a whole rebuild's scan, changed by each change of a count it sums
+        /// in a game's step (see [`Marks`]).
+        sums: [u32; groups],
     }
 }
 
@@ -93,6 +105,58 @@ impl FreeMarks {
     /// Elements of [`FreeMarks::tiles`] for `slots` slots (a multiple of [`WARP`]).
     pub const fn tiles_for(slots: u32) -> u32 {
         slots / WARP + 1
+    }
+
+    /// Elements of [`FreeMarks::sums`] for `slots` slots: one per [`TILE`] tiles.
+    pub const fn groups_for(slots: u32) -> u32 {
+        scan::tiles(Self::tiles_for(slots))
+    }
+}
+
+kernel_args! {
+    /// Where the integrator marks the slots whose freedom it changes (see [`Marks::note`]):
+    /// empty slices where it marks none.
+    pub struct Marks {
+        /// Slot range of each kind.
+        pub ranges: DevSlice<SlotRange>,
+        /// The flags (see [`FreeMarks::flags`]).
+        pub flags: DevSlice<u32>,
+        /// The free slots of each tile of 32 slots.
+        pub tiles: DevSlice<u32>,
+        /// The tiles' counts summed [`TILE`] at a time.
+        pub sums: DevSlice<u32>,
+    }
+}
+
+impl Marks {
+    /// No marks.
+    pub const NONE: Marks = Marks {
+        ranges: DevSlice::EMPTY,
+        flags: DevSlice::EMPTY,
+        tiles: DevSlice::EMPTY,
+        sums: DevSlice::EMPTY,
+    };
+
+    /// Slot `slot` of kind `kind`, whose body is `alive` now: if that changed whether the
+    /// slot is free, its flag says so (rank 0, until [`gather_free`] ranks its kind) and its
+    /// tile's count and the count's sum go up or down by one, atomically. A slot changes
+    /// only where a body died or was born, so the kind is one the rebuild remakes.
+    #[inline(always)]
+    pub fn note(&self, slot: u32, kind: u32, alive: bool) {
+        if self.flags.is_empty() {
+            return;
+        }
+        let flag = self.flags.get(slot);
+        let free = !alive && usable(slot, self.ranges.get(kind));
+        if free == (flag & FREE != 0) {
+            return;
+        }
+        self.flags.set(slot, self::flag(free, 0));
+        // Plus or minus one, wrapping: the sums are exact whatever the order of the adds.
+        let change = if free { 1 } else { u32::MAX };
+        let tile = slot / WARP;
+        self.tiles.atomic_add(tile, change);
+        self.sums.atomic_add(tile / TILE, change);
     }
 }
 
@@ -187,41 +251,49 @@ kernel_args! {
     }
 }
 
-/// Thread `i`: a free slot writes itself at its rank inside its range's list; the last usable
-/// slot of a range writes the range's count. Every element has one writer. A warp whose
-/// kind did not change returns at once.
+/// Thread `i`: a free slot writes itself at its rank inside its range's list, and thread `k`
+/// writes kind `k`'s count, the free slots of its tiles. Every element has one writer. A
+/// warp returns at once where its tile has no free slot (most, in a full world), or where
+/// its kind did not change.
 #[inline(always)]
 pub fn gather_free(t: Thread, args: &GatherArgs) {
     let slot = t.global();
+    let offsets = &args.offsets;
+    // A range starts a tile and its padding, never free, ends one: its count is its tiles'.
+    if slot < args.count.len() && args.changes.changed(slot) {
+        let range = args.ranges.get(slot);
+        if range.capacity > 0 {
+            let (first, last) = (range.start / WARP, (range.end() - 1) / WARP);
+            let count = offsets.get(last + 1).wrapping_sub(offsets.get(first));
+            args.count.set(slot, count);
+        }
+    }
     if slot >= args.flags.len() {
+        return;
+    }
+    let (lane, tile) = (t.lane(), slot / WARP);
+    // Warp-uniform, as the kind is: the tile's slots are of one range.
+    let [offset, next] = asked([offsets.get(tile), offsets.get(tile + 1)]);
+    if next == offset {
         return;
     }
     let kind = args.kind.get(slot);
     if !args.changes.changed(kind) {
         return;
     }
-    let (lane, tile) = (t.lane(), slot / WARP);
-    let offset = args.offsets.get(tile);
-    // Warp-uniform: only a tile with free slots scans its flags.
-    let before = if args.offsets.get(tile + 1) == offset {
-        0
-    } else {
-        warp::exclusive_sum_u32(lane, |l| args.flags.get(tile * WARP + l) & FREE)
-    };
+    let before = warp::exclusive_sum_u32(lane, |l| args.flags.get(tile * WARP + l) & FREE);
     let range = args.ranges.get(kind);
-    if !usable(slot, range) {
+    let flag = args.flags.get(slot);
+    if flag & FREE == 0 || !usable(slot, range) {
         return;
     }
-    // A range starts a tile: the free slots before it are its first tile's offset.
-    let rank = offset + before - args.offsets.get(range.start / WARP);
-    let flag = args.flags.get(slot);
-    let free = flag & FREE;
-    if free != 0 {
-        // Only the rank's bits change: the other lanes' reads of the flag's `FREE` above
-        // (on the CPU, where a lane reads its warp's flags) get the same bit either way.
-        args.flags.set(slot, flag | rank << RANK_SHIFT);
-    }
-    place_in_list((&args.list, &args.count), (slot, kind, range), rank, free);
+    // A range starts a tile: the free slots before it are its first tile's offset. Only the
+    // rank's bits change (a rank left by an earlier rebuild is replaced): the other lanes'
+    // reads of the flag's `FREE` above (on the CPU, where a lane reads its warp's flags) get
+    // the same bit either way.
+    let rank = offset + before - offsets.get(range.start / WARP);
+    args.flags.set(slot, FREE | rank << RANK_SHIFT);
+    args.list.set(range.start + rank, slot);
 }
 
 /// Usable slot `slot` of kind `kind`'s `range`, with `rank` free slots of the range before

@@ -9,6 +9,7 @@
 use glam::Vec2;
 
 use super::bodies::{Bodies, Contacts, Deaths};
+use super::free_list::Marks;
 use super::kinds::KindInfo;
 use super::narrow::inverse_mass;
 use super::space::Space;
@@ -81,6 +82,9 @@ kernel_args! {
         /// Nonzero: the launch takes its blocks from the last (see
         /// [`Thread::from_last_block`]).
         pub from_the_end: u32,
+        /// Where the slots whose freedom this launch changes are marked for the free lists
+        /// ([`Marks::NONE`] where the free lists' own launch marks every slot).
+        pub marks: Marks,
     }
 }
 
@@ -185,6 +189,10 @@ pub fn integrate_slot(args: &IntegrateArgs, slot: u32) {
     if live && dies {
         bodies.alive.set(slot, 0);
         args.deaths.count(slot, kind);
+    }
+    // In the substep that brings bodies to death, the last launch of the step that does.
+    if aging {
+        args.marks.note(slot, kind, alive && !(live && dies));
     }
     let moves = live && !dies;
     if moves && aging {
