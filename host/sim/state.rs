@@ -85,6 +85,7 @@ pub fn bytes_needed(
         buckets,
         per_slot(slots, moving),
         per_slot(slots, moving && traces),
+        2 * kinds,
     ));
     let tiles = FreeMarks::tiles_for(layout.slots) as usize;
     let groups = FreeMarks::groups_for(layout.slots) as usize;
@@ -213,6 +214,7 @@ impl Scratch {
                 buckets,
                 per_slot(slots, moving),
                 per_slot(slots, moving && traces),
+                2 * kinds,
             )?,
             grid_scan: PrefixSum::new(device, buckets)?,
             marks: FreeMarks::build(
@@ -245,6 +247,7 @@ impl Scratch {
             vel: self.entry_velocities(b, moving),
             prev: b.view(&self.grid.prev),
             start: b.view(&self.grid.start),
+            rows: b.view(&self.grid.rows),
             kinds: self.kinds,
             cells: self.cells,
             cap,

@@ -103,6 +103,8 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         entry_prev: b.view(&g.prev),
         runs: b.view(&g.ranks),
         bounded: u32::from(bounded),
+        space: world.space,
+        rows: b.view(&g.rows),
         reserved: 0,
     };
     ops.push(unsafe {

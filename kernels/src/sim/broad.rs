@@ -31,7 +31,7 @@ use crate::{DevSlice, Thread, asked, device_data, kernel_args};
 
 device_data! {
     /// The grid's arrays: what the broad phase builds each step and [`CellIndex`] queries.
-    pub struct Grid(slots, buckets, moving, traced) {
+    pub struct Grid(slots, buckets, moving, traced, kind_rows) {
         /// Each slot's bucket, or [`NO_BUCKET`].
         keys: [u32; slots],
         /// Each slot's arrival rank in its bucket; the merge passes' runs afterwards.
@@ -55,6 +55,9 @@ device_data! {
         /// whose bodies move in the launch that queries the grid (`traced` = slots; else
         /// none): see [`CellIndex::prev_at`].
         prev: [Vec2; traced],
+        /// Each kind's first and last row holding one of its bodies (`2k`, `2k + 1`), where
+        /// it has any (`kind_rows` = twice the kinds; see [`CellIndex::rows`]).
+        rows: [u32; kind_rows],
     }
 }
 
@@ -174,6 +177,11 @@ kernel_args! {
         /// Output when `bounded`: the entries of buckets larger than [`RUN`], each run of
         /// [`RUN`] entries in slot order, for [`merge_runs`] to merge.
         pub runs: DevSlice<u32>,
+        /// Output: each kind's first and last row holding one of its bodies (see
+        /// [`CellIndex::rows`]).
+        pub rows: DevSlice<u32>,
+        /// The world's grid (its rows and columns).
+        pub space: Space,
         /// Non-zero: buckets larger than [`RUN`] are ordered run by run (then merged), so that
         /// a crowded cell costs `O(n log n)`, not `O(n²)`.
         pub bounded: u32,
@@ -193,6 +201,9 @@ pub const DONE: u32 = u32::MAX;
 /// Thread `j` takes entry `j`: its slot's rank among its bucket's slots is the number of
 /// smaller slots there, and it moves there. The ranks of a bucket are a permutation (slots
 /// are distinct), so each output entry has one writer, whatever order the entries arrived in.
+/// The thread of a bucket's first entry writes the bucket's row as its kind's first or last
+/// row with a body (see [`CellIndex::rows`]) where the bucket is its kind's first or last
+/// that is not empty: one writer each.
 #[inline(always)]
 pub fn order_cells(t: Thread, args: &OrderArgs) {
     let j = t.global();
@@ -219,7 +230,25 @@ pub fn order_cells(t: Thread, args: &OrderArgs) {
     } else {
         Vec2::ZERO
     });
-    let (first, end) = (args.start.get(key), args.start.get(key + 1));
+    // The bucket's bounds, and its kind's, in one wait.
+    let cells = args.space.cells();
+    let kind = key / cells;
+    let [first, end, kind_first, kind_end] = asked([
+        args.start.get(key),
+        args.start.get(key + 1),
+        args.start.get(kind * cells),
+        args.start.get((kind + 1) * cells),
+    ]);
+    // The bucket's first entry notes whether its row is its kind's first or last.
+    if j == first {
+        let row = args.space.cell_coords(pos).1;
+        if first == kind_first {
+            args.rows.set(2 * kind, row);
+        }
+        if end == kind_end {
+            args.rows.set(2 * kind + 1, row);
+        }
+    }
     if args.bounded != 0 {
         if end - first > RUN {
             // A large bucket: order this entry's run only.
@@ -353,8 +382,7 @@ pub struct CellIndex {
     /// Slots by bucket, then by slot.
     pub slots: DevSlice<u32>,
     /// The position of each entry's body when the grid was built: inside its bucket's
-    /// cell, which the queries rely on: a kind's first and last entry give the rows its
-    /// bodies lie in.
+    /// cell.
     pub pos: DevSlice<Vec2>,
     /// The velocity of each entry's body when the grid was built, in worlds whose bodies
     /// move in the launch that queries the grid (whose own velocities then change under the
@@ -367,6 +395,10 @@ pub struct CellIndex {
     /// First entry of each bucket in `slots`, and one more element: the number of entries.
     /// Bucket `b` is `slots[start[b] .. start[b + 1]]`.
     pub start: DevSlice<u32>,
+    /// Each kind's first and last row holding one of its bodies (elements `2k` and
+    /// `2k + 1`), as the grid's ordering wrote them: meaningful only for a kind with
+    /// entries.
+    pub rows: DevSlice<u32>,
     /// Number of kinds.
     pub kinds: u32,
     /// Number of cells (buckets per kind).
@@ -517,28 +549,27 @@ impl CellIndex {
         while rest != 0 {
             let kind = rest.trailing_zeros();
             rest &= rest - 1;
-            if let Some((low, high)) = self.rows_of(space, kind) {
+            if let Some((low, high)) = self.rows_of(kind) {
                 any |= (0..around.count).any(|k| (low..=high).contains(&around.at(k)));
             }
         }
         any
     }
 
-    /// The first and the last row that hold a body of `kind`, if any does: its first and
-    /// last entry's, since a kind's buckets go in row-major cell order. The same for every
-    /// query, so a warp's lanes load them together; a kind of few bodies close together
-    /// (the ship, its shots) so costs the queries far from them one test a row, not the
-    /// loads of the row's bounds.
+    /// The first and the last row that hold a body of `kind`, if any does (see
+    /// [`CellIndex::rows`]), in one wait for memory. The same for every query, so a warp's
+    /// lanes load them together; a kind of few bodies close together (the ship, its shots)
+    /// so costs the queries far from them one test a row, not the loads of the row's
+    /// bounds.
     #[inline(always)]
-    fn rows_of(&self, space: &Space, kind: u32) -> Option<(u32, u32)> {
-        let [first, end] = asked([
+    fn rows_of(&self, kind: u32) -> Option<(u32, u32)> {
+        let [first, end, low, high] = asked([
             self.start.get(kind * self.cells),
             self.start.get((kind + 1) * self.cells),
+            self.rows.get(2 * kind),
+            self.rows.get(2 * kind + 1),
         ]);
-        (first < end).then(|| {
-            let row = |entry| space.cell_coords(self.pos.get(entry)).1;
-            (row(first), row(end - 1))
-        })
+        (first < end).then_some((low, high))
     }
 
     /// The block a query reads: the whole 3×3 block without a reach or under a cap.
@@ -688,7 +719,7 @@ impl CellIndex {
             let kind = rest.trailing_zeros();
             rest &= rest - 1;
             // Rows without a body of the kind have empty runs: not read.
-            let Some((low, high)) = self.rows_of(space, kind) else {
+            let Some((low, high)) = self.rows_of(kind) else {
                 continue;
             };
             // The bounds of the kind's `j`-th run of the block.
