@@ -137,17 +137,24 @@ impl Marks {
         sums: DevSlice::EMPTY,
     };
 
-    /// Slot `slot` of kind `kind`, whose body is `alive` now: if that changed whether the
-    /// slot is free, its flag says so (rank 0, until [`gather_free`] ranks its kind) and its
-    /// tile's count and the count's sum go up or down by one, atomically. A slot changes
-    /// only where a body died or was born, so the kind is one the rebuild remakes.
+    /// What [`Marks::note`] needs of slot `slot` of kind `kind`: its flag and its kind's
+    /// range, asked for with the slot's other reads (`None` without marks).
     #[inline(always)]
-    pub fn note(&self, slot: u32, kind: u32, alive: bool) {
-        if self.flags.is_empty() {
+    pub fn read(&self, slot: u32, kind: u32) -> Option<(u32, SlotRange)> {
+        (!self.flags.is_empty()).then(|| (self.flags.get(slot), self.ranges.get(kind)))
+    }
+
+    /// Slot `slot`, whose flag and kind's range are `read` ([`Marks::read`]) and whose body
+    /// is `alive` now: if that changed whether the slot is free, its flag says so (rank 0,
+    /// until [`gather_free`] ranks its kind) and its tile's count and the count's sum go up
+    /// or down by one, atomically. A slot changes only where a body died or was born, so
+    /// the kind is one the rebuild remakes.
+    #[inline(always)]
+    pub fn note(&self, slot: u32, read: Option<(u32, SlotRange)>, alive: bool) {
+        let Some((flag, range)) = read else {
             return;
-        }
-        let flag = self.flags.get(slot);
-        let free = !alive && usable(slot, self.ranges.get(kind));
+        };
+        let free = !alive && usable(slot, range);
         if free == (flag & FREE != 0) {
             return;
         }

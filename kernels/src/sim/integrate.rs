@@ -181,6 +181,7 @@ pub fn integrate_slot(args: &IntegrateArgs, slot: u32) {
     let (force, mass) = (bodies.force.get(slot), bodies.mass.get(slot));
     let push = args.contacts.push.get(slot);
     let info = args.kinds.get(kind);
+    let marked = args.marks.read(slot, kind);
     let live = alive && !frozen;
     // Bodies age and die in substep 0 only.
     let aging = args.substep == 0;
@@ -192,7 +193,7 @@ pub fn integrate_slot(args: &IntegrateArgs, slot: u32) {
     }
     // In the substep that brings bodies to death, the last launch of the step that does.
     if aging {
-        args.marks.note(slot, kind, alive && !(live && dies));
+        args.marks.note(slot, marked, alive && !(live && dies));
     }
     let moves = live && !dies;
     if moves && aging {
