@@ -111,6 +111,7 @@ fn rules(scene: &Scene, layout: &Layout) -> Rules {
         ship_kind,
         shot_kind: kind(&game.ship.shot),
         ship: layout.ranges[ship_kind as usize],
+        shots: layout.ranges[kind(&game.ship.shot) as usize],
         ship_speed: game.ship.speed,
         shot_speed: game.ship.shot_speed,
         fire_period: steps(1.0 / game.ship.fire_rate, dt),

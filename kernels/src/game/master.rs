@@ -124,9 +124,6 @@ pub fn master(t: Thread, args: &MasterArgs) {
         mine.waves += kind.waves;
         k += warp::WARP;
     }
-    // Asked for only now: its bounds check waits for the range's start, and the loads
-    // above need not.
-    let shot_slot = aboard.shot_slot(args);
     // The warp's totals (used only while playing); another lane's share is recomputed
     // without writing.
     let theirs = |l: u32| {
@@ -162,7 +159,7 @@ pub fn master(t: Thread, args: &MasterArgs) {
     let mut st = before;
     st.events = Events::default();
     st.input = input;
-    let (aboard, shot_slot) = if step == 0 {
+    let aboard = if step == 0 {
         let place = Place {
             pos: args.space.size * 0.5,
             vel: Vec2::ZERO,
@@ -175,10 +172,9 @@ pub fn master(t: Thread, args: &MasterArgs) {
             place,
             rules.ship_energy,
         );
-        let aboard = Aboard::read(args);
-        (aboard, aboard.shot_slot(args))
+        Aboard::read(args)
     } else {
-        (aboard, shot_slot)
+        aboard
     };
     if aboard.ship_alive {
         // Where the ship is as the step's grid is built (what the machines look at).
@@ -186,7 +182,7 @@ pub fn master(t: Thread, args: &MasterArgs) {
         fly_ship(args, &input, step, aboard.ship_energy);
         st.cooldown = st.cooldown.saturating_sub(1);
         if input.firing() && st.cooldown == 0 && aboard.shots_free > 0 {
-            fire(args, &input, &aboard, shot_slot);
+            fire(args, &input, &aboard);
             st.cooldown = rules.fire_period;
             st.events.shots_fired = 1;
         }
@@ -211,8 +207,9 @@ struct Aboard {
     ship_radius: f32,
     /// The shot kind's free slots.
     shots_free: u32,
-    /// The first entry of the shot kind's free list (every kind has at least one slot).
-    shots_start: u32,
+    /// The first entry of the shot kind's free list (every kind has at least one slot):
+    /// its first free slot, if it has one.
+    shot_slot: u32,
 }
 
 impl Aboard {
@@ -228,15 +225,8 @@ impl Aboard {
             shot: args.kinds.get(rules.shot_kind),
             ship_radius: args.kinds.get(rules.ship_kind).radius,
             shots_free: args.free.count.get(rules.shot_kind),
-            shots_start: args.ranges.get(rules.shot_kind).start,
+            shot_slot: args.free.list.get(rules.shots.start),
         }
-    }
-
-    /// The shot kind's first free slot (meaningful only if it has one), a load that waits
-    /// for [`Aboard::read`]'s.
-    #[inline(always)]
-    fn shot_slot(&self, args: &MasterArgs) -> u32 {
-        args.free.list.get(self.shots_start)
     }
 }
 
@@ -309,7 +299,7 @@ pub fn tally(t: Thread, args: &MasterArgs) {
     let ship = rules.ship.start;
     let (ship_alive, ship_at) = (b.is_alive(ship), b.pos.get(ship));
     let (energy, ship_hits) = (b.energy.get(ship), args.contacts.count.get(ship));
-    let shots = args.ranges.get(rules.shot_kind);
+    let shots = rules.shots;
     // The bodies of kind `k` alive now: those alive as the step began, those the master
     // brought to life (births, its shot), less the physics' deaths.
     let alive = |k: u32| {
@@ -438,10 +428,9 @@ fn fly_ship(args: &MasterArgs, input: &Input, step: u32, energy: i32) {
     }
 }
 
-/// A shot in `slot`, the first free slot of the shot kind, just outside the ship along the
-/// aim.
+/// A shot in the first free slot of the shot kind, just outside the ship along the aim.
 #[inline(always)]
-fn fire(args: &MasterArgs, input: &Input, aboard: &Aboard, slot: u32) {
+fn fire(args: &MasterArgs, input: &Input, aboard: &Aboard) {
     let aim = input.aim_dir();
     let gap = aboard.ship_radius + aboard.shot.radius;
     let place = Place {
@@ -449,7 +438,13 @@ fn fire(args: &MasterArgs, input: &Input, aboard: &Aboard, slot: u32) {
         vel: aim * args.rules.shot_speed,
         facing: aim,
     };
-    birth(&args.bodies, &args.space, slot, place, aboard.shot.energy);
+    birth(
+        &args.bodies,
+        &args.space,
+        aboard.shot_slot,
+        place,
+        aboard.shot.energy,
+    );
 }
 
 kernel_args! {

@@ -13,6 +13,9 @@ pub struct Rules {
     pub shot_kind: u32,
     /// The ship's slot.
     pub ship: SlotRange,
+    /// The shots' slots: known to the master at once, so that its reads of the shots' free
+    /// list and of their hits need not wait for the range first.
+    pub shots: SlotRange,
     /// Speed of the ship at full stick.
     pub ship_speed: f32,
     /// Speed of a shot.
