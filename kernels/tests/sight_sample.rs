@@ -84,13 +84,22 @@ fn a_sampled_look_takes_every_strided_entry_of_each_kind_within_the_budget() {
         }
         let entries = *start.last().unwrap();
         let slots: Vec<u32> = (0..entries).map(|e| e * 3 + 1).collect();
-        // Each entry in its bucket's cell, as a built grid has it (the queries skip the rows
-        // outside a kind's first and last entry's).
+        // Each entry in its bucket's cell, as a built grid has it.
         let pos: Vec<Vec2> = (0..kinds * cells)
             .flat_map(|bucket| {
                 let cell = bucket % cells;
                 let at = Vec2::new((cell % cols) as f32 + 0.5, (cell / cols) as f32 + 0.5);
                 (start[bucket as usize]..start[bucket as usize + 1]).map(move |_| at * 10.0)
+            })
+            .collect();
+        // Each kind's first and last row with an entry, as the grid's ordering notes them
+        // (the queries skip the rows outside them).
+        let kind_rows: Vec<u32> = (0..kinds)
+            .flat_map(|k| {
+                let rows_with = (0..cells)
+                    .filter(|&c| counts[(k * cells + c) as usize] > 0)
+                    .map(|c| c / cols);
+                [rows_with.clone().min(), rows_with.max()].map(|r| r.unwrap_or(0))
             })
             .collect();
         let cap = [0, 0, 1 + rng.below(150)][rng.below(3) as usize];
@@ -101,6 +110,7 @@ fn a_sampled_look_takes_every_strided_entry_of_each_kind_within_the_budget() {
             vel: view(&none),
             prev: view(&none),
             start: view(&start),
+            rows: view(&kind_rows),
             kinds,
             cells,
             cap,
