@@ -13,11 +13,11 @@
 //! | `pilot` | the autopilot's input for the next step (one warp), from the grid as it was built, beside the stages after it where they leave the grid alone and it keeps its entries' velocities (on the GPU a branch of the step's graph) | games |
 //! | `narrow` | contacts and their response (`collide_circles` without rectangles; in small games of circles whose machines run in teams, inside `think`'s launch) | worlds where something collides |
 //! | `think` | every enemy's machine, in one launch over the enemy kinds' slots, on the GPU from its last block where the kinds that walk the most lie at the end (or over every kind's, with the narrow phase and the integrator: `collide_think_integrate`) | games with enemies |
-//! | `integrate` | Euler, the boundary rule, deaths (inside `think`'s launch where the narrow phase is) | always |
+//! | `integrate` | Euler, the boundary rule, deaths (inside `think`'s launch where the narrow phase is); in a game's step that does not renumber, the free lists' marks of the slots whose freedom it changed | always |
 //! | `substeps` | broad, narrow and integrate again for each further substep | worlds with substeps |
 //! | `effects` | kills (the deaths the physics counted in their slots) burst into particles, the others move and fade, beside the stages after it (on the GPU a branch of the step's graph) | games with explosions |
 //! | `tally` | the master after the physics (one warp): counts from the free slots the master found, its births and the physics' deaths, beside the free lists (a branch) | games |
-//! | `free` | the free lists: flags, their prefix sum, gather (in a game's step that does not renumber, only of the kinds whose bodies died or were born) | always |
+//! | `free` | the free lists: flags, their prefix sum, gather (in a game's step that does not renumber, only of the kinds whose bodies died or were born, and from the integrator's marks: the prefix sum's last launch and the gather) | always |
 //!
 //! The scene decides which stages exist and which kernels they launch; every step of a
 //! scene then launches the same sequence, since per-step choices (who flies, whether a wave
@@ -138,16 +138,24 @@ impl<'d> Pipeline<'d> {
             // but the free lists of a step that does not renumber are remade only for the
             // kinds that changed, from the integrator's marks where it makes them (the
             // stage's own plan, for a world's first lists and after bodies are placed,
-            // remakes them all, as renumbering does).
+            // remakes them all, as renumbering does): those two stages have a tracked plan
+            // too, which the profile runs in the steps that do not renumber.
             all.extend(ops.iter().cloned());
-            match stage {
-                Stage::Renumber => {}
-                Stage::Integrate => plain.extend(stages::integrate::ops(&world, 0, true)),
-                Stage::Free => plain.extend(stages::free::ops(&world, true)),
-                _ => plain.extend(ops.iter().cloned()),
+            let tracked = match stage {
+                Stage::Integrate => Some(stages::integrate::ops(&world, 0, true)),
+                Stage::Free => Some(stages::free::ops(&world, true)),
+                _ => None,
+            };
+            match (stage, &tracked) {
+                (Stage::Renumber, _) => {}
+                (_, Some(tracked)) => plain.extend(tracked.iter().cloned()),
+                (_, None) => plain.extend(ops.iter().cloned()),
             }
-            let plan = device.plan(ops, graphs)?;
-            stages.push(StagePlan { stage, plan });
+            stages.push(StagePlan {
+                stage,
+                plan: device.plan(ops, graphs)?,
+                tracked: tracked.map(|ops| device.plan(ops, graphs)).transpose()?,
+            });
         }
         let renumbering = match world.config.renumber_every {
             0 => None,
@@ -210,7 +218,7 @@ impl<'d> Pipeline<'d> {
             // the others): its mean over the steps is its share of each.
             let runs = stage.stage != Stage::Renumber || renumbers;
             if runs {
-                device.run(&stage.plan)?;
+                device.run(stage.in_step(renumbers))?;
             }
             ran.push(runs);
             marks.push(device.mark()?);

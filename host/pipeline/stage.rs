@@ -99,22 +99,35 @@ impl Stage {
     }
 }
 
-/// A stage of a world's step and its plan.
+/// A stage of a world's step and its plans.
 pub struct StagePlan {
     /// Which stage.
     pub stage: Stage,
+    /// The stage as a step that renumbers runs it, and as a world's first free lists and
+    /// those after bodies are placed need it (every kind remade).
     pub(super) plan: Plan,
+    /// The stage as a step that does not renumber runs it, where that differs (the
+    /// integrator's marks and the free lists of the kinds that changed: see `free::ops`).
+    pub(super) tracked: Option<Plan>,
 }
 
 impl StagePlan {
-    /// Kernel launches per step.
-    pub fn launches(&self) -> usize {
-        self.plan.launches()
+    /// The plan a step runs for this stage: the tracked one, unless the step renumbers.
+    pub(super) fn in_step(&self, renumbers: bool) -> &Plan {
+        match (&self.tracked, renumbers) {
+            (Some(tracked), false) => tracked,
+            _ => &self.plan,
+        }
     }
 
-    /// Bytes the stage moves per step, by our count.
+    /// Kernel launches per step (of a step that does not renumber).
+    pub fn launches(&self) -> usize {
+        self.in_step(false).launches()
+    }
+
+    /// Bytes the stage moves per step (of a step that does not renumber), by our count.
     pub fn bytes(&self) -> u64 {
-        self.plan.bytes()
+        self.in_step(false).bytes()
     }
 }
 
