@@ -142,8 +142,10 @@ impl<'d> Pipeline<'d> {
             // too, which the profile runs in the steps that do not renumber.
             all.extend(ops.iter().cloned());
             let tracked = match stage {
-                Stage::Integrate => Some(stages::integrate::ops(&world, 0, true)),
-                Stage::Free => Some(stages::free::ops(&world, true)),
+                Stage::Integrate if world.config.marks_in_integrate => {
+                    Some(stages::integrate::ops(&world, 0, true))
+                }
+                Stage::Free if world.game.is_some() => Some(stages::free::ops(&world, true)),
                 _ => None,
             };
             match (stage, &tracked) {
