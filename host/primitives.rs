@@ -203,11 +203,10 @@ impl PrefixSum {
         (sums, kept): (&Buffer<u32>, bool),
     ) -> Result<Vec<Op>, Error> {
         let tiles = scan::tiles(n);
-        if n <= scan::TILE {
-            return Ok(vec![Self::tiles_op(input, output, n, None)]);
-        }
+        // A single tile reads no sums.
+        let single = n <= scan::TILE;
         if n as usize > input.len().min(output.len())
-            || tiles as usize > sums.len()
+            || (!single && tiles as usize > sums.len())
             || n as usize > self.capacity
         {
             return Err(Error::Invalid(format!(
@@ -217,6 +216,9 @@ impl PrefixSum {
                 sums.len(),
                 self.capacity
             )));
+        }
+        if single {
+            return Ok(vec![Self::tiles_op(input, output, n, None)]);
         }
         let mut ops = Vec::new();
         if !kept {
