@@ -160,7 +160,7 @@ fn a_sampled_look_takes_every_strided_entry_of_each_kind_within_the_budget() {
                 &space,
                 (near, sample),
                 Taken::default(),
-                |taken, weight, slot, _, _, entry| taken.add(weight, slot, entry),
+                |taken, weight, _, _, entry| taken.add(weight, slots[entry as usize], entry),
                 |a, _| a,
             );
             let share = budget.div_ceil(3);

@@ -333,23 +333,25 @@ pub fn look<const MOVING: bool>(
     };
     // The walk's closure takes its values by copy: borrowed, the CPU emulation read each
     // through a reference at every entry (`scale-1m` 3% slower there; the PTX is the same).
-    let seen = args.grid.merge_near_in(
+    let grid = &args.grid;
+    let seen = grid.merge_near_in(
         team,
         &args.space,
         (near, sample),
         Seen::NONE,
-        move |mut seen, weight, other, kind, at, entry| {
-            if other == slot {
-                return seen;
-            }
+        move |mut seen, weight, kind, at, entry| {
             let offset = args.space.offset(pos, at);
             let dist2 = offset.length_squared();
             if dist2 > vision2 {
                 return seen;
             }
-            if other == args.ship {
-                seen.ship_seen = entry + 1;
-            } else if social && kind == brain.kind {
+            // A body of its own kind (never the ship's, which has no machine) counts unless
+            // it is the looker itself: the slot is read only where the offset is zero (or
+            // not a number), as the looker's own is.
+            if social && kind == brain.kind {
+                if !(dist2 > 0.0) && grid.slots.get(entry) == slot {
+                    return seen;
+                }
                 // A neighbour of a crowd's sample stands for `weight` of them.
                 seen.similar = seen.similar.wrapping_add(weight);
                 seen.sum = add_fixed(seen.sum, weighted(fixed(offset, scale), weight));
@@ -357,6 +359,14 @@ pub fn look<const MOVING: bool>(
                     let away = fixed(math::normalize_or_zero(offset), UNIT_SCALE);
                     seen.crowd = add_fixed(seen.crowd, weighted(away, weight));
                 }
+                return seen;
+            }
+            let other = grid.slots.get(entry);
+            if other == slot {
+                return seen;
+            }
+            if other == args.ship {
+                seen.ship_seen = entry + 1;
             } else if dodges
                 && kind == args.shot_kind
                 && let Some((time, _)) = threat(
@@ -379,7 +389,6 @@ pub fn look<const MOVING: bool>(
     );
     // Where the bodies move in this launch, from the grid's entries, as the look measured;
     // else from the bodies, which have not moved since the grid was built.
-    let grid = &args.grid;
     let dodge = (seen.threat != u64::MAX).then(|| {
         let (entry, other) = (seen.threat_entry, seen.threat as u32);
         let at = if MOVING {

@@ -596,7 +596,6 @@ impl CellIndex {
     fn run(&self, start: u32, end: u32) -> Run {
         Run {
             start,
-            slots: self.slots.range(start, end - start),
             pos: self.pos.range(start, end - start),
         }
     }
@@ -645,7 +644,10 @@ impl CellIndex {
     /// [`CellIndex::for_each_near`] under `sample` (see [`Sample`]) shared by a `team` of
     /// lanes for a result that does not depend on the order in which the bodies come: each
     /// lane `add`s every team-width-th entry the sample takes of each run to its own value
-    /// (from `init`), with the run's stride as the weight, and the lanes' values are merged
+    /// (from `init`), with the run's stride as the weight, `add(value, weight, kind,
+    /// position, entry)`: the walk reads each entry's position, and leaves its slot to `add`
+    /// (`slots[entry]`), which reads it only for the entries whose place does not decide
+    /// (a look reads 8 bytes an entry of its own kind, not 12). The lanes' values are merged
     /// across the team (see [`Team::merge`]). Where `add` and `merge` are free of order
     /// (exact integer sums, least keys), every lane gets what one thread adding every entry
     /// taken gets, bit for bit, without handing each body found to every lane. Every lane
@@ -657,7 +659,7 @@ impl CellIndex {
         space: &Space,
         (near, sample): (Near, Sample),
         init: A,
-        add: impl Fn(A, u32, u32, u32, Vec2, u32) -> A,
+        add: impl Fn(A, u32, u32, Vec2, u32) -> A,
         merge: impl Fn(A, A) -> A,
     ) -> A {
         let (lane, width) = team.stride();
@@ -668,8 +670,7 @@ impl CellIndex {
             self.for_each_run(space, (near, false), |kind, start, end| {
                 let (every, skip) = sample.of_run(end - start);
                 let run = self.run(start, end);
-                let add =
-                    |value, weight, slot, at, entry| add(value, weight, slot, kind, at, entry);
+                let add = |value, weight, at, entry| add(value, weight, kind, at, entry);
                 // On the GPU a run taken whole (every run, where there is no budget) is
                 // walked with a weight known to be 1, so that `add`'s weighted sums multiply
                 // nothing. Natively the second copy of `add` made the emulated looks slower
@@ -686,8 +687,7 @@ impl CellIndex {
             let (every, skip) = sample.of_run(end - start);
             let mut entry = start + skip + lane * every;
             while entry < end {
-                let (slot, at) = (self.slots.get(entry), self.pos.get(entry));
-                value = add(value, every, slot, kind, at, entry);
+                value = add(value, every, kind, self.pos.get(entry), entry);
                 entry += width * every;
             }
         });
@@ -805,41 +805,32 @@ impl CellIndex {
 struct Run {
     /// The first entry's index in the grid.
     start: u32,
-    /// The run's slots.
-    slots: DevSlice<u32>,
     /// The run's positions.
     pos: DevSlice<Vec2>,
 }
 
 impl Run {
-    /// Entry `entry`'s slot and position, or the run's last entry's past its end, asked for
-    /// now (see [`asked`]): the one-thread walk reads one entry ahead of the one it visits,
-    /// so that it waits for the entries' memory about once, not once an entry. (Teams of
-    /// lanes gained nothing from it: `paper` −1.5% on an H200.)
+    /// Entry `entry`'s position, or the run's last entry's past its end, asked for now (see
+    /// [`asked`]): the one-thread walk reads one entry ahead of the one it visits, so that
+    /// it waits for the entries' memory about once, not once an entry. (Teams of lanes
+    /// gained nothing from it: `paper` −1.5% on an H200.)
     #[inline(always)]
-    fn ahead(&self, entry: u32) -> (u32, Vec2) {
-        let at = (entry - self.start).min(self.slots.len() - 1);
-        (asked(self.slots.get(at)), asked(self.pos.get(at)))
+    fn ahead(&self, entry: u32) -> Vec2 {
+        asked(self.pos.get((entry - self.start).min(self.pos.len() - 1)))
     }
 
-    /// `add(value, every, slot, position, entry)` over every `every`-th entry from `first`
-    /// on, in order, each entry asked for while the one before is visited.
+    /// `add(value, every, position, entry)` over every `every`-th entry from `first` on, in
+    /// order, each entry asked for while the one before is visited.
     #[inline(always)]
-    fn fold<A>(
-        &self,
-        first: u32,
-        every: u32,
-        init: A,
-        add: impl Fn(A, u32, u32, Vec2, u32) -> A,
-    ) -> A {
-        let end = self.start + self.slots.len();
+    fn fold<A>(&self, first: u32, every: u32, init: A, add: impl Fn(A, u32, Vec2, u32) -> A) -> A {
+        let end = self.start + self.pos.len();
         let mut value = init;
         let mut entry = first;
         let mut ahead = self.ahead(entry);
         while entry < end {
-            let (slot, at) = ahead;
+            let at = ahead;
             ahead = self.ahead(entry + every);
-            value = add(value, every, slot, at, entry);
+            value = add(value, every, at, entry);
             entry += every;
         }
         value
