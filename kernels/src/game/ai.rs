@@ -349,6 +349,8 @@ pub fn look<const MOVING: bool>(
             // it is the looker itself: the slot is read only where the offset is zero (or
             // not a number), as the looker's own is.
             if social && kind == brain.kind {
+                // Zero or not a number, the looker's own offset: not greater than zero.
+                #[allow(clippy::neg_cmp_op_on_partial_ord)]
                 if !(dist2 > 0.0) && grid.slots.get(entry) == slot {
                     return seen;
                 }
