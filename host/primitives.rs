@@ -186,7 +186,7 @@ impl PrefixSum {
             )));
         }
         let mut ops = Vec::new();
-        self.push_ops(input, output, n, 0, &mut ops);
+        self.push_ops(input, output, n, (None, 0), &mut ops);
         Ok(ops)
     }
 
@@ -202,11 +202,10 @@ impl PrefixSum {
         n: u32,
         (sums, kept): (&Buffer<u32>, bool),
     ) -> Result<Vec<Op>, Error> {
-        let tiles = scan::tiles(n);
         // A single tile reads no sums.
         let single = n <= scan::TILE;
         if n as usize > input.len().min(output.len())
-            || (!single && tiles as usize > sums.len())
+            || (!single && scan::tiles(n) as usize > sums.len())
             || n as usize > self.capacity
         {
             return Err(Error::Invalid(format!(
@@ -217,30 +216,8 @@ impl PrefixSum {
                 self.capacity
             )));
         }
-        if single {
-            return Ok(vec![Self::tiles_op(input, output, n, None)]);
-        }
         let mut ops = Vec::new();
-        if !kept {
-            ops.push(Self::reduce_op(input, sums, n));
-        }
-        if tiles <= scan::FLAT_TILES {
-            ops.push(Self::tiles_op(
-                input,
-                output,
-                n,
-                Some(TileOffsets::Sums(sums)),
-            ));
-        } else {
-            let offsets = &self.levels[0];
-            self.push_ops(sums, offsets, tiles, 1, &mut ops);
-            ops.push(Self::tiles_op(
-                input,
-                output,
-                n,
-                Some(TileOffsets::Scanned(offsets)),
-            ));
-        }
+        self.push_ops(input, output, n, (Some((sums, kept)), 0), &mut ops);
         Ok(ops)
     }
 
@@ -303,33 +280,43 @@ impl PrefixSum {
         unsafe { threads_in(kernel, scan::threads(n), SCAN_BLOCK, args, b, bytes) }
     }
 
-    /// The launches of [`PrefixSum::ops`] at scratch level `level`, which holds the tile sums
-    /// of `n` elements.
+    /// The launches that scan the first `n` elements of `input` into `output`, with their
+    /// tiles' sums `given` (and, if so, kept up to date by whoever writes `input`), else in
+    /// this scratch's level `level`; the scratch's levels from `level` on (past the one
+    /// used) are free for the scan of the sums, which is done in place in the scratch and
+    /// into the next free level where the sums are given (they are left as they are).
     fn push_ops(
         &self,
         input: &Buffer<u32>,
         output: &Buffer<u32>,
         n: u32,
-        level: usize,
+        (given, level): (Option<(&Buffer<u32>, bool)>, usize),
         ops: &mut Vec<Op>,
     ) {
-        let tiles = scan::tiles(n);
-        // Few tiles: each adds up the sums before its own (two launches); else recurse.
-        let flat = n > scan::TILE && tiles <= scan::FLAT_TILES;
-        let offsets = if n <= scan::TILE {
-            None
-        } else {
-            let sums = &self.levels[level];
-            ops.push(Self::reduce_op(input, sums, n));
-            if !flat {
-                self.push_ops(sums, sums, tiles, level + 1, ops);
-            }
-            Some(match flat {
-                true => TileOffsets::Sums(sums),
-                false => TileOffsets::Scanned(sums),
-            })
+        if n <= scan::TILE {
+            ops.push(Self::tiles_op(input, output, n, None));
+            return;
+        }
+        let (sums, kept, free) = match given {
+            Some((sums, kept)) => (sums, kept, level),
+            None => (&self.levels[level], false, level + 1),
         };
-        ops.push(Self::tiles_op(input, output, n, offsets));
+        if !kept {
+            ops.push(Self::reduce_op(input, sums, n));
+        }
+        let tiles = scan::tiles(n);
+        // Few tiles: each adds up the sums before its own; else the sums are scanned first.
+        let offsets = if tiles <= scan::FLAT_TILES {
+            TileOffsets::Sums(sums)
+        } else {
+            let (scanned, free) = match given {
+                Some(_) => (&self.levels[free], free + 1),
+                None => (sums, free),
+            };
+            self.push_ops(sums, scanned, tiles, (None, free), ops);
+            TileOffsets::Scanned(scanned)
+        };
+        ops.push(Self::tiles_op(input, output, n, Some(offsets)));
     }
 }
 
