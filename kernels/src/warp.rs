@@ -315,12 +315,23 @@ pub fn exclusive_scan_tile(
             }
             distance *= 2;
         }
+        // Each row's total, from its last lane: independent shuffles, in flight together
+        // (row after row, each row's offset waited on the shuffle before). The rows' offsets
+        // then add up in registers, and every row is stored from them: arrays indexed by
+        // constants only, never walked by an iterator, so that they stay in registers (the
+        // iterator's index put them in local memory).
+        let totals: [u32; WARP as usize] =
+            core::array::from_fn(|row| inclusive[row].shuffle_from(WARP - 1, u32::MAX));
         let mut running = offset;
-        for (row, (sum, own)) in inclusive.into_iter().zip(values).enumerate() {
+        let starts: [u32; WARP as usize] = core::array::from_fn(|row| {
+            let start = running.wrapping_add(inclusive[row].wrapping_sub(values[row]));
+            running = running.wrapping_add(totals[row]);
+            start
+        });
+        for (row, start) in starts.iter().enumerate() {
             if at(row) < len {
-                store(at(row), running.wrapping_add(sum.wrapping_sub(own)));
+                store(at(row), *start);
             }
-            running = running.wrapping_add(sum.shuffle_from(WARP - 1, u32::MAX));
         }
     }
     #[cfg(not(target_arch = "nvptx64"))]

@@ -121,17 +121,21 @@ pub fn scan_tiles(t: Thread, args: &ScanArgs) {
 
 /// [`scan_tiles`] where `tile_offsets` holds the tile sums themselves (of [`reduce_tiles`],
 /// at most [`FLAT_TILES`] of them, not scanned): the warp of tile `w` adds up the sums before
-/// `w` together, each lane every 32nd (at most `FLAT_TILES / 32` reads a lane, four in flight
-/// at a time, instead of up to `FLAT_TILES` for the last tile alone), and scans its tile from
+/// `w` together, each lane every 32nd (at most `FLAT_TILES / 32` reads a lane, all in flight
+/// at once, instead of up to `FLAT_TILES` for the last tile alone), and scans its tile from
 /// their sum. Integer sums: the result does not depend on their order.
 #[inline(always)]
 pub fn scan_tiles_after_sums(t: Thread, args: &ScanArgs) {
     let Some((tile, lane)) = tile_of(t, args.n) else {
         return;
     };
-    let sums = args.tile_offsets;
+    let sums = args.tile_offsets.range(0, tile);
     let before = warp::sum_u32(lane, |l| {
-        sums.fold_runs::<1, u32>((l, tile, WARP), 0, |sum, [v]| sum.wrapping_add(v))
+        let column: [u32; (FLAT_TILES / WARP) as usize] = core::array::from_fn(|k| {
+            let i = k as u32 * WARP + l;
+            if i < tile { sums.get(i) } else { 0 }
+        });
+        column.into_iter().fold(0u32, u32::wrapping_add)
     });
     scan_tile(args, (tile, lane), before);
 }
