@@ -131,6 +131,10 @@ pub fn scan_tiles_after_sums(t: Thread, args: &ScanArgs) {
     };
     let sums = args.tile_offsets.range(0, tile);
     let before = warp::sum_u32(lane, |l| {
+        // On the CPU one thread adds up every lane's share: only the sums there are read.
+        if cfg!(not(target_arch = "nvptx64")) {
+            return sums.fold_every((l, tile, WARP), 0, u32::wrapping_add);
+        }
         let column: [u32; (FLAT_TILES / WARP) as usize] = core::array::from_fn(|k| {
             let i = k as u32 * WARP + l;
             if i < tile { sums.get(i) } else { 0 }
