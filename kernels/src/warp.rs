@@ -315,11 +315,11 @@ pub fn exclusive_scan_tile(
             }
             distance *= 2;
         }
-        // Each row's total, from its last lane: independent shuffles, in flight together
-        // (row after row, each row's offset waited on the shuffle before). The rows' offsets
-        // then add up in registers, and every row is stored from them: arrays indexed by
-        // constants only, never walked by an iterator, so that they stay in registers (the
-        // iterator's index put them in local memory).
+        // Each row's total, from its last lane: 32 independent shuffles in flight together,
+        // where each row's offset waited for the shuffle of the row before. The offsets then
+        // add up in registers, each step short enough for the loops to unroll whole: a loop
+        // that took a row's shuffle and store a step was unrolled four times, not 32, and
+        // its run-time row index put the rows in local memory.
         let totals: [u32; WARP as usize] =
             core::array::from_fn(|row| inclusive[row].shuffle_from(WARP - 1, u32::MAX));
         let mut running = offset;
