@@ -3,6 +3,8 @@
 
 use glam::Vec2;
 
+use crate::{DevSlice, Thread, kernel_args};
+
 /// The PTX instruction `$instruction` on the 32-bit register `$x`, giving a `$result`.
 #[cfg(target_arch = "nvptx64")]
 macro_rules! one_instruction {
@@ -64,11 +66,105 @@ pub fn length(v: Vec2) -> f32 {
     sqrt(v.length_squared())
 }
 
+/// The squares of lengths from 2⁻⁵⁰ to 2⁵⁰ (both included): where the GPU's correctly rounded
+/// square root and reciprocal take no special case (see [`recip_sqrt`]).
+pub const PLAIN_SQUARES: core::ops::RangeInclusive<f32> =
+    f32::from_bits((127 - 100) << 23)..=f32::from_bits((127 + 100) << 23);
+
+/// `1 / sqrt(x)` with each step correctly rounded (`1.0 / sqrt(x)`, bit for bit), for `x`
+/// in [`PLAIN_SQUARES`]. On the GPU the ten instructions that `sqrt.rn.f32` and
+/// `rcp.rn.f32` run for such an `x`, without the range checks and branches around them
+/// (which doubled a look's cost of normalising an offset, taken by a few lanes of a warp
+/// at a time); [`check_recip_sqrt`] compares the two over every `f32` of the range on the
+/// GPU (`tests/exact.rs`).
+/// Natively, the division of the square root.
+#[inline(always)]
+pub fn recip_sqrt(x: f32) -> f32 {
+    #[cfg(target_arch = "nvptx64")]
+    {
+        let r: f32;
+        // SAFETY: register-to-register arithmetic; no memory, no preconditions.
+        unsafe {
+            core::arch::asm!(
+                "{{",
+                ".reg .f32 %y, %s, %h, %e;",
+                // The square root: an estimate of its reciprocal, one Newton step.
+                "rsqrt.approx.ftz.f32 %y, {x};",
+                "mul.ftz.f32 %s, {x}, %y;",
+                "mul.ftz.f32 %h, %y, 0f3F000000;",
+                "neg.f32 %e, %s;",
+                "fma.rn.f32 %e, %e, %s, {x};",
+                "fma.rn.f32 %s, %e, %h, %s;",
+                // Its reciprocal: an estimate, one Newton step.
+                "rcp.approx.ftz.f32 %y, %s;",
+                "neg.f32 %h, %y;",
+                "fma.rn.f32 %e, %h, %s, 0f3F800000;",
+                "fma.rn.f32 {r}, %y, %e, %y;",
+                "}}",
+                r = out(reg32) r,
+                x = in(reg32) x,
+                options(pure, nomem, nostack)
+            )
+        };
+        r
+    }
+    #[cfg(not(target_arch = "nvptx64"))]
+    {
+        1.0 / sqrt(x)
+    }
+}
+
+kernel_args! {
+    /// Arguments of [`check_recip_sqrt`].
+    pub struct RecipSqrtCheckArgs {
+        /// The first `f32` checked, as its bits.
+        pub first: u32,
+        /// How many consecutive bit patterns from `first` are checked.
+        pub count: u32,
+        /// Output: the number of patterns whose [`recip_sqrt`] differs from `1.0 /
+        /// sqrt(x)` (element 0), and the largest such pattern (element 1); zero before.
+        pub found: DevSlice<u32>,
+    }
+}
+
+/// Patterns a thread of [`check_recip_sqrt`] checks, one after another.
+pub const RECIP_SQRT_CHECKS_PER_THREAD: u32 = 64;
+
+/// Thread `i` compares [`recip_sqrt`] with the division of the correctly rounded square root
+/// for [`RECIP_SQRT_CHECKS_PER_THREAD`] consecutive patterns of the range from its `i`-th
+/// share on, bit for bit, and adds its mismatches to `found`.
+#[inline(always)]
+pub fn check_recip_sqrt(t: Thread, args: &RecipSqrtCheckArgs) {
+    let from = t.global().saturating_mul(RECIP_SQRT_CHECKS_PER_THREAD);
+    let to = from
+        .saturating_add(RECIP_SQRT_CHECKS_PER_THREAD)
+        .min(args.count);
+    let (mut mismatches, mut largest) = (0, 0);
+    for i in from..to {
+        let bits = args.first.wrapping_add(i);
+        let x = f32::from_bits(bits);
+        if recip_sqrt(x).to_bits() != (1.0 / sqrt(x)).to_bits() {
+            mismatches += 1;
+            largest = bits;
+        }
+    }
+    if mismatches > 0 {
+        args.found.atomic_add(0, mismatches);
+        args.found.atomic_max(1, largest);
+    }
+}
+
 /// `v` scaled to length 1, or `None` where that is not finite or `v` is zero: `glam`'s
-/// `Vec2::try_normalize`, bit for bit, through [`sqrt`].
+/// `Vec2::try_normalize`, bit for bit, through [`sqrt`] (and [`recip_sqrt`] where the
+/// square of the length allows).
 #[inline(always)]
 pub fn try_normalize(v: Vec2) -> Option<Vec2> {
-    let rcp = 1.0 / length(v);
+    let length2 = v.length_squared();
+    if cfg!(target_arch = "nvptx64") && PLAIN_SQUARES.contains(&length2) {
+        // The reciprocal of a length from 2⁻⁵⁰ to 2⁵⁰: finite and positive.
+        return Some(v * recip_sqrt(length2));
+    }
+    let rcp = 1.0 / sqrt(length2);
     (rcp.is_finite() && rcp > 0.0).then(|| v * rcp)
 }
 

@@ -5,6 +5,7 @@
 //! the entry's name and the constant's `name` come from the same identifier, they cannot drift.
 
 use crate::game::{ai, autopilot, effects, master};
+use crate::math;
 use crate::primitives::{histogram, scan, sort, touch};
 use crate::render::{self, camera, particles, radar};
 use crate::rng::streams;
@@ -77,6 +78,9 @@ kernels! {
     HISTOGRAM = histogram(histogram::HistogramArgs) => histogram::count_keys;
     /// Adds one to each thread's element: the launch floor's probe.
     TOUCH = touch(touch::TouchArgs) => touch::touch;
+    /// Counts the `f32`s of a range whose fast reciprocal square root differs from the
+    /// correctly rounded one's (the check of `math::recip_sqrt`).
+    CHECK_RECIP_SQRT = check_recip_sqrt(math::RecipSqrtCheckArgs) => math::check_recip_sqrt;
     /// Rounds of one touch a thread with a block barrier between them: the one-block floor.
     TOUCH_ROUNDS = touch_rounds(touch::TouchRoundsArgs) => touch::touch_rounds;
     /// Counts the digits of each tile of keys (one counting-sort pass).
