@@ -285,13 +285,18 @@ pub struct Looker {
 /// kamikaze looks only for the ship. With `MOVING` (bodies move in the launch that looks),
 /// the others' places and velocities come from the grid's entries.
 ///
-/// Where the walk has no cap, the ship is not walked for: it is looked at where the status
-/// says it was as the grid was built. The grid's cells are no narrower than the widest
-/// vision, so a ship in sight lies in the block the walk reads: the walk would find it
-/// exactly when this check does (it is in the grid whenever a body thinks, since a step
-/// without a live ship is frozen), and a kamikaze walks nothing at all.
+/// `DIRECT`: the walk has no cap (`args.grid.cap == 0`). Then the ship is not walked for:
+/// it is looked at where the status says it was as the grid was built. The grid's cells
+/// are no narrower than the widest vision, so a ship in sight lies in the block the walk
+/// reads: the walk would find it exactly when this check does (it is in the grid whenever
+/// a body thinks, since a step without a live ship is frozen), and a kamikaze walks
+/// nothing at all. And the looker counts its own entry among its kind's by place alone,
+/// and takes it off after the walk ([`CellIndex::own_weight`]): a living body is in the
+/// step's grid, at the very place it looks from (nothing revives or moves a body between
+/// the grid's build and its look). Under a cap, which may stop the walk before the
+/// looker's entry, its entry is told apart by its slot as the walk meets it.
 #[inline(always)]
-pub fn look<const MOVING: bool>(
+pub fn look<const MOVING: bool, const DIRECT: bool>(
     args: &ThinkArgs,
     brain: &Brain,
     machine: Machine,
@@ -311,7 +316,8 @@ pub fn look<const MOVING: bool>(
     let social = machine != Machine::Kamikaze;
     let dodges = social && brain.avoid_bullets != 0;
     let scale = fixed_scale(brain.vision);
-    let direct = args.grid.cap == 0;
+    let direct = DIRECT;
+    debug_assert_eq!(direct, args.grid.cap == 0);
     let mask = match direct {
         true => others_mask(brain, machine, args.shot_kind),
         false => sight_mask(brain, machine, ship_kind, args.shot_kind),
@@ -334,7 +340,7 @@ pub fn look<const MOVING: bool>(
     // The walk's closure takes its values by copy: borrowed, the CPU emulation read each
     // through a reference at every entry (`scale-1m` 3% slower there; the PTX is the same).
     let grid = &args.grid;
-    let seen = grid.merge_near_in(
+    let mut seen = grid.merge_near_in(
         team,
         &args.space,
         (near, sample),
@@ -345,19 +351,23 @@ pub fn look<const MOVING: bool>(
             if dist2 > vision2 {
                 return seen;
             }
-            // A body of its own kind (never the ship's, which has no machine) counts unless
-            // it is the looker itself: the slot is read only where the offset is zero (or
-            // not a number), as the looker's own is.
+            // A body of its own kind (never the ship's, which has no machine) counts, the
+            // looker itself too where the walk has no cap: it is taken off after the walk
+            // (its slot read only where the offset is zero, a wait for memory a few lanes
+            // of a warp at a time, cost `scale-1m` 1% on an H100). Under a cap it is left
+            // out here, its slot read only where the offset is zero (or not a number), as
+            // the looker's own is.
             if social && kind == brain.kind {
                 // Zero or not a number, the looker's own offset: not greater than zero.
                 #[allow(clippy::neg_cmp_op_on_partial_ord)]
-                if !(dist2 > 0.0) && grid.slots.get(entry) == slot {
+                if !direct && !(dist2 > 0.0) && grid.slots.get(entry) == slot {
                     return seen;
                 }
                 // A neighbour of a crowd's sample stands for `weight` of them.
                 seen.similar = seen.similar.wrapping_add(weight);
                 seen.sum = add_fixed(seen.sum, weighted(fixed(offset, scale), weight));
-                if dist2 < personal * personal {
+                // (An offset of zero, the looker's own, would add nothing.)
+                if dist2 > 0.0 && dist2 < personal * personal {
                     let away = fixed(math::normalize_or_zero(offset), UNIT_SCALE);
                     seen.crowd = add_fixed(seen.crowd, weighted(away, weight));
                 }
@@ -389,9 +399,17 @@ pub fn look<const MOVING: bool>(
         },
         Seen::merge,
     );
+    // The looker counted itself among its own kind (its offset: zero, adding nothing to
+    // the sums), as often as the sample took its entry.
+    if direct && social {
+        let own = grid.own_weight(&args.space, (near, sample), brain.kind, slot);
+        seen.similar = seen.similar.wrapping_sub(own);
+    }
     // Where the bodies move in this launch, from the grid's entries, as the look measured;
     // else from the bodies, which have not moved since the grid was built.
-    let dodge = (seen.threat != u64::MAX).then(|| {
+    // (A branch, not a closure: LLVM left such a closure out of line, its captures in
+    // local memory, once `look` grew.)
+    let dodge = if seen.threat != u64::MAX {
         let (entry, other) = (seen.threat_entry, seen.threat as u32);
         let at = if MOVING {
             grid.pos.get(entry)
@@ -400,8 +418,10 @@ pub fn look<const MOVING: bool>(
         };
         let offset = args.space.offset(pos, at);
         let rel = grid.vel_at::<MOVING>(entry, other, &b.vel) - vel;
-        threat(offset, rel, radius).map_or(Vec2::ZERO, |(_, away)| away)
-    });
+        Some(threat(offset, rel, radius).map_or(Vec2::ZERO, |(_, away)| away))
+    } else {
+        None
+    };
     let ship = if direct {
         // Read after the walk, not held across it (the status is one line, in the caches).
         let offset = args.space.offset(pos, args.status.get(0).ship);
@@ -652,7 +672,11 @@ fn think_as<const MACHINE: u32, const MOVING: bool>(
 ) {
     let b = &args.bodies;
     let machine = Machine::from_u32(MACHINE);
-    let sight = look::<MOVING>(args, brain, machine, looker, team);
+    // Without a cap, a walk of its own (see `look`).
+    let sight = match args.grid.cap {
+        0 => look::<MOVING, true>(args, brain, machine, looker, team),
+        _ => look::<MOVING, false>(args, brain, machine, looker, team),
+    };
     if !team.leads() {
         return;
     }
