@@ -72,6 +72,8 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         start: b.view(&g.start),
         unordered: b.view(&g.unordered),
         counts: b.view(&g.counts),
+        rows: b.view(&g.rows),
+        space: world.space,
     };
     let buckets = g.counts.len() as u64;
     ops.push(unsafe {
@@ -103,8 +105,6 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         entry_prev: b.view(&g.prev),
         runs: b.view(&g.ranks),
         bounded: u32::from(bounded),
-        space: world.space,
-        rows: b.view(&g.rows),
         reserved: 0,
     };
     ops.push(unsafe {

@@ -13,8 +13,9 @@
 //!    which hands out ranks in whatever order threads arrive (the counts do not depend on it);
 //! 2. the exclusive prefix sum of the counts: each bucket's first entry;
 //! 3. [`place_in_cells`]: each body writes its slot at its bucket's start plus its rank, a
-//!    scheduling-dependent order inside the bucket, and the counts go back to zero for the
-//!    next build (so no clear runs between the step's launches);
+//!    scheduling-dependent order inside the bucket (in a small bucket, with its rank and the
+//!    bucket's size beside it), and the counts go back to zero for the next build (so no
+//!    clear runs between the step's launches);
 //! 4. [`order_cells`]: each entry counts the smaller slots in its bucket and moves its slot to
 //!    that rank, which makes every bucket canonical (increasing slots) before anything reads
 //!    it.
@@ -42,7 +43,8 @@ device_data! {
         /// Each bucket's first entry (the counts' exclusive prefix sums); the last element is
         /// the number of entries.
         start: [u32; buckets],
-        /// Slots by bucket, in arrival order.
+        /// Slots by bucket, in arrival order (with their places in small buckets: see
+        /// [`placed`]); the merge passes' runs afterwards.
         unordered: [u32; slots],
         /// Slots by bucket, in slot order.
         slots: [u32; slots],
@@ -117,16 +119,49 @@ kernel_args! {
         pub ranks: DevSlice<u32>,
         /// Each bucket's first entry: the exclusive prefix sums of the counts.
         pub start: DevSlice<u32>,
-        /// Output: the slots grouped by bucket, in arrival order inside a bucket.
+        /// Output: the slots grouped by bucket, in arrival order inside a bucket, each with
+        /// its place in a small bucket (see [`placed`]).
         pub unordered: DevSlice<u32>,
         /// The counts that were scanned into `start`: set back to zero.
         pub counts: DevSlice<u32>,
+        /// Output: each kind's first and last row holding one of its bodies (see
+        /// [`CellIndex::rows`]).
+        pub rows: DevSlice<u32>,
+        /// The world's grid (its rows and columns).
+        pub space: Space,
     }
 }
 
+/// The bits of an arrival-ordered entry that hold its slot (slots are below 2²⁴).
+const SLOT_BITS: u32 = 24;
+
+/// The largest bucket whose entries carry their place in it (see [`placed`]).
+const SMALL_BUCKET: u32 = 15;
+
+/// Slot `slot`'s arrival-ordered entry, with its `rank` in a bucket of `size` entries
+/// where the bucket has at most [`SMALL_BUCKET`] (size in the top four bits, rank in the
+/// four below them; a size of 0 says the bucket is larger): so that the ordering finds its
+/// bucket's entries without first waiting for the slot's key and the bucket's bounds.
+#[inline(always)]
+fn placed(slot: u32, rank: u32, size: u32) -> u32 {
+    match size <= SMALL_BUCKET {
+        true => slot | rank << SLOT_BITS | size << (SLOT_BITS + 4),
+        false => slot,
+    }
+}
+
+/// The slot of an arrival-ordered entry (see [`placed`]).
+#[inline(always)]
+fn slot_of(entry: u32) -> u32 {
+    entry & ((1 << SLOT_BITS) - 1)
+}
+
 /// Thread `i` writes slot `i` into its bucket: each entry has exactly one writer, since the
-/// ranks of a bucket are distinct. The threads also zero the counts, every `threads`-th
-/// bucket each, for the next build: nothing in this launch reads them.
+/// ranks of a bucket are distinct. The thread of a bucket's first arrival writes the
+/// bucket's row as its kind's first or last row with a body (see [`CellIndex::rows`]) where
+/// the bucket is its kind's first or last that is not empty: one writer each. The threads
+/// also zero the counts, every `threads`-th bucket each, for the next build: nothing in this
+/// launch reads them.
 #[inline(always)]
 pub fn place_in_cells(t: Thread, args: &PlaceArgs) {
     let slot = t.global();
@@ -145,8 +180,26 @@ pub fn place_in_cells(t: Thread, args: &PlaceArgs) {
         args.counts.set(bucket, 0);
         bucket += threads;
     }
-    if key != NO_BUCKET {
-        args.unordered.set(args.start.get(key) + rank, slot);
+    if key == NO_BUCKET {
+        return;
+    }
+    let [first, end] = asked([args.start.get(key), args.start.get(key + 1)]);
+    args.unordered
+        .set(first + rank, placed(slot, rank, end - first));
+    if rank == 0 {
+        let cells = args.space.cells();
+        let kind = key / cells;
+        let row = key % cells / args.space.cols;
+        let [kind_first, kind_end] = asked([
+            args.start.get(kind * cells),
+            args.start.get((kind + 1) * cells),
+        ]);
+        if first == kind_first {
+            args.rows.set(2 * kind, row);
+        }
+        if end == kind_end {
+            args.rows.set(2 * kind + 1, row);
+        }
     }
 }
 
@@ -177,11 +230,6 @@ kernel_args! {
         /// Output when `bounded`: the entries of buckets larger than [`RUN`], each run of
         /// [`RUN`] entries in slot order, for [`merge_runs`] to merge.
         pub runs: DevSlice<u32>,
-        /// Output: each kind's first and last row holding one of its bodies (see
-        /// [`CellIndex::rows`]).
-        pub rows: DevSlice<u32>,
-        /// The world's grid (its rows and columns).
-        pub space: Space,
         /// Non-zero: buckets larger than [`RUN`] are ordered run by run (then merged), so that
         /// a crowded cell costs `O(n log n)`, not `O(n²)`.
         pub bounded: u32,
@@ -201,9 +249,8 @@ pub const DONE: u32 = u32::MAX;
 /// Thread `j` takes entry `j`: its slot's rank among its bucket's slots is the number of
 /// smaller slots there, and it moves there. The ranks of a bucket are a permutation (slots
 /// are distinct), so each output entry has one writer, whatever order the entries arrived in.
-/// The thread of a bucket's first entry writes the bucket's row as its kind's first or last
-/// row with a body (see [`CellIndex::rows`]) where the bucket is its kind's first or last
-/// that is not empty: one writer each.
+/// An entry of a small bucket carries its place in it (see [`placed`]); only a larger
+/// bucket's entries wait for their slot's key, then their bucket's bounds.
 #[inline(always)]
 pub fn order_cells(t: Thread, args: &OrderArgs) {
     let j = t.global();
@@ -211,12 +258,12 @@ pub fn order_cells(t: Thread, args: &OrderArgs) {
         return;
     }
     // Each wait asks for all it can: the entry with the count of entries (past it, a stale
-    // entry, unused), then its slot's key with its place.
-    let [live, slot] = asked([args.start.get(args.start.len() - 1), args.unordered.get(j)]);
+    // entry, unused), then its slot's place (and a large bucket's bounds).
+    let [live, entry] = asked([args.start.get(args.start.len() - 1), args.unordered.get(j)]);
     if j >= live {
         return;
     }
-    let key = asked(args.keys.get(slot));
+    let slot = slot_of(entry);
     let pos = asked(args.pos.get(slot));
     let keeps_vel = !args.entry_vel.is_empty();
     let vel = asked(if keeps_vel {
@@ -230,25 +277,14 @@ pub fn order_cells(t: Thread, args: &OrderArgs) {
     } else {
         Vec2::ZERO
     });
-    // The bucket's bounds, and its kind's, in one wait.
-    let cells = args.space.cells();
-    let kind = key / cells;
-    let [first, end, kind_first, kind_end] = asked([
-        args.start.get(key),
-        args.start.get(key + 1),
-        args.start.get(kind * cells),
-        args.start.get((kind + 1) * cells),
-    ]);
-    // The bucket's first entry notes whether its row is its kind's first or last.
-    if j == first {
-        let row = args.space.cell_coords(pos).1;
-        if first == kind_first {
-            args.rows.set(2 * kind, row);
-        }
-        if end == kind_end {
-            args.rows.set(2 * kind + 1, row);
-        }
-    }
+    let size = entry >> (SLOT_BITS + 4);
+    let [first, end] = if size != 0 {
+        let first = j - (entry >> SLOT_BITS & 15);
+        [first, first + size]
+    } else {
+        let key = args.keys.get(slot);
+        asked([args.start.get(key), args.start.get(key + 1)])
+    };
     if args.bounded != 0 {
         if end - first > RUN {
             // A large bucket: order this entry's run only.
@@ -256,7 +292,7 @@ pub fn order_cells(t: Thread, args: &OrderArgs) {
             let mut rank = 0;
             args.unordered
                 .for_each_in::<4>(run, end.min(run + RUN), |_, other| {
-                    rank += u32::from(other < slot);
+                    rank += u32::from(slot_of(other) < slot);
                 });
             args.runs.set(run + rank, slot);
             return;
@@ -265,7 +301,7 @@ pub fn order_cells(t: Thread, args: &OrderArgs) {
     }
     let mut rank = 0;
     args.unordered.for_each_in::<4>(first, end, |_, other| {
-        rank += u32::from(other < slot);
+        rank += u32::from(slot_of(other) < slot);
     });
     args.slots.set(first + rank, slot);
     args.entry_pos.set(first + rank, pos);
@@ -784,6 +820,59 @@ impl CellIndex {
             }
             base += width;
         }
+    }
+
+    /// The weight [`CellIndex::merge_near_in`] under `sample` gives the entry of slot
+    /// `slot`, a body of kind `kind` at `near.pos` that is in the grid: its run's stride
+    /// where the sample takes it, else 0. Without a cap, so that a walk may count a body
+    /// among its neighbours by place alone and take itself off after (rather than read the
+    /// slot of every entry at offset zero: a wait for memory a few lanes at a time). Only
+    /// a run beyond its share looks for the entry (in its cell's bucket, by slot).
+    #[inline(always)]
+    pub fn own_weight(
+        &self,
+        space: &Space,
+        (near, sample): (Near, Sample),
+        kind: u32,
+        slot: u32,
+    ) -> u32 {
+        if sample.budget == 0 {
+            return 1;
+        }
+        // The block's run of columns that holds the body's own cell, in its own row.
+        let cols = self.block(space, near).cols;
+        let (col, row) = space.cell_coords(near.pos);
+        let (first, last) = match cols.run(0) {
+            (first, last) if (first..=last).contains(&col) => (first, last),
+            _ => cols.run(1),
+        };
+        let base = kind * self.cells + row * space.cols;
+        let [start, end] = asked([
+            self.start.get(base + first),
+            self.start.get(base + last + 1),
+        ]);
+        let (every, skip) = sample.of_run(end - start);
+        if every == 1 {
+            return 1;
+        }
+        let [mut low, mut high] =
+            asked([self.start.get(base + col), self.start.get(base + col + 1)]);
+        // A bucket is in increasing slot order.
+        while low < high {
+            let mid = low + (high - low) / 2;
+            match self.slots.get(mid) {
+                s if s < slot => low = mid + 1,
+                s if s > slot => high = mid,
+                _ => {
+                    return if (mid - start) % every == skip {
+                        every
+                    } else {
+                        0
+                    };
+                }
+            }
+        }
+        0
     }
 
     /// The runs of entries that [`CellIndex::for_each_near`] visits for `near`, to be taken
