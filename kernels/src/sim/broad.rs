@@ -44,7 +44,7 @@ device_data! {
         /// the number of entries.
         start: [u32; buckets],
         /// Slots by bucket, in arrival order (with their places in small buckets: see
-        /// [`placed`]); the merge passes' runs afterwards.
+        /// [`place_in_cells`]); the merge passes' runs afterwards.
         unordered: [u32; slots],
         /// Slots by bucket, in slot order.
         slots: [u32; slots],
@@ -120,7 +120,7 @@ kernel_args! {
         /// Each bucket's first entry: the exclusive prefix sums of the counts.
         pub start: DevSlice<u32>,
         /// Output: the slots grouped by bucket, in arrival order inside a bucket, each with
-        /// its place in a small bucket (see [`placed`]).
+        /// its place in a small bucket (see [`place_in_cells`]).
         pub unordered: DevSlice<u32>,
         /// The counts that were scanned into `start`: set back to zero.
         pub counts: DevSlice<u32>,
@@ -157,11 +157,13 @@ fn slot_of(entry: u32) -> u32 {
 }
 
 /// Thread `i` writes slot `i` into its bucket: each entry has exactly one writer, since the
-/// ranks of a bucket are distinct. The thread of a bucket's first arrival writes the
-/// bucket's row as its kind's first or last row with a body (see [`CellIndex::rows`]) where
-/// the bucket is its kind's first or last that is not empty: one writer each. The threads
-/// also zero the counts, every `threads`-th bucket each, for the next build: nothing in this
-/// launch reads them.
+/// ranks of a bucket are distinct. In a bucket of at most 15 entries the entry also holds
+/// the bucket's size and its rank in the eight bits above the slot, so that [`order_cells`]
+/// finds the bucket's entries without waiting for the key. The thread of a bucket's first
+/// arrival writes the bucket's row as its kind's first or last row with a body (see
+/// [`CellIndex::rows`]) where the bucket is its kind's first or last that is not empty: one
+/// writer each. The threads also zero the counts, every `threads`-th bucket each, for the
+/// next build: nothing in this launch reads them.
 #[inline(always)]
 pub fn place_in_cells(t: Thread, args: &PlaceArgs) {
     let slot = t.global();
@@ -249,7 +251,7 @@ pub const DONE: u32 = u32::MAX;
 /// Thread `j` takes entry `j`: its slot's rank among its bucket's slots is the number of
 /// smaller slots there, and it moves there. The ranks of a bucket are a permutation (slots
 /// are distinct), so each output entry has one writer, whatever order the entries arrived in.
-/// An entry of a small bucket carries its place in it (see [`placed`]); only a larger
+/// An entry of a small bucket carries its place in it (see [`place_in_cells`]); only a larger
 /// bucket's entries wait for their slot's key, then their bucket's bounds.
 #[inline(always)]
 pub fn order_cells(t: Thread, args: &OrderArgs) {
