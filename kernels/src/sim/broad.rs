@@ -135,8 +135,12 @@ kernel_args! {
 /// The bits of an arrival-ordered entry that hold its slot (slots are below 2²⁴).
 const SLOT_BITS: u32 = 24;
 
+/// The bits of an arrival-ordered entry that hold its rank, and then its bucket's size,
+/// above its slot (see [`placed`]).
+const PLACE_BITS: u32 = 4;
+
 /// The largest bucket whose entries carry their place in it (see [`placed`]).
-const SMALL_BUCKET: u32 = 15;
+const SMALL_BUCKET: u32 = (1 << PLACE_BITS) - 1;
 
 /// Slot `slot`'s arrival-ordered entry, with its `rank` in a bucket of `size` entries
 /// where the bucket has at most [`SMALL_BUCKET`] (size in the top four bits, rank in the
@@ -145,7 +149,7 @@ const SMALL_BUCKET: u32 = 15;
 #[inline(always)]
 fn placed(slot: u32, rank: u32, size: u32) -> u32 {
     match size <= SMALL_BUCKET {
-        true => slot | rank << SLOT_BITS | size << (SLOT_BITS + 4),
+        true => slot | rank << SLOT_BITS | size << (SLOT_BITS + PLACE_BITS),
         false => slot,
     }
 }
@@ -279,9 +283,9 @@ pub fn order_cells(t: Thread, args: &OrderArgs) {
     } else {
         Vec2::ZERO
     });
-    let size = entry >> (SLOT_BITS + 4);
+    let size = entry >> (SLOT_BITS + PLACE_BITS);
     let [first, end] = if size != 0 {
-        let first = j - (entry >> SLOT_BITS & 15);
+        let first = j - (entry >> SLOT_BITS & SMALL_BUCKET);
         [first, first + size]
     } else {
         let key = args.keys.get(slot);
