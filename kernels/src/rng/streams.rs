@@ -26,11 +26,26 @@ impl RngStreams {
     /// at most one handle per slot may be open at a time (one thread owns a slot).
     #[inline(always)]
     pub fn open(&self, slot: u32) -> SlotRng<'_> {
+        self.open_at(slot, self.position(slot))
+    }
+
+    /// The position of `slot`'s generator (the index of its oldest word), which
+    /// [`RngStreams::open_at`] takes: a thread that reads it early asks for the words of its
+    /// draws with the parameters, not after them.
+    #[inline(always)]
+    pub fn position(&self, slot: u32) -> u32 {
+        self.index.get(slot)
+    }
+
+    /// [`RngStreams::open`], given the generator's `position` (read with
+    /// [`RngStreams::position`], and not moved since).
+    #[inline(always)]
+    pub fn open_at(&self, slot: u32, position: u32) -> SlotRng<'_> {
         SlotRng {
             streams: self,
             slot,
             params: self.params.get(slot),
-            index: self.index.get(slot),
+            index: position,
         }
     }
 }
