@@ -158,7 +158,7 @@ fn a_sampled_look_takes_every_strided_entry_of_each_kind_within_the_budget() {
             let got = grid.merge_near_in(
                 Team::new(0, 1),
                 &space,
-                (near, sample),
+                (near, sample, 0),
                 Taken::default(),
                 |taken, weight, _, _, entry| taken.add(weight, slots[entry as usize], entry),
                 |a, _| a,

@@ -344,7 +344,7 @@ pub fn look<const MOVING: bool, const DIRECT: bool>(
     let mut seen = grid.merge_near_in(
         team,
         &args.space,
-        (near, sample),
+        (near, sample, brain.kind),
         Seen::NONE,
         move |mut seen, weight, kind, at, entry| {
             let offset = args.space.offset(pos, at);

@@ -693,13 +693,15 @@ impl CellIndex {
     /// across the team (see [`Team::merge`]). Where `add` and `merge` are free of order
     /// (exact integer sums, least keys), every lane gets what one thread adding every entry
     /// taken gets, bit for bit, without handing each body found to every lane. Every lane
-    /// of the team must call it with the same `near` and `sample`.
+    /// of the team must call it with the same `near` and `sample`. On the GPU one thread
+    /// walks the runs of kind `own` in a loop of their own, which hands `add` that kind as
+    /// `own` itself, so that what `add` does by kind is decided once, not at each entry.
     #[inline(always)]
     pub fn merge_near_in<A: Handed>(
         &self,
         team: Team,
         space: &Space,
-        (near, sample): (Near, Sample),
+        (near, sample, own): (Near, Sample, u32),
         init: A,
         add: impl Fn(A, u32, u32, Vec2, u32) -> A,
         merge: impl Fn(A, A) -> A,
@@ -712,14 +714,20 @@ impl CellIndex {
             self.for_each_run(space, (near, false), |kind, start, end| {
                 let (every, skip) = sample.of_run(end - start);
                 let run = self.run(start, end);
-                let add = |value, weight, at, entry| add(value, weight, kind, at, entry);
-                // On the GPU a run taken whole (every run, where there is no budget) is
-                // walked with a weight known to be 1, so that `add`'s weighted sums multiply
-                // nothing. Natively the second copy of `add` made the emulated looks slower
+                let of_run = |value, weight, at, entry| add(value, weight, kind, at, entry);
+                // On the GPU a run of kind `own` taken whole (every run, where there is no
+                // budget) is walked with a weight known to be 1 and its kind known, so that
+                // `add`'s weighted sums multiply nothing and its test of the kind folds away
+                // (a third copy of `add`, for the other kinds' whole runs, was left out of
+                // line). Natively the second copy of `add` made the emulated looks slower
                 // (`paper` 434 -> 594 µs a step): one walk there.
                 value = match every {
-                    1 if cfg!(target_arch = "nvptx64") => run.fold(start, 1, value, add),
-                    _ => run.fold(start + skip, every, value, add),
+                    1 if cfg!(target_arch = "nvptx64") && kind == own => {
+                        run.fold(start, 1, value, |value, weight, at, entry| {
+                            add(value, weight, own, at, entry)
+                        })
+                    }
+                    _ => run.fold(start + skip, every, value, of_run),
                 };
             });
             return value;
