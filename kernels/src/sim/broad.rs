@@ -161,13 +161,13 @@ fn slot_of(entry: u32) -> u32 {
 }
 
 /// Thread `i` writes slot `i` into its bucket: each entry has exactly one writer, since the
-/// ranks of a bucket are distinct. In a bucket of at most 15 entries the entry also holds
-/// the bucket's size and its rank in the eight bits above the slot, so that [`order_cells`]
-/// finds the bucket's entries without waiting for the key. The thread of a bucket's first
-/// arrival writes the bucket's row as its kind's first or last row with a body (see
-/// [`CellIndex::rows`]) where the bucket is its kind's first or last that is not empty: one
-/// writer each. The threads also zero the counts, every `threads`-th bucket each, for the
-/// next build: nothing in this launch reads them.
+/// ranks of a bucket are distinct. In a bucket of at most `SMALL_BUCKET` entries the entry
+/// also holds the bucket's size and its rank in the bits above the slot (see `placed`),
+/// so that [`order_cells`] finds the bucket's entries without waiting for the key. The
+/// thread of a bucket's first arrival writes the bucket's row as its kind's first or last
+/// row with a body (see [`CellIndex::rows`]) where the bucket is its kind's first or last
+/// that is not empty: one writer each. The threads also zero the counts, every
+/// `threads`-th bucket each, for the next build: nothing in this launch reads them.
 #[inline(always)]
 pub fn place_in_cells(t: Thread, args: &PlaceArgs) {
     let slot = t.global();
