@@ -51,7 +51,7 @@ pub(super) enum BufferImp<T: Element> {
         _element: PhantomData<T>,
     },
     /// Page-locked host memory mapped into the GPU's address space, `len` elements: what the
-    /// host and the steps in flight exchange without copies (see [`Ring`]).
+    /// host and the steps in flight exchange without copies (see [`Ring`](super::ring::Ring)).
     Mapped {
         memory: cuda::Mapped,
         len: usize,
@@ -133,7 +133,7 @@ impl<T: Element> Buffer<T> {
     ///
     /// # Safety
     /// The view must be used only by launches that run while the memory is allocated, and in
-    /// the device's order (see [`Binder`], the one caller).
+    /// the device's order (see [`Binder`](super::plan::Binder), the one caller).
     pub(super) unsafe fn view_prefix(&self, len: u32) -> DevSlice<T> {
         let len = len.min(self.len() as u32);
         // SAFETY: `len` elements of this buffer from its start; the caller keeps its use in

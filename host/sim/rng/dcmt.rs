@@ -330,7 +330,7 @@ struct Masks {
     c: u32,
 }
 
-/// A lattice vector over GF(2)[t]: a recurrence state (circular buffer) plus
+/// A lattice vector over GF(2)\[t\]: a recurrence state (circular buffer) plus
 /// the top bits of its next tempered output.
 #[derive(Clone, Copy)]
 struct LatticeVec {

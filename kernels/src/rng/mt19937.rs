@@ -89,8 +89,8 @@ impl Mt19937 {
         y ^ (y >> 18)
     }
 
-    /// Regenerates all N words; the sequence x[k+N] = x[k+M] ^ twist(x[k],
-    /// x[k+1]) is computed in place, so later words see updated ones.
+    /// Regenerates all N words; the sequence `x[k+N] = x[k+M] ^ twist(x[k], x[k+1])` is
+    /// computed in place, so later words see updated ones.
     fn twist(&mut self) {
         let s = &mut self.state;
         for k in 0..N {
