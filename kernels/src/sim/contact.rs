@@ -127,12 +127,21 @@ fn outward(x: f32, tie: f32) -> f32 {
     }
 }
 
-/// A contact that begins during a step's motion: the pair was apart when the motion began
-/// (a test at the motion's end alone misses it if the pair is apart again there, and
-/// resolves it the wrong way if the bodies passed each other's middles).
+/// A contact that begins during a step's motion: the pair was apart or touching when the
+/// motion began (a test at the motion's end alone misses it if the pair is apart again
+/// there, and resolves it the wrong way if the bodies passed each other's middles).
+///
+/// What counts, so that the test at the motion's end ([`contact`]) and this one together
+/// see every path once: the bounds are open sets (touching is not overlapping). A motion
+/// that starts overlapping was counted at the end of the motion before; one that starts
+/// apart or touching and enters the overlap at any moment `t` in `[0, 1)` is swept, at the
+/// first such moment (0 for a touching start that closes in); one that only reaches
+/// touching at its end, or grazes (touches without entering), is no contact; the next
+/// motion starts touching and counts it if it closes in.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Swept {
-    /// When the bounds first touch, as a fraction of the motion, in `(0, 1)`.
+    /// When the bounds first overlap, as a fraction of the motion, in `[0, 1)` (never
+    /// `-0.0`).
     pub time: f32,
     /// Unit normal at that moment, pointing from `a` towards `b`.
     pub normal: Vec2,
@@ -140,8 +149,9 @@ pub struct Swept {
 
 /// The first moment at which `a` and `b` overlap while the offset from `a` to `b` moves
 /// linearly from `d0` (where the motion began) to `d1` (where it ended), for a pair apart
-/// at `d0` (the caller tests it with [`contact`]). Grazing (touching without overlapping)
-/// is no contact, as in [`contact`]; any NaN gives `None`.
+/// or touching at `d0` (the caller tests it with [`contact`]): a touching start that
+/// closes in enters at 0, one that grazes or moves away does not enter (see [`Swept`]).
+/// Any NaN gives `None`.
 ///
 /// Like [`contact`] it is antisymmetric: swapping the bodies (negating both offsets) gives
 /// the same time, bit for bit, and the opposite normal, so both threads of a pair agree.
@@ -172,7 +182,8 @@ fn rect_rect_sweep(reach: Vec2, d0: Vec2, d1: Vec2) -> Option<Swept> {
 /// moves from `d0` to `d1`. They overlap while the centre lies in the rectangle grown by
 /// `r` with rounded corners: the union of two boxes (the rectangle grown along one axis)
 /// and four disks (one on each corner), whose earliest entry is the earliest of the pieces'
-/// (the path starts outside all of them). Not inlined (see [`rect_rect_sweep`]).
+/// (a touching start lies on the boundary of one piece at least, and enters at 0 where it
+/// closes in on that piece). Not inlined (see [`rect_rect_sweep`]).
 #[inline(never)]
 fn circle_rect_sweep(r: f32, half: Vec2, d0: Vec2, d1: Vec2) -> Option<Swept> {
     let v = d1 - d0;
@@ -203,21 +214,27 @@ fn earliest(a: Option<Swept>, b: Option<Swept>) -> Option<Swept> {
 }
 
 /// When the point `p0 + v t` first enters the open disk of radius `reach` around the
-/// origin, for `t` in `(0, 1)`, with the outward normal there. Every term is a product of
-/// two of the inputs' components, so negating `p0` and `v` changes no bit of the time.
+/// origin, for `t` in `[0, 1)`, with the outward normal there. A start on the circle (or
+/// inside it by a rounding the caller's test of the start did not make: a corner's disk of
+/// [`circle_rect_sweep`]) enters at 0 if it closes in. Every term is a product of two of the
+/// inputs' components, so negating `p0` and `v` changes no bit of the time.
 #[inline(always)]
 fn disk_entry(p0: Vec2, v: Vec2, reach: f32) -> Option<Swept> {
     let a = v.length_squared();
     let b = p0.dot(v);
     let c = p0.length_squared() - reach * reach;
     let disc = b * b - a * c;
-    // Moving (a > 0), outside (c > 0), closing in (b < 0), and passing closer than the
-    // reach (disc > 0, so the path crosses the circle rather than touching it). NaN fails.
-    if !(a > 0.0 && c > 0.0 && b < 0.0 && disc > 0.0) {
+    // Moving (a > 0), closing in (b < 0), and passing closer than the reach (disc > 0, so
+    // the path crosses the circle rather than grazing it). NaN fails.
+    if !(a > 0.0 && b < 0.0 && disc > 0.0) {
         return None;
     }
-    let time = (-b - sqrt(disc)) / a;
-    if !(time > 0.0 && time < 1.0) {
+    // The smaller root (−b − √disc) / a, written as c / (−b + √disc): the same number, but
+    // a quotient of a sum of two positive terms, where the difference cancels for a start
+    // near the circle (a gap of 1e-7 at a reach of 2 came out as no entry). A start on the
+    // circle (c = 0) or inside it by rounding (c < 0) enters at once.
+    let time = if c > 0.0 { c / (-b + sqrt(disc)) } else { 0.0 };
+    if time >= 1.0 {
         return None;
     }
     let at = p0 + v * time;
@@ -229,8 +246,11 @@ fn disk_entry(p0: Vec2, v: Vec2, reach: f32) -> Option<Swept> {
 }
 
 /// When the point `p0 + v t` first enters the open box `|x| < half` (per axis), for `t` in
-/// `(0, 1)`, with the normal of the face it crosses, pointing from the box's centre to the
-/// point. The slab times of each axis swap, not change, when `p0` and `v` are negated.
+/// `[0, 1)`, with the normal of the face it crosses, pointing from the box's centre to the
+/// point. The slab times of each axis swap, not change, when `p0` and `v` are negated. A
+/// start on a face enters at 0 if it moves in; one inside the box by a rounding the
+/// caller's test did not make (a face's box of [`circle_rect_sweep`]) enters at 0 if it
+/// moves in across the face nearest it.
 #[inline(always)]
 fn box_entry(p0: Vec2, v: Vec2, half: Vec2) -> Option<Swept> {
     let (enter_x, leave_x) = slab(p0.x, v.x, half.x);
@@ -241,9 +261,28 @@ fn box_entry(p0: Vec2, v: Vec2, half: Vec2) -> Option<Swept> {
         (enter_x, Vec2::new(-sign(v.x), 0.0))
     };
     // Written so that NaN fails.
-    (time < leave_x.min(leave_y) && time > 0.0 && time < 1.0).then_some(Swept { time, normal })
+    if !(time < leave_x.min(leave_y) && time < 1.0) {
+        return None;
+    }
+    if time >= 0.0 {
+        // `+ 0.0` makes a time of −0 (a start on a face, `(half − p) / v` with v < 0) +0,
+        // as its mirror image computes it.
+        return Some(Swept {
+            time: time + 0.0,
+            normal,
+        });
+    }
+    if leave_x.min(leave_y) <= 0.0 {
+        return None;
+    }
+    // Inside at the start: it enters at once if it moves in across its nearest face.
+    let gap = half - p0.abs();
+    let (p, v, normal) = match gap.y < gap.x {
+        true => (p0.y, v.y, Vec2::new(0.0, sign(p0.y))),
+        false => (p0.x, v.x, Vec2::new(sign(p0.x), 0.0)),
+    };
+    (p * v < 0.0).then_some(Swept { time: 0.0, normal })
 }
-
 /// The times at which `p + v t` enters and leaves `|x| < half`: all time for a point that
 /// does not move and lies inside, none for one that lies outside.
 #[inline(always)]
