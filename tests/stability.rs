@@ -25,7 +25,7 @@ use common::sim::{circle, kind, rect, world};
 use glam::{DVec2, Vec2};
 use gpuwars::Device;
 use gpuwars::backend::Schedule;
-use gpuwars::game::accuracy::audit_steps;
+use gpuwars::game::accuracy::{Stepped, audit_steps};
 use gpuwars::game::{Game, Scene};
 use gpuwars::pipeline::Simulation;
 use gpuwars::sim::audit::{Accuracy, Roles};
@@ -487,14 +487,18 @@ fn swept_world(shot_speed: f32, dt: f32) -> WorldSpec {
 }
 
 /// `spec`'s world with `bodies` placed (kind, position, velocity, each kind's slots in
-/// order), stepped `steps` times, each step's contacts audited against the exact check of
-/// `gpuwars::sim::audit` (independent of the kernels); the audit and the final digest.
+/// order), stepped `steps` times, each step's contacts logged and audited against the exact
+/// check of `gpuwars::sim::audit` (independent of the kernels); the audit and the final
+/// digest.
 fn audited(
     device: &Device,
     spec: &WorldSpec,
     bodies: &[(usize, Vec2, Vec2)],
     steps: u32,
 ) -> (Accuracy, (u64, u64)) {
+    let mut logged = spec.clone();
+    logged.physics.trace_paths = true;
+    let spec = &logged;
     let mut sim = Simulation::new(device, spec, 1).unwrap();
     let mut next_slot = sim
         .layout()
@@ -518,29 +522,34 @@ fn audited(
         walls: 1 << 2,
     };
     let start = sim.snapshot().unwrap();
+    let cursor = sim.contact_log_cursor().unwrap();
     let mut last = digest(&start);
-    let accuracy = audit_steps(spec, &roles, start, steps, || {
-        let renumbers = sim.renumbers_next();
+    let accuracy = audit_steps(spec, &roles, (start, cursor), steps, |since| {
+        let renumbered = sim.renumbers_next();
         sim.step()?;
-        let next = sim.snapshot()?;
-        assert_invariants(spec, &next);
-        last = digest(&next);
-        Ok::<_, gpuwars::Error>(Some((next, renumbers)))
+        let end = sim.snapshot()?;
+        assert_invariants(spec, &end);
+        last = digest(&end);
+        let log = sim.contact_log(since)?;
+        Ok::<_, gpuwars::Error>(Some(Stepped {
+            end,
+            log,
+            renumbered,
+        }))
     })
     .unwrap();
     (accuracy, last)
 }
 
-/// Every contact the exact check is sure of was counted, and nothing was counted that it
-/// is sure did not happen: the kernels' count is the audit's, give or take the grazing
-/// pairs f32 cannot decide.
+/// Every contact the exact check is sure of was counted with its partner at its moment,
+/// and nothing was counted that it is sure did not happen: the kernels' contacts are the
+/// audit's, pair by pair, but for the grazing pairs f32 cannot decide.
 fn assert_exact(case: &str, a: &Accuracy) {
-    assert_eq!(a.all.missed, 0, "{case}: missed contacts ({:?})", a.all);
-    assert!(
-        a.all.extra <= a.uncertain,
-        "{case}: counted contacts that did not happen ({:?}, {} uncertain)",
-        a.all,
-        a.uncertain
+    let t = a.all;
+    assert_eq!(
+        (t.missed, t.extra, t.wrong_partner, t.late),
+        (0, 0, 0, 0),
+        "{case}: missed, extra, wrong partner or late contacts ({t:?})"
     );
 }
 

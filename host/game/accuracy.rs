@@ -4,6 +4,8 @@
 //! anything drift apart: events are compared, not trajectories.
 
 use super::{Game, Options, Scene};
+use gpuwars_kernels::sim::Touched;
+
 use crate::Device;
 use crate::sim::audit::{Accuracy, Roles, StepEnd};
 use crate::sim::{Snapshot, WorldSpec};
@@ -42,44 +44,63 @@ pub fn audit_game(
         game.submit(None)?;
     }
     let start = game.snapshot()?;
-    audit_steps(world, &roles, start, length.steps, || {
+    let cursor = game.pipeline().contact_log_cursor()?;
+    audit_steps(world, &roles, (start, cursor), length.steps, |since| {
         if game.status().is_over() {
             return Ok(None);
         }
-        let renumbers = game.pipeline().renumbers_next();
+        let renumbered = game.pipeline().renumbers_next();
         game.step(None)?;
-        Ok(Some((game.snapshot()?, renumbers)))
+        Ok(Some(Stepped {
+            end: game.snapshot()?,
+            log: game.pipeline().contact_log(since)?,
+            renumbered,
+        }))
     })
 }
 
-/// The audit of up to `steps` steps from the step end `start`: `step` plays one and gives
-/// its end and whether it renumbered the bodies, or `None` to stop early.
+/// One step as the audit takes it.
+#[derive(Clone, Debug)]
+pub struct Stepped {
+    /// Its end.
+    pub end: Snapshot,
+    /// The contacts its narrow phase logged, and the log's cursor after them (see
+    /// [`crate::pipeline::Pipeline::contact_log`]).
+    pub log: (Vec<Touched>, u32),
+    /// Whether it moved bodies between slots before its narrow phase.
+    pub renumbered: bool,
+}
+
+/// The audit of up to `steps` steps from the step end `start`, the contact log's cursor
+/// then beside it: `step` plays one, given the cursor, and gives what it did, or `None` to
+/// stop early.
 pub fn audit_steps<E>(
     spec: &WorldSpec,
     roles: &Roles,
-    start: Snapshot,
+    (start, cursor): (Snapshot, u32),
     steps: u32,
-    mut step: impl FnMut() -> Result<Option<(Snapshot, bool)>, E>,
+    mut step: impl FnMut(u32) -> Result<Option<Stepped>, E>,
 ) -> Result<Accuracy, E> {
     let mut accuracy = Accuracy::default();
-    let mut this = start;
+    let (mut this, mut cursor) = (start, cursor);
     for _ in 0..steps {
-        let Some((next, renumbered)) = step()? else {
+        let Some(next) = step(cursor)? else {
             break;
         };
         accuracy.add_step(
             spec,
             roles,
-            &step_end(&this, false),
-            &step_end(&next, renumbered),
+            &step_end(&this, &[], false),
+            &step_end(&next.end, &next.log.0, next.renumbered),
         );
-        this = next;
+        (this, cursor) = (next.end, next.log.1);
     }
     Ok(accuracy)
 }
 
-/// A snapshot as the audit reads it; `renumbered` if its step moved bodies between slots.
-pub fn step_end(snapshot: &Snapshot, renumbered: bool) -> StepEnd<'_> {
+/// A snapshot as the audit reads it, with the contacts its step's narrow phase logged;
+/// `renumbered` if its step moved bodies between slots.
+pub fn step_end<'a>(snapshot: &'a Snapshot, log: &'a [Touched], renumbered: bool) -> StepEnd<'a> {
     let b = &snapshot.bodies;
     StepEnd {
         alive: &b.alive,
@@ -88,7 +109,7 @@ pub fn step_end(snapshot: &Snapshot, renumbered: bool) -> StepEnd<'_> {
         pos: &b.pos,
         vel: &b.vel,
         energy: &b.energy,
-        counted: &snapshot.contacts,
+        log,
         renumbered,
     }
 }

@@ -10,6 +10,8 @@ pub(super) const NARROW: &[&str] = &[
     "Contacts.kick",
     "Contacts.count",
     "Contacts.damage",
+    "Contacts.log",
+    "Contacts.cursor",
 ];
 
 /// The machines (`think*`): states, deaths, energy, the force they steer with, and the

@@ -50,10 +50,11 @@ pub use world::bytes_needed;
 use gpuwars_kernels::game::control::{Order, Status};
 use gpuwars_kernels::game::effects::{Burst, Particles};
 use gpuwars_kernels::game::rules::{Brain, Rules, Wave};
-use gpuwars_kernels::sim::Space;
+use gpuwars_kernels::sim::{Space, Touched};
 
 use crate::backend::Vecs;
 use crate::sim::layout::Layout;
+use crate::sim::state::LOGGED_PER_SLOT;
 use crate::sim::{Snapshot, WorldSpec};
 use crate::{Buffer, Device, Error, Plan};
 use world::World;
@@ -272,6 +273,44 @@ impl<'d> Pipeline<'d> {
     pub fn snapshot(&self) -> Result<Snapshot, Error> {
         let (state, contacts) = (&self.world.state, &self.world.scratch.contacts);
         state.snapshot(self.device, self.steps, contacts)
+    }
+
+    /// The contacts the narrow phase logged since its log's cursor was at `since` (see
+    /// `Contacts::log`; the cursor starts at 0), sorted by slot, partner and time, and the
+    /// cursor now; waits for the steps queued. Fails where the world keeps no log
+    /// ([`crate::sim::Physics::trace_paths`]), or more contacts were logged since than it
+    /// holds.
+    pub fn contact_log(&self, since: u32) -> Result<(Vec<Touched>, u32), Error> {
+        let contacts = &self.world.scratch.contacts;
+        let cursor = self.contact_log_cursor()?;
+        let ring = self.device.download(&contacts.log)?;
+        let new = cursor.wrapping_sub(since) as usize;
+        if new > ring.len() {
+            return Err(Error::Invalid(format!(
+                "{new} contacts logged since the last read, more than the log's {} (at most \
+                 {LOGGED_PER_SLOT} a slot a step: read it every step)",
+                ring.len()
+            )));
+        }
+        let mask = ring.len() - 1;
+        let mut log: Vec<Touched> = (0..new)
+            .map(|i| ring[(since as usize).wrapping_add(i) & mask])
+            .collect();
+        log.sort_unstable_by(|a, b| {
+            (a.slot, a.other, a.time.to_bits()).cmp(&(b.slot, b.other, b.time.to_bits()))
+        });
+        Ok((log, cursor))
+    }
+
+    /// The contact log's cursor after the steps queued (see [`Pipeline::contact_log`]);
+    /// waits for them. Fails where the world keeps no log.
+    pub fn contact_log_cursor(&self) -> Result<u32, Error> {
+        match self.device.download(&self.world.scratch.contacts.cursor)?[..] {
+            [cursor] => Ok(cursor),
+            _ => Err(Error::Invalid(
+                "the contact log of a world that keeps none (an audit's world keeps one)".into(),
+            )),
+        }
     }
 
     /// The state hash after the steps so far (see [`Snapshot::state_hash`]).

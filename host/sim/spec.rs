@@ -139,8 +139,9 @@ pub struct Physics {
     /// [`MAX_RENUMBER_EVERY`]); `None` lets the world's size choose (see
     /// [`Physics::renumber_period`]).
     pub renumber_every: Option<u32>,
-    /// Whether each body's last path is kept even where no pair is swept, for an audit of
-    /// the contacts (`crate::sim::audit`): a store a body a step, nothing else changes.
+    /// Whether each body's last path is kept even where no pair is swept, and the narrow
+    /// phase logs every contact it counts, for an audit of the contacts
+    /// (`crate::sim::audit`): a store a body a step and one a contact, nothing else changes.
     pub trace_paths: bool,
 }
 

@@ -60,7 +60,8 @@ pub(crate) fn made<T>(result: Result<T, Infallible>) -> T {
 /// Bytes of device memory the buffers of a world of this layout and grid take, the
 /// generators' set-up (seeds and parameter table) included, the renumbering's buffers if it
 /// `renumbers`, its grid entries' velocities if its bodies are `moving` in the launch
-/// that queries the grid, and the bodies' last paths if it `traces` them.
+/// that queries the grid, the bodies' last paths if it `traces` them, and the contact log if
+/// it `logs` its contacts.
 pub fn bytes_needed(
     layout: &Layout,
     space: &Space,
@@ -69,6 +70,7 @@ pub fn bytes_needed(
         renumbers,
         moving,
         traces,
+        logs,
     }: Extras,
 ) -> u64 {
     let (slots, buckets) = (layout.slots as usize, buckets(space, kinds));
@@ -78,7 +80,8 @@ pub fn bytes_needed(
     made(Bodies::<Unmade>::build(s, slots, traced));
     made(KindTables::<Unmade>::build(s, kinds));
     made(FreeSlots::<Unmade>::build(s, slots, kinds));
-    made(Contacts::<Unmade>::build(s, slots));
+    let (logged, logging) = log_sizes(slots, logs);
+    made(Contacts::<Unmade>::build(s, slots, logged, logging));
     made(Grid::<Unmade>::build(
         s,
         slots,
@@ -186,6 +189,9 @@ pub struct Extras {
     pub moving: bool,
     /// The bodies' last paths (and the grid entries' copies of them, where `moving`).
     pub traces: bool,
+    /// The narrow phase's log of every contact it counts, for an audit (see
+    /// [`Contacts::log`]).
+    pub logs: bool,
 }
 
 impl Scratch {
@@ -200,6 +206,7 @@ impl Scratch {
             renumbers,
             moving,
             traces,
+            logs,
         }: Extras,
     ) -> Result<Self, Error> {
         let slots = layout.slots as usize;
@@ -207,7 +214,10 @@ impl Scratch {
         let buckets = buckets(space, kinds);
         let tiles = FreeMarks::tiles_for(layout.slots) as usize;
         Ok(Scratch {
-            contacts: Contacts::build(&mut device.zeroed(), slots)?,
+            contacts: {
+                let (logged, logging) = log_sizes(slots, logs);
+                Contacts::build(&mut device.zeroed(), slots, logged, logging)?
+            },
             grid: Grid::build(
                 &mut device.zeroed(),
                 slots,
@@ -262,6 +272,19 @@ impl Scratch {
             true => b.view(&self.grid.vel),
             false => DevSlice::EMPTY,
         }
+    }
+}
+
+/// Records a step's contacts may take, each contact logged from both sides: room for this
+/// many a live body.
+pub const LOGGED_PER_SLOT: usize = 16;
+
+/// The contact log's records (a power of two) and cursors where a world `logs` its contacts
+/// (see [`Contacts::log`]), none elsewhere.
+fn log_sizes(slots: usize, logs: bool) -> (usize, usize) {
+    match logs {
+        true => ((slots * LOGGED_PER_SLOT).next_power_of_two(), 1),
+        false => (0, 0),
     }
 }
 

@@ -50,6 +50,18 @@ pub struct GameAccuracy {
     pub tunnelling: u64,
     /// Contacts missed per thousand found (`None`: none found).
     pub missed: Option<f64>,
+    /// Contacts counted with a partner the check finds no contact with, per thousand found.
+    pub extra: Option<f64>,
+    /// Contacts counted with another body than the one met, per thousand found.
+    pub wrong_partner: Option<f64>,
+    /// Swept contacts counted at a moment off by more than the tolerance
+    /// ([`crate::sim::audit::TIME_TOLERANCE`] of the motion), per thousand found.
+    pub late: Option<f64>,
+    /// Pairs f32 cannot decide (a contact or not within the margin's sizes), left out of
+    /// the others, and expected swept contacts whose moment it cannot decide.
+    pub undecidable: u64,
+    /// Of the undecidable, those whose moment alone is undecided.
+    pub moment_undecidable: u64,
     /// Shots' contacts with enemies missed per thousand.
     pub shot_enemy: Option<f64>,
     /// The ship's contacts with enemies missed per thousand.
@@ -72,6 +84,11 @@ impl GameAccuracy {
             expected: a.all.expected,
             tunnelling: a.all.tunnelling,
             missed: a.total_missed_per_thousand(),
+            extra: a.all.per_thousand(a.all.extra),
+            wrong_partner: a.all.per_thousand(a.all.wrong_partner),
+            late: a.all.per_thousand(a.all.late),
+            undecidable: a.all.undecidable + a.all.moment_undecidable,
+            moment_undecidable: a.all.moment_undecidable,
             shot_enemy: a.missed_per_thousand(SHOT_ENEMY),
             enemy_ship: a.missed_per_thousand(ENEMY_SHIP),
             body_wall: a.missed_per_thousand(BODY_WALL),

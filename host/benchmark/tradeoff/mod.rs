@@ -355,30 +355,42 @@ impl TradeoffSummary {
         out += &format!(
             "\n### Game: `{}` under each choice\n\nAfter {} steps of play: steps per second, \
              then the contacts of {} steps audited against an exact continuous-time check of \
-             the bodies' paths (f64, every pair): contacts found (each from both sides), how \
-             many passed between two step ends, and missed per thousand, in all and by class; \
-             penetration at a step's end, mean and deepest; body-steps over a limit. ✓: on \
-             the Pareto frontier of missed against simulated seconds per second. –: no such \
-             contact in the audit.\n\n| choice | steps/s | simulated s/s | contacts | \
-             between ends | missed ‰ | shot→enemy ‰ | enemy→ship ‰ | body→wall ‰ | depth \
-             mean / max | over a limit | frontier |\n|---|---:|---:|---:|---:|---:|---:|---:|\
-             ---:|---:|---:|:---:|\n",
-            self.scene, s.game_warmup, s.audit_steps
+             the bodies' paths (f64, every pair), partner by partner: contacts found (each \
+             from both sides), how many passed between two step ends, and per thousand found: \
+             missed, extra (counted but not found), wrong partner (counted with another \
+             body), late (a swept contact's moment off by more than {} of the motion), then \
+             missed by class; pairs f32 cannot decide (their verdict or moment moves within \
+             the audit's margin), counted apart; penetration at a step's end, mean and \
+             deepest; body-steps over a limit. ✓: on the Pareto frontier of missed against \
+             simulated seconds per second. –: no such contact in the audit.\n\n| choice | \
+             steps/s | simulated s/s | contacts | between ends | missed ‰ | extra ‰ | wrong \
+             partner ‰ | late ‰ | shot→enemy ‰ | enemy→ship ‰ | body→wall ‰ | undecidable | \
+             depth mean / max | over a limit | frontier |\n|---|---:|---:|---:|---:|---:|---:|\
+             ---:|---:|---:|---:|---:|---:|---:|---:|:---:|\n",
+            self.scene,
+            s.game_warmup,
+            s.audit_steps,
+            crate::sim::audit::TIME_TOLERANCE
         );
         let per_thousand = |v: Option<f64>| v.map_or("–".to_owned(), |v| format!("{v:.1}"));
         for r in &self.game {
             let Some(a) = &r.accuracy else { continue };
             out += &format!(
-                "| {} | {:.0} | {:.2} | {} | {} | {} | {} | {} | {} | {} / {:.2} | {} | {} |\n",
+                "| {} | {:.0} | {:.2} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} / \
+                 {:.2} | {} | {} |\n",
                 r.choice,
                 r.steps_per_s,
                 r.sim_seconds_per_s,
                 a.expected,
                 a.tunnelling,
                 per_thousand(a.missed),
+                per_thousand(a.extra),
+                per_thousand(a.wrong_partner),
+                per_thousand(a.late),
                 per_thousand(a.shot_enemy),
                 per_thousand(a.enemy_ship),
                 per_thousand(a.body_wall),
+                a.undecidable,
                 a.depth_mean.map_or("–".to_owned(), |d| format!("{d:.2}")),
                 a.depth_max,
                 a.limit_violations,

@@ -27,7 +27,16 @@ pub(super) struct Found {
     pub(super) link: Link,
     /// The penetration at the step's end of a certain contact that overlaps there.
     pub(super) depth: Option<f64>,
+    /// When a certain contact began, as the kernels report a swept pair's: the first moment
+    /// of the motion (a fraction in `[0, 1)`) at which the pair overlaps, or 1 where it
+    /// overlapped from the start (a contact at the end); `None` where sizes within the
+    /// margin move it by more than [`TIME_TOLERANCE`].
+    pub(super) moment: Option<f64>,
 }
+
+/// How far (a fraction of the motion) a swept contact's moment may be from the audit's
+/// before it is late.
+pub const TIME_TOLERANCE: f64 = 1e-4;
 
 /// Every pair of live bodies of `this` whose kinds collide and whose verdict is a contact or
 /// uncertain, in a fixed order (so the depths' sum is reproducible).
@@ -62,7 +71,17 @@ pub(super) fn scan(spec: &WorldSpec, this: &StepEnd) -> Vec<Found> {
                         return None;
                     }
                     let (link, depth) = judge(overlap, d0, end, d1)?;
-                    Some(Found { a, b, link, depth })
+                    let moment = match link {
+                        Link::Uncertain => None,
+                        _ => moment(overlap, d0, end),
+                    };
+                    Some(Found {
+                        a,
+                        b,
+                        link,
+                        depth,
+                        moment,
+                    })
                 })
             }));
         }
@@ -89,6 +108,17 @@ fn judge(overlap: Overlap, d0: DVec2, end: DVec2, d1: DVec2) -> Option<(Link, Op
     } else {
         Some((Link::Tunnelling, None))
     }
+}
+
+/// When the contact of a pair whose offset went from `d0` to `end` began (see
+/// [`Found::moment`]), if sizes within the margin agree on it.
+fn moment(overlap: Overlap, d0: DVec2, end: DVec2) -> Option<f64> {
+    let at = |o: Overlap| match o.contains(d0) {
+        true => 1.0,
+        false => o.entry(d0, end).unwrap_or(1.0),
+    };
+    let [shrunk, grown] = [1.0 - MARGIN, 1.0 + MARGIN].map(|scale| at(overlap.scaled(scale)));
+    ((shrunk - grown).abs() <= TIME_TOLERANCE).then(|| at(overlap))
 }
 
 /// How a world measures the offset between two positions.
@@ -191,17 +221,27 @@ impl Overlap {
 
     /// Whether the closed segment from `from` to `to` meets the set.
     fn meets(self, from: DVec2, to: DVec2) -> bool {
+        self.entry(from, to).is_some()
+    }
+
+    /// The first moment `t` in `[0, 1]` at which `from + (to - from) t` is in the set (the
+    /// infimum: the set is open), or `None` where the closed segment does not meet it.
+    fn entry(self, from: DVec2, to: DVec2) -> Option<f64> {
         match self {
-            Overlap::Disk(reach) => disk_meets(DVec2::ZERO, reach, from, to),
+            Overlap::Disk(reach) => disk_entry(DVec2::ZERO, reach, from, to),
             // A union of open sets: a cross of two rectangles and a disk at each corner.
-            Overlap::Rounded { half, radius } => {
-                rect_meets(half + DVec2::new(radius, 0.0), from, to)
-                    || rect_meets(half + DVec2::new(0.0, radius), from, to)
-                    || [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)]
-                        .into_iter()
-                        .any(|(x, y)| disk_meets(half * DVec2::new(x, y), radius, from, to))
-            }
-            Overlap::Rect(half) => rect_meets(half, from, to),
+            Overlap::Rounded { half, radius } => [
+                rect_entry(half + DVec2::new(radius, 0.0), from, to),
+                rect_entry(half + DVec2::new(0.0, radius), from, to),
+            ]
+            .into_iter()
+            .chain(
+                [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)]
+                    .map(|(x, y)| disk_entry(half * DVec2::new(x, y), radius, from, to)),
+            )
+            .flatten()
+            .reduce(f64::min),
+            Overlap::Rect(half) => rect_entry(half, from, to),
         }
     }
 
@@ -224,27 +264,32 @@ impl Overlap {
     }
 }
 
-/// Whether the closed segment from `from` to `to` meets the open disk of `radius` around
-/// `centre`: its point nearest the centre is inside.
-fn disk_meets(centre: DVec2, radius: f64, from: DVec2, to: DVec2) -> bool {
-    let along = to - from;
-    let length2 = along.length_squared();
-    let t = if length2 > 0.0 {
-        ((centre - from).dot(along) / length2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (from + along * t - centre).length_squared() < radius * radius
+/// The first moment in `[0, 1]` at which `from + (to - from) t` is in the open disk of
+/// `radius` around `centre`: where the path crosses the circle (the root of a quadratic,
+/// written without cancellation), or 0 for a start inside.
+fn disk_entry(centre: DVec2, radius: f64, from: DVec2, to: DVec2) -> Option<f64> {
+    let (p, along) = (from - centre, to - from);
+    let c = p.length_squared() - radius * radius;
+    if c < 0.0 {
+        return Some(0.0);
+    }
+    let (a, b) = (along.length_squared(), p.dot(along));
+    let disc = b * b - a * c;
+    if !(b < 0.0 && disc > 0.0) {
+        return None;
+    }
+    let t = c / (-b + disc.sqrt());
+    (t < 1.0).then_some(t)
 }
 
-/// Whether the closed segment from `from` to `to` meets the open rectangle of half extents
-/// `half` around zero: the open parameter intervals in which each axis is inside overlap
-/// each other and `[0, 1]`.
-fn rect_meets(half: DVec2, from: DVec2, to: DVec2) -> bool {
+/// The first moment in `[0, 1]` at which `from + (to - from) t` is in the open rectangle of
+/// half extents `half` around zero: where the open parameter intervals in which each axis
+/// is inside overlap each other and `[0, 1]`.
+fn rect_entry(half: DVec2, from: DVec2, to: DVec2) -> Option<f64> {
     let (x0, x1) = slab(from.x, to.x, half.x);
     let (y0, y1) = slab(from.y, to.y, half.y);
     let (lo, hi) = (x0.max(y0), x1.min(y1));
-    lo < hi && lo < 1.0 && hi > 0.0
+    (lo < hi && lo < 1.0 && hi > 0.0).then_some(lo.max(0.0))
 }
 
 /// The open interval of `t` in which `|a + (b - a) t| < half`. When `a == b`, dividing by

@@ -3,6 +3,10 @@
 //! f64 and continuous in time: a pair whose paths met between two step ends is a contact
 //! even if it overlaps at neither end. It shares no code with the kernels, so it checks their
 //! narrow phase (swept or not) rather than repeating it.
+//!
+//! It compares sets, not counts: each slot's partners and moments against the contacts the
+//! kernels logged (`Contacts::log`), so that a spurious contact cannot hide a missed one, and
+//! a wrong partner or a late moment shows.
 
 mod geometry;
 #[cfg(test)]
@@ -11,8 +15,10 @@ mod tests;
 use std::collections::BTreeMap;
 
 use glam::Vec2;
+use gpuwars_kernels::sim::Touched;
 
 use super::spec::{KindSpec, WorldSpec};
+pub use geometry::TIME_TOLERANCE;
 use geometry::{Link, scan};
 
 /// Class of the contacts of shots with enemies, counted from the shots.
@@ -42,9 +48,10 @@ pub struct StepEnd<'a> {
     pub vel: &'a [Vec2],
     /// Its energy at the end.
     pub energy: &'a [i32],
-    /// The contacts the kernels counted for each slot in this step's narrow phase, which
-    /// tests the motion of the step before (see [`Accuracy::add_step`]).
-    pub counted: &'a [u32],
+    /// The contacts the kernels counted in this step's narrow phase, which tests the motion
+    /// of the step before (see [`Accuracy::add_step`]), sorted by slot then partner (as
+    /// `Pipeline::contact_log` gives them).
+    pub log: &'a [Touched],
     /// Whether this step moved bodies to other slots (renumbering) before its narrow phase:
     /// then no slot holds the body it held at the step before's end.
     pub renumbered: bool,
@@ -64,7 +71,6 @@ impl StepEnd<'_> {
             self.pos.len(),
             self.vel.len(),
             self.energy.len(),
-            self.counted.len(),
         ];
         assert!(
             lengths.iter().all(|&l| l == n),
@@ -139,26 +145,47 @@ impl Roles {
 pub struct Tally {
     /// Certain contacts the audit found.
     pub expected: u64,
-    /// Of those, how many the kernels' counts lack.
+    /// Of those, how many the kernels did not count with that partner.
     pub missed: u64,
-    /// Contacts the kernels counted beyond the expected ones (in a class: those its
-    /// uncertain pairs may explain; the rest only in [`Accuracy::all`]).
+    /// Contacts the kernels counted with a partner the audit finds no contact with (nor an
+    /// undecidable one), or counted twice.
     pub extra: u64,
+    /// A slot's missed contact and extra one taken as a pair: counted, but with another body
+    /// (each such pair is one here and neither missed nor extra).
+    pub wrong_partner: u64,
+    /// Expected contacts of swept pairs counted at a moment more than [`TIME_TOLERANCE`] of
+    /// the motion from the audit's.
+    pub late: u64,
     /// Expected contacts that overlapped at neither step end: their paths met in between.
     pub tunnelling: u64,
+    /// Pairs whose verdict sizes within the margin change (f32 cannot decide them): left out
+    /// of the expected and extra contacts, whatever the kernels counted.
+    pub undecidable: u64,
+    /// Expected contacts of swept pairs whose moment sizes within the margin move by more
+    /// than the tolerance: never late.
+    pub moment_undecidable: u64,
 }
 
 impl Tally {
     /// Missed contacts per thousand expected; `None` when none were expected.
     pub fn missed_per_thousand(&self) -> Option<f64> {
-        (self.expected > 0).then(|| 1000.0 * self.missed as f64 / self.expected as f64)
+        self.per_thousand(self.missed)
+    }
+
+    /// `count` per thousand expected contacts; `None` when none were expected.
+    pub fn per_thousand(&self, count: u64) -> Option<f64> {
+        (self.expected > 0).then(|| 1000.0 * count as f64 / self.expected as f64)
     }
 
     fn add(&mut self, other: Tally) {
         self.expected += other.expected;
         self.missed += other.missed;
         self.extra += other.extra;
+        self.wrong_partner += other.wrong_partner;
+        self.late += other.late;
         self.tunnelling += other.tunnelling;
+        self.undecidable += other.undecidable;
+        self.moment_undecidable += other.moment_undecidable;
     }
 }
 
@@ -203,9 +230,9 @@ pub struct Accuracy {
     pub slots_audited: u64,
     /// Live slots left out because the next step moved bodies to other slots.
     pub slots_skipped: u64,
-    /// Pairs of an audited slot and a partner whose verdict the margin leaves undecided (left
-    /// out of the expected and missed contacts).
-    pub uncertain: u64,
+    /// Contacts the kernels counted with bodies born after the step began (no path to
+    /// audit).
+    pub partners_born: u64,
     /// Depths of the certain contacts at the audited steps' ends, between any live bodies
     /// (audited or not).
     pub depth: Depths,
@@ -249,8 +276,7 @@ impl Accuracy {
             self.classes.entry(name.clone()).or_default();
         }
 
-        // (audited slot, link, partner): sorted, each slot's partners come in the order its
-        // missed contacts are attributed, then its uncertain ones.
+        // (audited slot, partner, link, moment): sorted, each slot's partners in order.
         let mut links = Vec::new();
         for found in scan(spec, this) {
             if let Some(depth) = found.depth {
@@ -258,56 +284,114 @@ impl Accuracy {
             }
             for (s, partner) in [(found.a, found.b), (found.b, found.a)] {
                 if audited[s] {
-                    links.push((s, found.link, partner));
+                    links.push((s, partner, found.link, found.moment));
                 }
             }
         }
-        links.sort_unstable();
+        links.sort_unstable_by_key(|&(s, partner, ..)| (s, partner));
 
-        let mut rest = &links[..];
+        let swept = spec.sweep_masks();
+        let (mut rest, mut log) = (&links[..], next.log);
         for (s, &same) in audited.iter().enumerate() {
+            let (mine, tail) = rest.split_at(rest.partition_point(|l| l.0 == s));
+            rest = tail;
+            let (counted, tail) = log.split_at(log.partition_point(|t| t.slot as usize <= s));
+            log = tail;
+            let counted = &counted[counted.partition_point(|t| (t.slot as usize) < s)..];
             if !same {
                 self.slots_skipped += u64::from(this.alive[s] != 0);
                 continue;
             }
-            let (mine, tail) = rest.split_at(rest.partition_point(|&(t, ..)| t == s));
-            rest = tail;
-            let class = |partner: usize| {
-                classes[this.kind[s] as usize * kinds + this.kind[partner] as usize].as_deref()
+            let kind = this.kind[s] as usize;
+            let slot = Slot {
+                links: mine,
+                counted,
+                class: |partner: usize| {
+                    classes[kind * kinds + this.kind[partner] as usize].as_deref()
+                },
+                swept: |partner: usize| swept[kind] >> this.kind[partner] & 1 != 0,
+                alive: |partner: usize| this.alive.get(partner).is_some_and(|&a| a != 0),
             };
-            self.add_slot(mine, next.counted[s], class);
-            self.check_limits(&spec.kinds[this.kind[s] as usize], this, s);
+            self.add_slot(slot);
+            self.check_limits(&spec.kinds[kind], this, s);
         }
     }
 
-    /// Tallies an audited slot: its links (in attribution order) and the contacts the
-    /// kernels counted for it; `class` names the class of a partner's contacts with it.
+    /// Tallies an audited slot: the audit's partners against the kernels' records.
     fn add_slot<'c>(
         &mut self,
-        links: &[(usize, Link, usize)],
-        counted: u32,
-        class: impl Fn(usize) -> Option<&'c str>,
+        slot: Slot<
+            impl Fn(usize) -> Option<&'c str>,
+            impl Fn(usize) -> bool,
+            impl Fn(usize) -> bool,
+        >,
     ) {
         self.slots_audited += 1;
-        let certain = links.iter().filter(|l| l.1 != Link::Uncertain).count();
-        let missed = certain.saturating_sub(counted as usize);
-        let extra = (counted as usize).saturating_sub(certain);
-        for (i, &(_, link, partner)) in links.iter().enumerate() {
-            let mut add = Tally::default();
-            if link == Link::Uncertain {
-                self.uncertain += 1;
-                add.extra = u64::from(i - certain < extra);
-            } else {
-                add.expected = 1;
-                add.missed = u64::from(i < missed);
-                add.tunnelling = u64::from(link == Link::Tunnelling);
-                self.all.add(add);
+        let mut records = slot.counted.iter().peekable();
+        // Missed and extra contacts by partner, to pair up as wrong partners.
+        let (mut missed, mut extra) = (Vec::new(), Vec::new());
+        let add = |me: &mut Self, partner: usize, tally: Tally| {
+            me.all.add(tally);
+            if let Some(t) = (slot.class)(partner).and_then(|c| me.classes.get_mut(c)) {
+                t.add(tally);
             }
-            if let Some(tally) = class(partner).and_then(|c| self.classes.get_mut(c)) {
-                tally.add(add);
+        };
+        for &(_, partner, link, moment) in slot.links {
+            // The records of partners before this one that the audit does not find.
+            while let Some(r) = records.next_if(|r| (r.other as usize) < partner) {
+                extra.push(r.other as usize);
+            }
+            let record = records.next_if(|r| r.other as usize == partner);
+            let mut tally = Tally::default();
+            if link == Link::Uncertain {
+                tally.undecidable = 1;
+            } else {
+                tally.expected = 1;
+                tally.tunnelling = u64::from(link == Link::Tunnelling);
+                match (record, moment) {
+                    (None, _) => missed.push(partner),
+                    (Some(_), _) if !(slot.swept)(partner) => {}
+                    (Some(_), None) => tally.moment_undecidable = 1,
+                    (Some(r), Some(m)) => {
+                        tally.late = u64::from((f64::from(r.time) - m).abs() > TIME_TOLERANCE);
+                    }
+                }
+            }
+            add(self, partner, tally);
+            // Counted more than once.
+            while let Some(r) = records.next_if(|r| r.other as usize == partner) {
+                extra.push(r.other as usize);
             }
         }
-        self.all.extra += extra as u64;
+        extra.extend(records.map(|r| r.other as usize));
+        extra.retain(|&partner| {
+            let born = !(slot.alive)(partner);
+            self.partners_born += u64::from(born);
+            !born
+        });
+        let wrong = missed.len().min(extra.len());
+        for (i, &partner) in missed.iter().enumerate() {
+            let (wrong_partner, missed) = (u64::from(i < wrong), u64::from(i >= wrong));
+            add(
+                self,
+                partner,
+                Tally {
+                    wrong_partner,
+                    missed,
+                    ..Tally::default()
+                },
+            );
+        }
+        for &partner in &extra[wrong..] {
+            add(
+                self,
+                partner,
+                Tally {
+                    extra: 1,
+                    ..Tally::default()
+                },
+            );
+        }
     }
 
     /// Counts the limits of its kind that the body in `slot` breaks.
@@ -330,4 +414,18 @@ impl Accuracy {
     pub fn total_missed_per_thousand(&self) -> Option<f64> {
         self.all.missed_per_thousand()
     }
+}
+
+/// One audited slot as [`Accuracy::add_slot`] takes it.
+struct Slot<'l, C, S, A> {
+    /// Its links (slot, partner, link, moment), by partner.
+    links: &'l [(usize, usize, Link, Option<f64>)],
+    /// The kernels' records of it, by partner.
+    counted: &'l [Touched],
+    /// The class of its contacts with a partner.
+    class: C,
+    /// Whether its contacts with a partner are swept.
+    swept: S,
+    /// Whether a partner was alive at the step's start.
+    alive: A,
 }

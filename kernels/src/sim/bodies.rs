@@ -107,8 +107,9 @@ impl Deaths {
 }
 
 device_data! {
-    /// What the narrow phase tells the integrator about each slot.
-    pub struct Contacts(slots) {
+    /// What the narrow phase tells the integrator about each slot, and in audit runs every
+    /// contact it counted.
+    pub struct Contacts(slots, logged, logging) {
         /// Displacement that separates the body from those it overlaps.
         push: [Vec2; slots],
         /// Velocity change from the collision impulses.
@@ -117,5 +118,41 @@ device_data! {
         count: [u32; slots],
         /// Energy it lost to those contacts this step.
         damage: [i32; slots],
+        /// Audit runs only (`logged`, a power of two, elsewhere 0): every contact the narrow
+        /// phase counted, from each side, in a ring that [`Contacts::cursor`] goes round.
+        /// The order of a step's records depends on the schedule; the host sorts them.
+        log: [Touched; logged],
+        /// Audit runs only (`logging` = 1, elsewhere 0): the records ever written, modulo
+        /// 2³²; the host reads a step's records between its values before and after.
+        cursor: [u32; logging],
+    }
+}
+
+/// One contact the narrow phase counted (see [`Contacts::log`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Touched {
+    /// The slot that counted it.
+    pub slot: u32,
+    /// The other body's slot.
+    pub other: u32,
+    /// When it began as a fraction of the motion, in `[0, 1)`, for a swept contact; 1 for a
+    /// contact found at the motion's end. (Under a contact budget, the contacts found among
+    /// the sample are logged, each once: see `crate::sim::broad::Sample`.)
+    pub time: f32,
+}
+
+impl Contacts {
+    /// Logs `touched` where the run audits its contacts (a ring of records); does nothing
+    /// elsewhere.
+    #[inline(always)]
+    pub fn record(&self, touched: Touched) {
+        if self.cursor.is_empty() {
+            return;
+        }
+        // The cursor's value is unique to this record whatever the order; the ring's length
+        // is a power of two, so it wraps with the cursor.
+        let at = self.cursor.atomic_add(0, 1);
+        self.log.set(at & (self.log.len() - 1), touched);
     }
 }

@@ -9,7 +9,7 @@
 
 use glam::Vec2;
 
-use super::bodies::{Bodies, Contacts};
+use super::bodies::{Bodies, Contacts, Touched};
 use super::broad::{CellIndex, Near, Sample};
 use super::contact::{Swept, contact, sweep, tie_break};
 use super::kinds::{Bound, KindInfo};
@@ -333,6 +333,9 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool, const SWEPT: bool>(
                     (None, Some(c)) => (c.normal, c.depth, 1.0),
                     (None, None) => return None,
                 };
+                if args.substep == 0 {
+                    out.record(Touched { slot, other, time });
+                }
                 let r = respond(
                     normal,
                     depth,
