@@ -7,7 +7,8 @@ mod common;
 
 use gpuwars::Device;
 use gpuwars::game::Scene;
-use gpuwars::game::accuracy::{AuditLength, audit_game};
+use gpuwars::game::accuracy::{AuditLength, GameAudit, audit_game};
+use gpuwars::game::scene::BUILT_IN;
 use gpuwars::sim::Sweep;
 use gpuwars::sim::audit::{Accuracy, SHOT_ENEMY};
 
@@ -35,7 +36,11 @@ const LENGTH: AuditLength = AuditLength {
 /// nothing swept: `[(swept, unswept); 2]`.
 fn audits(device: &Device) -> [(Accuracy, Accuracy); 2] {
     [None, Some(1.0 / 30.0)].map(|dt| {
-        let audit = |sweep| audit_game(device, &paper(dt, sweep), 1, LENGTH).unwrap();
+        let audit = |sweep| {
+            audit_game(device, &paper(dt, sweep), 1, LENGTH)
+                .unwrap()
+                .contacts
+        };
         (audit(None), audit(Some(Sweep::Off)))
     })
 }
@@ -80,4 +85,89 @@ fn shots_swept_miss_no_enemy_and_unswept_ones_do(device: &Device) {
     }
 }
 
-on_both_backends!(shots_swept_miss_no_enemy_and_unswept_ones_do);
+/// The built-in game scenes (the two scale worlds are too large for an f64 audit of every
+/// pair, and have no ship).
+const GAME_SCENES: [&str; 5] = ["paper", "arena", "kamikaze", "group", "tricky"];
+
+/// One line of the game's accuracy table (docs/physics.md): the figures of `a`.
+fn table_row(scene: &str, dt: &str, sweep: &str, a: &GameAudit) -> String {
+    let all = &a.contacts.all;
+    let per = |n: u64| {
+        all.per_thousand(n)
+            .map_or("–".into(), |v| format!("{v:.1}"))
+    };
+    format!(
+        "| {scene} | {dt} | {sweep} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+        all.expected,
+        all.tunnelling,
+        per(all.missed),
+        per(all.extra),
+        per(all.wrong_partner),
+        per(all.late),
+        all.undecidable,
+        all.moment_undecidable,
+        a.kills_per_shot().map_or("–".into(), |k| format!("{k:.2}")),
+    )
+}
+
+/// Every built-in game scene at 1/120, 1/60 and 1/30 s, as it sweeps and with nothing
+/// swept: its swept pairs' contacts are every one found, once, with the right partner, at
+/// its moment; its unswept pairs miss exactly the contacts that began and ended between
+/// step ends. Each audit covers the same game time (5 s of play, then 10 s audited).
+fn every_game_scene_swept_exact_at_three_steps(device: &Device) {
+    eprintln!(
+        "| scene | dt | swept | contacts | between ends | missed ‰ | extra ‰ | wrong partner ‰ \
+         | late ‰ | undecidable | moment undecidable | kills per shot |"
+    );
+    for name in GAME_SCENES {
+        assert!(
+            BUILT_IN.iter().any(|b| b.name == name),
+            "{name} is not built in"
+        );
+        for hz in [120.0, 60.0, 30.0] {
+            let length = AuditLength {
+                warmup: (5.0 * hz) as u32,
+                steps: (10.0 * hz) as u32,
+            };
+            for sweep in [None, Some(Sweep::Off)] {
+                let mut scene = Scene::load(name).unwrap();
+                scene.world.dt = 1.0 / hz;
+                if let Some(sweep) = sweep {
+                    scene.world.kinds.iter_mut().for_each(|k| k.sweep = sweep);
+                }
+                let audit = audit_game(device, &scene, 1, length).unwrap();
+                let label = if sweep.is_some() {
+                    "nothing"
+                } else {
+                    "as the scene says"
+                };
+                eprintln!("{}", table_row(name, &format!("1/{hz}"), label, &audit));
+                let a = &audit.contacts;
+                let at = format!("{name} at 1/{hz} s, swept {label}: {a:?}");
+                let s = &a.swept;
+                assert_eq!(
+                    (s.missed, s.extra, s.wrong_partner, s.late),
+                    (0, 0, 0, 0),
+                    "{at}"
+                );
+                let u = &a.unswept;
+                assert_eq!((u.extra, u.wrong_partner), (0, 0), "{at}");
+                assert_eq!(u.missed, u.tunnelling, "{at}");
+                assert!(a.slots_audited > a.slots_skipped, "{at}: mostly renumbered");
+                // An enemy killed was a contact the audit found (a shot's or the ship's).
+                assert!(
+                    audit.kills == 0 || a.all.expected > 0,
+                    "{at}: kills, no contact"
+                );
+                if sweep.is_some() {
+                    assert_eq!(s.expected + s.undecidable, 0, "{at}: a pair still swept");
+                }
+            }
+        }
+    }
+}
+
+on_both_backends!(
+    shots_swept_miss_no_enemy_and_unswept_ones_do,
+    every_game_scene_swept_exact_at_three_steps
+);

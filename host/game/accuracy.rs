@@ -20,6 +20,25 @@ pub struct AuditLength {
     pub steps: u32,
 }
 
+/// A game's audit: its contacts, and what the player saw of them over the same steps.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GameAudit {
+    /// The contacts against the exact check.
+    pub contacts: Accuracy,
+    /// Shots the ship fired over the audited steps.
+    pub shots_fired: u64,
+    /// Enemies that died over them.
+    pub kills: u64,
+}
+
+impl GameAudit {
+    /// Enemies killed per shot fired, the player's figure of the contacts; `None` when no
+    /// shot was fired.
+    pub fn kills_per_shot(&self) -> Option<f64> {
+        (self.shots_fired > 0).then(|| self.kills as f64 / self.shots_fired as f64)
+    }
+}
+
 /// `scene` played from `seed` by the autopilot on `device`, the contacts of `length.steps`
 /// steps audited after `length.warmup`. The world keeps its bodies' paths for the audit
 /// ([`crate::sim::Physics::trace_paths`]), which changes nothing it computes: the game is
@@ -29,7 +48,7 @@ pub fn audit_game(
     scene: &Scene,
     seed: u32,
     length: AuditLength,
-) -> anyhow::Result<Accuracy> {
+) -> anyhow::Result<GameAudit> {
     let mut traced = scene.clone();
     traced.world.physics.trace_paths = true;
     let world = &traced.world;
@@ -45,17 +64,25 @@ pub fn audit_game(
     }
     let start = game.snapshot()?;
     let cursor = game.pipeline().contact_log_cursor()?;
-    audit_steps(world, &roles, (start, cursor), length.steps, |since| {
+    let (mut shots_fired, mut kills) = (0, 0);
+    let contacts = audit_steps(world, &roles, (start, cursor), length.steps, |since| {
         if game.status().is_over() {
-            return Ok(None);
+            return anyhow::Ok(None);
         }
         let renumbered = game.pipeline().renumbers_next();
-        game.step(None)?;
+        let events = game.step(None)?.events;
+        shots_fired += u64::from(events.shots_fired);
+        kills += u64::from(events.kills);
         Ok(Some(Stepped {
             end: game.snapshot()?,
             log: game.pipeline().contact_log(since)?,
             renumbered,
         }))
+    })?;
+    Ok(GameAudit {
+        contacts,
+        shots_fired,
+        kills,
     })
 }
 

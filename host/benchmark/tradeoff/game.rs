@@ -7,11 +7,11 @@ use serde::{Deserialize, Serialize};
 
 use super::RunSizes;
 use crate::Device;
-use crate::game::accuracy::{AuditLength, audit_game};
+use crate::game::accuracy::{AuditLength, GameAudit, audit_game};
 use crate::game::spec::Machine;
 use crate::game::{Game, Options, Scene};
 use crate::pipeline::Profile;
-use crate::sim::audit::{Accuracy, BODY_WALL, ENEMY_SHIP, SHOT_ENEMY};
+use crate::sim::audit::{BODY_WALL, ENEMY_SHIP, SHOT_ENEMY};
 use crate::sim::{Integrator, Physics, Shape, Sweep, WorldSpec};
 
 /// One configuration of the game scene.
@@ -74,11 +74,14 @@ pub struct GameAccuracy {
     pub depth_max: f64,
     /// Body-steps over their kind's speed limit or birth energy.
     pub limit_violations: u64,
+    /// Enemies killed per shot fired over the audited steps (`None`: no shot fired).
+    pub kills_per_shot: Option<f64>,
 }
 
 impl GameAccuracy {
-    /// The summary of an audit.
-    fn of(a: &Accuracy) -> Self {
+    /// The summary of a game's audit.
+    fn of(audit: &GameAudit) -> Self {
+        let a = &audit.contacts;
         GameAccuracy {
             steps: a.steps,
             expected: a.all.expected,
@@ -95,6 +98,7 @@ impl GameAccuracy {
             depth_mean: a.depth.mean(),
             depth_max: a.depth.max,
             limit_violations: a.speed_violations + a.energy_violations,
+            kills_per_shot: audit.kills_per_shot(),
         }
     }
 }

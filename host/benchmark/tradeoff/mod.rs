@@ -361,12 +361,13 @@ impl TradeoffSummary {
              body), late (a swept contact's moment off by more than {} of the motion), then \
              missed by class; pairs f32 cannot decide (their verdict or moment moves within \
              the audit's margin), counted apart; penetration at a step's end, mean and \
-             deepest; body-steps over a limit. ✓: on the Pareto frontier of missed against \
+             deepest; body-steps over a limit; enemies killed per shot fired, the player's \
+             figure. ✓: on the Pareto frontier of missed against \
              simulated seconds per second. –: no such contact in the audit.\n\n| choice | \
              steps/s | simulated s/s | contacts | between ends | missed ‰ | extra ‰ | wrong \
              partner ‰ | late ‰ | shot→enemy ‰ | enemy→ship ‰ | body→wall ‰ | undecidable | \
-             depth mean / max | over a limit | frontier |\n|---|---:|---:|---:|---:|---:|---:|\
-             ---:|---:|---:|---:|---:|---:|---:|---:|:---:|\n",
+             depth mean / max | over a limit | kills per shot | frontier |\n|---|---:|---:|---:|\
+             ---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|:---:|\n",
             self.scene,
             s.game_warmup,
             s.audit_steps,
@@ -377,7 +378,7 @@ impl TradeoffSummary {
             let Some(a) = &r.accuracy else { continue };
             out += &format!(
                 "| {} | {:.0} | {:.2} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} / \
-                 {:.2} | {} | {} |\n",
+                 {:.2} | {} | {} | {} |\n",
                 r.choice,
                 r.steps_per_s,
                 r.sim_seconds_per_s,
@@ -394,6 +395,8 @@ impl TradeoffSummary {
                 a.depth_mean.map_or("–".to_owned(), |d| format!("{d:.2}")),
                 a.depth_max,
                 a.limit_violations,
+                a.kills_per_shot
+                    .map_or("–".to_owned(), |k| format!("{k:.2}")),
                 if r.pareto { "✓" } else { "" }
             );
         }

@@ -34,6 +34,11 @@ pub(super) struct Found {
     pub(super) moment: Option<f64>,
 }
 
+/// How many widths of the margin's band (the sizes within the margin) a path that starts in
+/// the band may run inside it before it grazes the set rather than leaves it: a path leaving
+/// straight out crosses the band within one width.
+const GRAZE: f64 = 4.0;
+
 /// How far (a fraction of the motion) a swept contact's moment may be from the audit's
 /// before it is late.
 pub const TIME_TOLERANCE: f64 = 1e-4;
@@ -92,13 +97,19 @@ pub(super) fn scan(spec: &WorldSpec, this: &StepEnd) -> Vec<Found> {
 /// The verdict on a pair whose offset went from `d0` to `end` in a straight line (`d1`: the
 /// same end as the world measures it, its image nearest zero), and its depth at the end for a
 /// certain contact that overlaps there; `None` for a certain non-contact.
+///
+/// A verdict is certain when both ends of the margin's sizes give it, with one exception: a
+/// start within the margin of touching whose path then runs along the boundary (the state a
+/// swept contact's rewind leaves, and a body sliding along a wall). The grown set holds its
+/// start (a contact counted at the motion before) and the shrunk one is never met, but at
+/// the size in between the path grazes the set, and whether it enters is decided by the
+/// roundings of f32: undecidable.
 fn judge(overlap: Overlap, d0: DVec2, end: DVec2, d1: DVec2) -> Option<(Link, Option<f64>)> {
     let contact = |o: Overlap| o.contains(d1) || (!o.contains(d0) && o.meets(d0, end));
     let verdict = contact(overlap);
-    if [1.0 - MARGIN, 1.0 + MARGIN]
-        .into_iter()
-        .any(|scale| contact(overlap.scaled(scale)) != verdict)
-    {
+    let [shrunk, grown] = [1.0 - MARGIN, 1.0 + MARGIN].map(|scale| overlap.scaled(scale));
+    let grazes = || !shrunk.contains(d0) && grown.runs_along(overlap, d0, end);
+    if contact(shrunk) != verdict || contact(grown) != verdict || (!verdict && grazes()) {
         return Some((Link::Uncertain, None));
     }
     if !verdict {
@@ -198,6 +209,30 @@ impl Overlap {
             },
             Overlap::Rect(half) => Overlap::Rect(half * scale),
         }
+    }
+
+    /// Whether the path from `from` (inside this set, the grown one) to `to` stays in it
+    /// for more than [`GRAZE`] of the margin's band around `exact`'s boundary: it runs along
+    /// that boundary rather than leaving it. The set is convex, so the path is inside it over
+    /// one interval from its start, whose end is bisected.
+    fn runs_along(self, exact: Overlap, from: DVec2, to: DVec2) -> bool {
+        if !self.contains(from) {
+            return false;
+        }
+        let band = 2.0 * MARGIN * exact.extent().max_element();
+        let length = (to - from).length();
+        if self.contains(to) {
+            return length > GRAZE * band;
+        }
+        let (mut inside, mut outside) = (0.0, 1.0);
+        for _ in 0..60 {
+            let mid = 0.5 * (inside + outside);
+            match self.contains(from.lerp(to, mid)) {
+                true => inside = mid,
+                false => outside = mid,
+            }
+        }
+        inside * length > GRAZE * band
     }
 
     /// Half extents of the set's bounding box.
@@ -333,6 +368,34 @@ mod tests {
                 let (from, to) = (DVec2::new(x, -10.0), DVec2::new(x, 10.0));
                 assert_eq!(set.meets(from, to), meets, "{set:?} {x}");
             }
+        }
+    }
+
+    #[test]
+    fn a_path_along_the_boundary_from_touching_is_undecidable() {
+        let sets = [
+            Overlap::Disk(5.0),
+            Overlap::Rounded {
+                half: DVec2::new(4.0, 3.0),
+                radius: 1.0,
+            },
+            Overlap::Rect(DVec2::new(5.0, 3.0)),
+        ];
+        for set in sets {
+            // Each set's boundary passes through (5, 0) with the normal along x.
+            let touching = DVec2::new(5.0, 0.0);
+            let verdict = |from: DVec2, to: DVec2| judge(set, from, to, to).map(|(l, _)| l);
+            // Sliding from touching along the boundary's tangent: f32 decides it.
+            let along = touching + DVec2::new(0.0, 2.0);
+            assert_eq!(verdict(touching, along), Some(Link::Uncertain), "{set:?}");
+            // Leaving straight out from touching, or sliding parallel well outside: none.
+            assert_eq!(verdict(touching, DVec2::new(7.0, 0.0)), None, "{set:?}");
+            let outside = DVec2::new(5.0 + 100.0 * MARGIN * 5.0, 0.0);
+            assert_eq!(verdict(outside, outside + DVec2::Y * 2.0), None, "{set:?}");
+            // Going straight in from touching and staying in: certain.
+            let inside = DVec2::new(4.0, 0.0);
+            assert_eq!(verdict(touching, inside).map(|_| ()), Some(()), "{set:?}");
+            assert_ne!(verdict(touching, inside), Some(Link::Uncertain), "{set:?}");
         }
     }
 

@@ -223,6 +223,10 @@ pub struct Accuracy {
     /// Every audited slot's contacts, whatever the class: each contact between two audited
     /// slots counts from both.
     pub all: Tally,
+    /// Of `all`, the contacts of pairs of kinds the world sweeps ([`WorldSpec::sweeps`]).
+    pub swept: Tally,
+    /// Of `all`, the contacts of pairs of kinds tested at step ends only.
+    pub unswept: Tally,
     /// Steps audited.
     pub steps: u64,
     /// Slots audited (body-steps): alive at the step's end and holding the same body at the
@@ -244,8 +248,8 @@ pub struct Accuracy {
 
 impl Accuracy {
     /// Audits the motion of one step. `this` is its end (`prev`: where the bodies started,
-    /// `pos`: where they ended) and `next` the end of the step after, whose `counted` are the
-    /// kernels' counts for that motion. A slot is audited when it holds the same body at both
+    /// `pos`: where they ended) and `next` the end of the step after, whose `log` holds the
+    /// contacts the kernels counted for that motion. A slot is audited when it holds the same body at both
     /// ends: alive at `this`, and `next` did not renumber. A body that dies in `next` still
     /// had its contacts counted there (it dies after the narrow phase, as a shot does on
     /// the enemy it hits), and a body is born only into a slot that was free. Its partners
@@ -291,6 +295,12 @@ impl Accuracy {
         links.sort_unstable_by_key(|&(s, partner, ..)| (s, partner));
 
         let swept = spec.sweep_masks();
+        let pairs = Pairs {
+            kinds,
+            classes: &classes,
+            swept: &swept,
+            end: this,
+        };
         let (mut rest, mut log) = (&links[..], next.log);
         for (s, &same) in audited.iter().enumerate() {
             let (mine, tail) = rest.split_at(rest.partition_point(|l| l.0 == s));
@@ -302,41 +312,29 @@ impl Accuracy {
                 self.slots_skipped += u64::from(this.alive[s] != 0);
                 continue;
             }
-            let kind = this.kind[s] as usize;
-            let slot = Slot {
-                links: mine,
-                counted,
-                class: |partner: usize| {
-                    classes[kind * kinds + this.kind[partner] as usize].as_deref()
-                },
-                swept: |partner: usize| swept[kind] >> this.kind[partner] & 1 != 0,
-                alive: |partner: usize| this.alive.get(partner).is_some_and(|&a| a != 0),
-            };
-            self.add_slot(slot);
-            self.check_limits(&spec.kinds[kind], this, s);
+            self.add_slot(&pairs, s, mine, counted);
+            self.check_limits(&spec.kinds[this.kind[s] as usize], this, s);
         }
     }
 
-    /// Tallies an audited slot: the audit's partners against the kernels' records.
-    fn add_slot<'c>(
-        &mut self,
-        slot: Slot<
-            impl Fn(usize) -> Option<&'c str>,
-            impl Fn(usize) -> bool,
-            impl Fn(usize) -> bool,
-        >,
-    ) {
+    /// Tallies audited slot `s`: the audit's `links` of it (by partner) against the
+    /// kernels' records of it (`counted`, by partner).
+    fn add_slot(&mut self, pairs: &Pairs, s: usize, links: &[AuditLink], counted: &[Touched]) {
         self.slots_audited += 1;
-        let mut records = slot.counted.iter().peekable();
+        let mut records = counted.iter().peekable();
         // Missed and extra contacts by partner, to pair up as wrong partners.
         let (mut missed, mut extra) = (Vec::new(), Vec::new());
         let add = |me: &mut Self, partner: usize, tally: Tally| {
             me.all.add(tally);
-            if let Some(t) = (slot.class)(partner).and_then(|c| me.classes.get_mut(c)) {
+            match pairs.swept(s, partner) {
+                true => me.swept.add(tally),
+                false => me.unswept.add(tally),
+            }
+            if let Some(t) = pairs.class(s, partner).and_then(|c| me.classes.get_mut(c)) {
                 t.add(tally);
             }
         };
-        for &(_, partner, link, moment) in slot.links {
+        for &(_, partner, link, moment) in links {
             // The records of partners before this one that the audit does not find.
             while let Some(r) = records.next_if(|r| (r.other as usize) < partner) {
                 extra.push(r.other as usize);
@@ -350,7 +348,7 @@ impl Accuracy {
                 tally.tunnelling = u64::from(link == Link::Tunnelling);
                 match (record, moment) {
                     (None, _) => missed.push(partner),
-                    (Some(_), _) if !(slot.swept)(partner) => {}
+                    (Some(_), _) if !pairs.swept(s, partner) => {}
                     (Some(_), None) => tally.moment_undecidable = 1,
                     (Some(r), Some(m)) => {
                         tally.late = u64::from((f64::from(r.time) - m).abs() > TIME_TOLERANCE);
@@ -365,7 +363,7 @@ impl Accuracy {
         }
         extra.extend(records.map(|r| r.other as usize));
         extra.retain(|&partner| {
-            let born = !(slot.alive)(partner);
+            let born = pairs.end.alive.get(partner).is_none_or(|&a| a == 0);
             self.partners_born += u64::from(born);
             !born
         });
@@ -416,16 +414,30 @@ impl Accuracy {
     }
 }
 
-/// One audited slot as [`Accuracy::add_slot`] takes it.
-struct Slot<'l, C, S, A> {
-    /// Its links (slot, partner, link, moment), by partner.
-    links: &'l [(usize, usize, Link, Option<f64>)],
-    /// The kernels' records of it, by partner.
-    counted: &'l [Touched],
-    /// The class of its contacts with a partner.
-    class: C,
-    /// Whether its contacts with a partner are swept.
-    swept: S,
-    /// Whether a partner was alive at the step's start.
-    alive: A,
+/// One of the audit's links: (audited slot, partner, link, moment).
+type AuditLink = (usize, usize, Link, Option<f64>);
+
+/// What a step end's pairs of slots are to the audit: their class and whether swept.
+struct Pairs<'a> {
+    /// Number of kinds.
+    kinds: usize,
+    /// The class of kind `a`'s contacts with kind `b`, at `a * kinds + b`.
+    classes: &'a [Option<String>],
+    /// Each kind's mask of the kinds its contacts with are swept.
+    swept: &'a [u32],
+    /// The step end whose motion is audited.
+    end: &'a StepEnd<'a>,
+}
+
+impl Pairs<'_> {
+    /// The class of slot `s`'s contacts with `partner`, if tallied from `s`'s side.
+    fn class(&self, s: usize, partner: usize) -> Option<&str> {
+        let kind = |slot: usize| self.end.kind[slot] as usize;
+        self.classes[kind(s) * self.kinds + kind(partner)].as_deref()
+    }
+
+    /// Whether slot `s`'s contacts with `partner` are swept.
+    fn swept(&self, s: usize, partner: usize) -> bool {
+        self.swept[self.end.kind[s] as usize] >> self.end.kind[partner] & 1 != 0
+    }
 }
