@@ -668,6 +668,37 @@ fn swept_contacts_at_the_extremes_are_counted_exactly(device: &Device) {
     });
 }
 
+/// A shot left touching a crate's corner (as `arena` left one, to the last bit) and moving
+/// off along the tangent, which f32 sees closing in by a rounding while the velocities do
+/// not approach: the contact moves nothing, and the shot goes on its way at its speed every
+/// step (it was put back where it began, step after step, frozen until its lifetime ran out).
+fn a_shot_grazing_a_corner_is_not_frozen(device: &Device) {
+    let mut shot = kind("shot", circle(2.0), 32, &["crate"]);
+    shot.max_speed = 650.0;
+    shot.sweep = Sweep::On;
+    shot.mass = 0.1;
+    let mut crate_kind = kind("crate", rect(24.0, 12.0), 32, &[]);
+    crate_kind.mass = f32::INFINITY;
+    let mut spec = world(Vec2::splat(1024.0), Boundary::Wrap, vec![shot, crate_kind]);
+    spec.dt = 1.0 / 120.0;
+    let vel = Vec2::new(-228.28195, -0.024383143);
+    let bodies = [
+        (1, Vec2::new(348.8497, 913.1666), Vec2::ZERO),
+        (0, Vec2::new(324.8499, 899.1666), vel),
+    ];
+    let mut last = Vec2::new(324.8499, 899.1666);
+    let (a, _) = audited_with(device, &spec, &bodies, 8, |end| {
+        let at = end.bodies.prev[0];
+        let moved = (at - last).length();
+        assert!(
+            moved > 0.99 * vel.length() * spec.dt || end.steps == 1,
+            "frozen at {at}"
+        );
+        last = at;
+    });
+    assert_exact("grazing a corner", &a);
+}
+
 /// The pile's wall: its centre, and its half extents.
 const PILE_WALL: (Vec2, Vec2) = (Vec2::new(1500.0, 1000.0), Vec2::new(4.0, 600.0));
 
@@ -1530,6 +1561,7 @@ on_both_backends!(
     swept_contacts_at_the_extremes_are_counted_exactly,
     a_million_bodies_under_swept_shots_are_counted_exactly,
     a_pile_of_swept_bodies_against_a_wall_stays_exact,
+    a_shot_grazing_a_corner_is_not_frozen,
     bodies_crossing_many_cells_a_step_lose_no_contact,
     a_crowded_cell_is_bounded_by_the_cap,
     a_crowded_cell_is_bounded_by_the_contact_budget,

@@ -223,7 +223,11 @@ fn disk_entry(p0: Vec2, v: Vec2, reach: f32) -> Option<Swept> {
     let a = v.length_squared();
     let b = p0.dot(v);
     let c = p0.length_squared() - reach * reach;
-    let disc = b * b - a * c;
+    // b² − a·c by Lagrange's identity: a·reach² − (p0 × v)². A path grazing the circle
+    // gives two equal products here, not a difference of terms each rounded (c above all,
+    // whose rounding made tangents to a rectangle's corner cross it).
+    let cross = p0.perp_dot(v);
+    let disc = a * (reach * reach) - cross * cross;
     // Moving (a > 0), closing in (b < 0), and passing closer than the reach (disc > 0, so
     // the path crosses the circle rather than grazing it). NaN fails.
     if !(a > 0.0 && b < 0.0 && disc > 0.0) {

@@ -275,8 +275,11 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool, const SWEPT: bool>(
     let mut count = 0u32;
     let mut at_end = 0u32;
     let mut damage = 0i32;
-    // The earliest swept contact, in the fixed order (time, then slot): the body goes back
-    // to where it was then, and only that contact kicks it.
+    // The earliest swept contact that kicks the body, in the fixed order (time, then slot):
+    // the body goes back to where it was then, and only that contact kicks it. A swept
+    // contact with no kick (a path that closes in on the other body only by f32's rounding
+    // of a tangent, while the velocities do not approach) is counted but moves nothing:
+    // going back for it would put the body where it began, step after step, frozen.
     let mut first = Earliest {
         time: 1.0,
         other: 0,
@@ -361,7 +364,7 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool, const SWEPT: bool>(
                     push += touch.push * times;
                     kick += touch.kick * times;
                     at_end += weight;
-                } else if touch.before(&first) {
+                } else if touch.kick != Vec2::ZERO && touch.before(&first) {
                     first = Earliest {
                         time: touch.time,
                         other: touch.other,
