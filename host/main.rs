@@ -39,12 +39,18 @@ fn main() -> ExitCode {
     }
 }
 
-/// The default command: the game in a window when a display is there, else the demo.
+/// The default command: the game in a window when a display is there and answers, else the
+/// demo (saying why, where a display is named but will not do: a stale login's `DISPLAY`).
 fn default_command() -> Command {
-    if play::display_present() {
-        Command::Play(defaults())
-    } else {
-        Command::Demo(default_demo())
+    if !play::display_present() {
+        return Command::Demo(default_demo());
+    }
+    match play::display::check() {
+        Ok(()) => Command::Play(defaults()),
+        Err(why) => {
+            eprintln!("gpuwars: {why}: playing the demo without a window instead");
+            Command::Demo(default_demo())
+        }
     }
 }
 

@@ -906,10 +906,18 @@ fn play_without_a_display_says_what_to_do_in_words() {
         let out = command.output().unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{stderr}");
-        assert_eq!(
-            stderr.trim_end(),
-            "gpuwars: error: no display to open a window on; `gpuwars demo` plays without one"
-        );
+        match display {
+            None => assert_eq!(
+                stderr.trim_end(),
+                "gpuwars: error: no display to open a window on; `gpuwars demo` plays without one"
+            ),
+            // A display named but not there is named, with what to do.
+            Some(name) => {
+                assert!(stderr.contains(name), "{stderr}");
+                assert!(stderr.contains("cannot be reached"), "{stderr}");
+                assert!(stderr.contains("`gpuwars demo` plays without"), "{stderr}");
+            }
+        }
     }
 }
 
@@ -1011,6 +1019,131 @@ fn a_silent_display_is_an_error_naming_it() {
         assert_eq!(out.status.code(), Some(1), "{args:?}: {text}");
         assert!(text.contains("silent-wayland"), "{text}");
         assert!(text.contains("did not answer"), "{text}");
+    }
+}
+
+/// `gpuwars --backend cpu ARGS` with the display `(variable, value)` (and no other), its
+/// temporary files in `tmp`; a short demo of `kamikaze` where the bare command falls back
+/// to one.
+#[cfg(unix)]
+fn on_display(
+    args: &[&str],
+    (variable, value): (&str, &str),
+    tmp: &std::path::Path,
+) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
+        .args(["--backend", "cpu"])
+        .args(args)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env(variable, value)
+        .env("GPUWARS_STEPS", "5")
+        .env("GPUWARS_SCENE", "kamikaze")
+        .env("TMPDIR", tmp)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stderr).into_owned();
+    (out.status.code().unwrap_or(-1), text)
+}
+
+/// A display that answers garbage and keeps the connection open, a fake Wayland socket
+/// and a fake X server on TCP alike, is refused in words that name it by every command
+/// that opens a window (each would wait for ever in the window library otherwise, hanging
+/// this test); the bare `gpuwars` plays the demo instead, saying why. So is one that hangs
+/// up at once (the library's own "Io error" never shown), and an X display whose server
+/// is gone (a stale login's `DISPLAY`).
+#[cfg(unix)]
+#[test]
+fn a_display_that_answers_garbage_is_refused_naming_it() {
+    use std::net::TcpListener;
+    use std::os::unix::net::UnixListener;
+    let dir = tempfile::tempdir().unwrap();
+    // What a web server would say, a few KiB of it, and then nothing (the connection held
+    // open); or, hanging up, nothing at all.
+    fn serve<S: std::io::Write + Send + 'static>(incoming: impl Iterator<Item = S>, hang_up: bool) {
+        let garbage = b"HTTP/1.1 400 Bad Request\r\nConnection: keep-alive\r\n\r\n".repeat(80);
+        let mut held = Vec::new();
+        for mut stream in incoming {
+            if !hang_up {
+                stream.write_all(&garbage).ok();
+                held.push(stream);
+            }
+        }
+    }
+    let wayland = dir.path().join("garbled-wayland");
+    let hang_up = dir.path().join("hang-up-wayland");
+    for (path, hangs) in [(&wayland, false), (&hang_up, true)] {
+        let listener = UnixListener::bind(path).unwrap();
+        std::thread::spawn(move || serve(listener.incoming().flatten(), hangs));
+    }
+    // X display n listens on TCP port 6000 + n: the first free port from 6100 up.
+    let (x11, port) = (6100..7000)
+        .find_map(|port| {
+            TcpListener::bind(("127.0.0.1", port))
+                .ok()
+                .map(|l| (l, port))
+        })
+        .unwrap();
+    std::thread::spawn(move || serve(x11.incoming().flatten(), false));
+    let gone = (7000..8000)
+        .find(|&port| TcpListener::bind(("127.0.0.1", port)).is_ok())
+        .unwrap();
+    let x11 = format!("127.0.0.1:{}", port - 6000);
+    let gone = format!("127.0.0.1:{}", gone - 6000);
+    let replay = recorded(&dir.path().join("game.json"));
+    let out = dir.path().to_str().unwrap();
+    let commands: [&[&str]; 3] = [
+        &["play"],
+        &["replay", replay.to_str().unwrap(), "--window"],
+        &[
+            "bench",
+            "paper",
+            "--window",
+            "--minutes",
+            "0.01",
+            "--out",
+            out,
+        ],
+    ];
+    let displays = [
+        (
+            ("WAYLAND_DISPLAY", wayland.to_str().unwrap()),
+            "garbled-wayland",
+            "not in the Wayland protocol",
+        ),
+        (
+            ("DISPLAY", x11.as_str()),
+            x11.as_str(),
+            "not in the X11 protocol",
+        ),
+        (
+            ("WAYLAND_DISPLAY", hang_up.to_str().unwrap()),
+            "hang-up-wayland",
+            "closed the connection",
+        ),
+        (
+            ("DISPLAY", gone.as_str()),
+            gone.as_str(),
+            "cannot be reached",
+        ),
+    ];
+    for (display, name, why) in displays {
+        for args in commands {
+            let (code, text) = on_display(args, display, dir.path());
+            assert_eq!(code, 1, "{args:?} on {display:?}: {text}");
+            assert!(
+                text.contains(name) && text.contains(why),
+                "{args:?}: {text}"
+            );
+            assert!(!text.contains("Io error"), "{args:?}: {text}");
+        }
+        let (code, text) = on_display(&[], display, dir.path());
+        assert_eq!(code, 0, "bare on {display:?}: {text}");
+        assert!(text.contains(name) && text.contains(why), "bare: {text}");
+        assert!(
+            text.contains("playing the demo without a window instead"),
+            "{text}"
+        );
     }
 }
 

@@ -179,7 +179,7 @@ pub fn display_present() -> bool {
 /// Plays `scene` in a window until Esc or the window is closed; returns the last game's
 /// report (and writes its replay if asked).
 pub fn play(device: &Device, scene: &Scene, options: PlayOptions) -> anyhow::Result<PlayReport> {
-    display::check().map_err(anyhow::Error::msg)?;
+    display::check().map_err(|e| anyhow!("{e}; `gpuwars demo` plays without a window"))?;
     // winit's error quotes its own source file: the user is told what to do instead.
     let event_loop = EventLoop::new()
         .map_err(|_| anyhow!("no display to open a window on; `gpuwars demo` plays without one"))?;
@@ -244,7 +244,7 @@ pub fn measure(
     options: PlayOptions,
     duration: Duration,
 ) -> anyhow::Result<(Seconds, bool)> {
-    display::check().map_err(anyhow::Error::msg)?;
+    display::check().map_err(|e| anyhow!("{e}; leave out --window to render offscreen"))?;
     let event_loop = EventLoop::new().map_err(|_| {
         anyhow!("no display to open a window on; leave out --window to render offscreen")
     })?;
