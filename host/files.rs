@@ -202,6 +202,21 @@ pub fn number(x: f32) -> String {
     }
 }
 
+/// A measured figure in three significant digits: plainly from 0.001 to a million
+/// (`11.8`, `0.0417`, `137`), in scientific notation beyond (`3.40e38`, `1.67e-31`); `0`,
+/// `inf` and `NaN` as such.
+pub fn figure(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    if !(1e-3..1e6).contains(&x.abs()) {
+        return format!("{x:.2e}");
+    }
+    // Decimals for three significant digits, none past the units.
+    let decimals = (2 - x.abs().log10().floor() as i32).max(0) as usize;
+    format!("{x:.decimals$}")
+}
+
 /// What a file system entry is, in words.
 fn kind_of(file_type: FileType) -> &'static str {
     #[cfg(unix)]
