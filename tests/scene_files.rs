@@ -503,6 +503,49 @@ fn numbers_are_checked_as_written_before_rounding() {
     );
 }
 
+/// Ways of writing `v` that TOML reads and that round to `v` in an `f32`: the shortest,
+/// in scientific notation, with ten significant digits, and with digits past those f32
+/// keeps.
+fn spellings(v: f32) -> Vec<String> {
+    let mut out = vec![format!("{v:?}"), format!("{v:e}"), format!("{v:.9e}")];
+    let long = format!("{:.12e}", f64::from(v) * (1.0 + 1e-11));
+    assert_eq!(long.parse::<f32>().unwrap(), v, "{long}");
+    out.push(long);
+    out
+}
+
+proptest! {
+    /// A bound that is another value of the file is compared with the same rounding on
+    /// both sides: an enemy's `speed` equal to its kind's `max_speed`, and `fps.min` equal
+    /// to `fps.start`, are read in every spelling of every value (70.7 was refused against
+    /// 70.7, its limit rounded down by f32 and the speed compared as written); the next
+    /// f32 above the bound is refused, naming it.
+    #[test]
+    fn a_bound_from_another_value_is_compared_as_stored(
+        v in 1.0e-3f32..1.0e6,
+        a in 0usize..4,
+        b in 0usize..4,
+    ) {
+        let (limit, speed) = (&spellings(v)[a], &spellings(v)[b]);
+        let text = mutate("max_speed = 70.0", &format!("max_speed = {limit}"))
+            .replacen("\nspeed = 70.0", &format!("\nspeed = {speed}"), 1);
+        let scene = Scene::from_toml(&text, "paper.toml");
+        prop_assert!(scene.is_ok(), "{limit} against {speed}: {}", scene.unwrap_err());
+        let over = v.next_up();
+        let text = mutate("max_speed = 70.0", &format!("max_speed = {limit}"))
+            .replacen("\nspeed = 70.0", &format!("\nspeed = {over:?}"), 1);
+        let says = format!("{over:?} is out of range");
+        prop_assert!(error(&text).to_string().contains(&says), "{}", error(&text));
+
+        let v = v.min(1000.0);
+        let (start, min) = (&spellings(v)[a], &spellings(v)[b]);
+        let text = mutate("start = 60.0", &format!("start = {start}"))
+            .replacen("min = 12.0", &format!("min = {min}"), 1);
+        let scene = Scene::from_toml(&text, "paper.toml");
+        prop_assert!(scene.is_ok(), "{start} against {min}: {}", scene.unwrap_err());
+    }
+}
+
 #[test]
 fn arrays_have_exactly_their_length() {
     for (to, says) in [

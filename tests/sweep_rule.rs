@@ -49,7 +49,11 @@ fn reference(travel: f64, reach: f64) -> f64 {
     if s == 0.0 {
         return 0.0;
     }
-    let end = if s < 1.0 { s.asin() } else { std::f64::consts::FRAC_PI_2 };
+    let end = if s < 1.0 {
+        s.asin()
+    } else {
+        std::f64::consts::FRAC_PI_2
+    };
     integrate(|t| (1.0 - t.sin() / s) * t.sin(), (0.0, end), 64)
 }
 

@@ -613,6 +613,8 @@ pub struct Interval {
     low: f32,
     closed: bool,
     high: f32,
+    /// Whether `high` is another value of the file as stored (see [`Interval::up_to_stored`]).
+    stored: bool,
 }
 
 /// `(low, high]`.
@@ -621,6 +623,7 @@ pub fn above(low: f32, high: f32) -> Interval {
         low,
         closed: false,
         high,
+        stored: false,
     }
 }
 
@@ -630,6 +633,7 @@ pub fn within(low: f32, high: f32) -> Interval {
         low,
         closed: true,
         high,
+        stored: false,
     }
 }
 
@@ -641,8 +645,24 @@ impl fmt::Display for Interval {
 }
 
 impl Interval {
-    /// Whether `x`, as written, is in the range (NaN never is).
+    /// The range whose upper bound is another value of the file, read and stored as an
+    /// `f32` (a speed at most its kind's `max_speed`): a number is then compared as it
+    /// will be stored, with the same rounding on both sides, so that `70.7` is at most
+    /// `70.7` whatever `f32` makes of it, in any spelling.
+    pub fn up_to_stored(self) -> Interval {
+        Interval {
+            stored: true,
+            ..self
+        }
+    }
+
+    /// Whether `x`, as written (as it will be stored, against a stored bound), is in the
+    /// range (NaN never is).
     fn contains(&self, x: f64) -> bool {
+        let x = match self.stored {
+            true => f64::from(x as f32),
+            false => x,
+        };
         let (low, high) = (f64::from(self.low), f64::from(self.high));
         let above = if self.closed { x >= low } else { x > low };
         above && x <= high

@@ -342,7 +342,7 @@ fn read_fps(node: &Node<'_>) -> Result<FpsSpec, SceneError> {
     let start = fps.need("start")?.real(above(0.0, MAX_FPS))?;
     Ok(FpsSpec {
         start,
-        min: fps.need("min")?.real(within(0.0, start))?,
+        min: fps.need("min")?.real(within(0.0, start).up_to_stored())?,
         recovery: fps.need("recovery")?.real(within(0.0, MAX_FPS))?,
     })
 }
@@ -516,8 +516,10 @@ fn read_behaviour(node: &Node<'_>, max_speed: f32) -> Result<Behaviour, SceneErr
     Ok(Behaviour {
         machine,
         vision: b.need("vision")?.real(side())?,
-        // At most the kind's speed limit, as written.
-        speed: b.need("speed")?.real(above(0.0, max_speed.min(MAX)))?,
+        // At most the kind's speed limit, both as stored.
+        speed: b
+            .need("speed")?
+            .real(above(0.0, max_speed.min(MAX)).up_to_stored())?,
         avoid_bullets,
         low_energy,
         recovery,
