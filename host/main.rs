@@ -153,11 +153,17 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             seed,
             out,
         } => {
-            let scene = Scene::load(&scene)?;
+            let loaded = Scene::load(&scene)?;
             // Its game tables play the scene many times: a large one is said first.
-            announce(&device, &scene);
+            announce(&device, &loaded);
+            // Titled by the file the user gave, and the name it gives its scene.
+            let scene_given = match loaded.name == scene {
+                true => scene,
+                false => format!("{} ({})", loaded.name, shown(Path::new(&scene))),
+            };
             let options = TradeoffOptions {
-                scene,
+                scene: loaded,
+                scene_given,
                 quick,
                 seed,
                 out: out.out,

@@ -29,6 +29,7 @@ fn paper(dt: Option<f32>, sweep: Option<Sweep>) -> Scene {
 /// Long enough for the field to fill and the autopilot's shots to hit a few dozen enemies.
 const LENGTH: AuditLength = AuditLength {
     warmup: 600,
+    busy_within: 0,
     steps: 1200,
 };
 
@@ -127,6 +128,7 @@ fn every_game_scene_swept_exact_at_three_steps(device: &Device) {
         for hz in [120.0, 60.0, 30.0] {
             let length = AuditLength {
                 warmup: (5.0 * hz) as u32,
+                busy_within: 0,
                 steps: (10.0 * hz) as u32,
             };
             for sweep in [None, Some(Sweep::Off)] {

@@ -18,6 +18,11 @@ use gpuwars::sim::{Physics, Snapshot};
 
 /// Runs the quick matrix on `backend`; the summary it printed, checked against its files.
 fn quick(backend: &str) -> TradeoffSummary {
+    quick_of(backend, "paper")
+}
+
+/// [`quick`] of the game scene `scene` (a built-in name or a file).
+fn quick_of(backend: &str, scene: &str) -> TradeoffSummary {
     let dir = tempfile::tempdir().unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
         .args([
@@ -25,6 +30,8 @@ fn quick(backend: &str) -> TradeoffSummary {
             backend,
             "tradeoff",
             "--quick",
+            "--scene",
+            scene,
             "--json",
             "--out",
         ])
@@ -86,6 +93,8 @@ fn check(summary: &TradeoffSummary) {
             row.position_rms.is_finite() && row.steps_per_s > 0.0,
             "{row:?}"
         );
+        // Every speed is a median inside its rounds' range.
+        assert!(row.steps_per_s_low <= row.steps_per_s && row.steps_per_s <= row.steps_per_s_high);
         // Without a cap, the grid finds every contact brute force finds.
         if row.neighbour_cap == 0 {
             assert_eq!(row.contacts_missed, 0.0, "{}", row.choice);
@@ -100,14 +109,21 @@ fn check(summary: &TradeoffSummary) {
     assert!(rms("2 substeps") < rms("default"));
     // Two substeps are two steps of half the time step, bit for bit.
     assert_eq!(rms("2 substeps"), rms("dt 1/120"));
-    // The Pareto flags: a row is on the frontier exactly when nothing dominates it.
+    // The Pareto flags: a row is on the frontier exactly when no row is as accurate and
+    // faster in every round than it in any, or more accurate and not slower so.
     for a in &summary.physics {
+        let sim = |r: &PhysicsRow| (r.steps_per_s_low * r.dt, r.steps_per_s_high * r.dt);
         let dominated = summary.physics.iter().any(|b| {
-            b.position_rms <= a.position_rms
-                && b.sim_seconds_per_s >= a.sim_seconds_per_s
-                && (b.position_rms < a.position_rms || b.sim_seconds_per_s > a.sim_seconds_per_s)
+            let (faster, slower) = (sim(b).0 > sim(a).1, sim(a).0 > sim(b).1);
+            (b.position_rms <= a.position_rms && faster)
+                || (b.position_rms < a.position_rms && !slower)
         });
         assert_eq!(a.pareto, !dominated, "{}", a.choice);
+        // What it cannot be told apart from beats it by the medians.
+        for name in a.unseparated.split("; ").filter(|n| !n.is_empty()) {
+            let b = rows[name];
+            assert!(b.position_rms <= a.position_rms && b.sim_seconds_per_s >= a.sim_seconds_per_s);
+        }
     }
 
     let analytic = |case: &str, integrator: &str, dt: f32| {
@@ -147,7 +163,22 @@ fn check(summary: &TradeoffSummary) {
         let a = r.accuracy.as_ref().unwrap();
         assert!(a.tunnelling <= a.expected, "{}", r.choice);
         assert!((r.sim_seconds_per_s - r.steps_per_s * r.dt).abs() < 1e-9);
+        let (low, high) = r.steps_per_s_range;
+        assert!(
+            low > 0.0 && low <= r.steps_per_s && r.steps_per_s <= high,
+            "{r:?}"
+        );
+        // The quick audit starts where the ship fires: every choice's audit has contacts,
+        // and a missed figure.
+        assert!(a.expected > 0 && a.missed.is_some(), "{}: {a:?}", r.choice);
     }
+    assert!(
+        summary
+            .game
+            .iter()
+            .chain(&summary.features)
+            .all(|r| r.skipped.is_none())
+    );
     // The choices that turn sweeping off or on are offered for the scene's swept kinds.
     let choices: Vec<&str> = summary.game.iter().map(|r| r.choice.as_str()).collect();
     for choice in [
@@ -163,6 +194,45 @@ fn check(summary: &TradeoffSummary) {
 #[test]
 fn the_quick_tradeoff_runs_on_the_cpu() {
     check(&quick("cpu"));
+}
+
+/// `arena` at a step of 0.6 s: the coarser step's choices (1.2 s) do not apply, and are
+/// rows that say so while the run goes on; every row that was measured has its figures,
+/// and the tables and plots are written (`quick_of` checks the files).
+#[test]
+fn a_choice_that_does_not_apply_is_a_row_that_says_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let arena = gpuwars::game::scene::BUILT_IN
+        .iter()
+        .find(|b| b.name == "arena")
+        .unwrap()
+        .source;
+    assert!(arena.contains("dt = 0.016666668"));
+    let file = dir.path().join("slow arena.toml");
+    std::fs::write(&file, arena.replace("dt = 0.016666668", "dt = 0.6")).unwrap();
+    let summary = quick_of("cpu", file.to_str().unwrap());
+    assert!(
+        summary.scene.contains("slow arena.toml"),
+        "{}",
+        summary.scene
+    );
+    let skipped: Vec<_> = (summary.game.iter())
+        .filter(|r| r.skipped.is_some())
+        .collect();
+    assert!(
+        skipped.iter().any(|r| r.choice == "dt 1.2 s"),
+        "{skipped:?}"
+    );
+    for r in &skipped {
+        let why = r.skipped.as_ref().unwrap();
+        assert!(
+            why.contains("world.dt") || why.contains("autopilot lost"),
+            "{why}"
+        );
+    }
+    for r in summary.game.iter().filter(|r| r.skipped.is_none()) {
+        assert!(r.steps_per_s > 0.0 && r.accuracy.is_some(), "{r:?}");
+    }
 }
 
 #[test]

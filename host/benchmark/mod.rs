@@ -6,11 +6,13 @@
 //! - [`scale`]: the paper's mix and density from 1,024 enemies up to the largest world that
 //!   fits the device, doubling.
 //! - [`compare`]: the change between two summaries, figure by figure.
+//! - [`rounds`]: speeds timed in interleaved rounds, with their spread.
 //! - [`tradeoff`]: speed against accuracy for each physics choice (`gpuwars tradeoff`).
 
 pub mod compare;
 pub mod paper;
 pub mod plot;
+pub mod rounds;
 pub mod scale;
 pub mod tradeoff;
 

@@ -10,12 +10,15 @@ use crate::Device;
 use crate::sim::audit::{Accuracy, Roles, StepEnd};
 use crate::sim::{Snapshot, WorldSpec};
 
-/// How long an audit plays: `warmup` steps unaudited (the field fills up), then `steps`
-/// audited ones.
+/// How long an audit plays: `warmup` steps unaudited (the field fills up), more until the
+/// ship has fired (up to `busy_within`), then `steps` audited ones.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct AuditLength {
     /// Steps played before the audit starts.
     pub warmup: u32,
+    /// Most steps played past the warm-up until the ship fires its first shot, so that a
+    /// short audit sees shots meet enemies (0: none).
+    pub busy_within: u32,
     /// Steps whose motion is audited.
     pub steps: u32,
 }
@@ -40,7 +43,7 @@ impl GameAudit {
 }
 
 /// `scene` played from `seed` by the autopilot on `device`, the contacts of `length.steps`
-/// steps audited after `length.warmup`. The world keeps its bodies' paths for the audit
+/// steps audited after the warm-up (see [`AuditLength`]). The world keeps its bodies' paths for the audit
 /// ([`crate::sim::Physics::trace_paths`]), which changes nothing it computes: the game is
 /// the one `scene` plays, bit for bit. It stops early if the game ends.
 pub fn audit_game(
@@ -59,8 +62,18 @@ pub fn audit_game(
         index(&traced.game.ship.shot),
     );
     let mut game = Game::with_options(device, &traced, seed, Options::default())?;
+    let mut fired = false;
     for _ in 0..length.warmup {
         game.submit(None)?;
+        while let Some(status) = game.next_status()? {
+            fired |= status.events.shots_fired > 0;
+        }
+    }
+    for _ in 0..length.busy_within {
+        if fired || game.status().is_over() {
+            break;
+        }
+        fired = game.step(None)?.events.shots_fired > 0;
     }
     let start = game.snapshot()?;
     let cursor = game.pipeline().contact_log_cursor()?;

@@ -116,16 +116,20 @@ impl Scene {
         let root = Spanned::new(root.span(), DeValue::Table(root.into_inner()));
         let root = Node::toml(&doc, &root);
         let scene = read_scene(&root)?;
-        // The world's rules, then the game's.
-        let world = &scene.world;
+        scene.validate().map_err(|SpecError { field, problem }| {
+            SceneError::new(origin, line_of_field(&root, &field), field, &problem)
+        })?;
+        Ok(scene)
+    }
+
+    /// Checks the world's rules, then the game's: an error names the field as a scene file
+    /// writes it (`world.dt`, `kinds[2].max_speed`).
+    pub fn validate(&self) -> Result<(), SpecError> {
+        let world = &self.world;
         world
             .validate()
             .map_err(|e| toml_field(world, e))
-            .and_then(|()| check_game(world, &scene.game))
-            .map_err(|SpecError { field, problem }| {
-                SceneError::new(origin, line_of_field(&root, &field), field, &problem)
-            })?;
-        Ok(scene)
+            .and_then(|()| check_game(world, &self.game))
     }
 
     /// The built-in scene called `name_or_path` if there is one, else the TOML file at that

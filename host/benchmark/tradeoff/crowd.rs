@@ -1,13 +1,12 @@
 //! The crowd: a ring of balls around a central attractor under each physics choice, its
 //! error against the reference and its speed; and every ball of a world in one cell.
 
-use std::time::{Duration, Instant};
-
 use glam::Vec2;
 use serde::{Deserialize, Serialize};
 
 use super::DT;
 use super::reference::Reference;
+use crate::benchmark::rounds::{Point, Rate, Rounds, frontier, interleaved};
 use crate::pipeline::{Pipeline, Profile, Simulation};
 use crate::sim::{Boundary, Field, Integrator, KindSpec, Physics, Shape, Sweep, WorldSpec};
 use crate::{Device, Error};
@@ -43,12 +42,20 @@ pub struct PhysicsRow {
     pub position_rms: f64,
     /// Fraction of the brute-force contacts the grid's queries did not count.
     pub contacts_missed: f64,
-    /// Steps per wall second on the larger crowd.
+    /// Steps per wall second on the larger crowd: the median of the timed rounds.
     pub steps_per_s: f64,
-    /// Simulated seconds per wall second (steps/s × dt).
+    /// The slowest round's steps per second.
+    pub steps_per_s_low: f64,
+    /// The fastest round's.
+    pub steps_per_s_high: f64,
+    /// Simulated seconds per wall second (the median steps/s × dt).
     pub sim_seconds_per_s: f64,
-    /// Whether no other choice is both faster and more accurate.
+    /// Whether no other choice is both more accurate and faster beyond the speeds' spreads
+    /// (see [`crate::benchmark::rounds::frontier`]).
     pub pareto: bool,
+    /// The choices that beat this one by their median speeds alone, inside the spreads
+    /// (`; ` between them): the run cannot tell them apart.
+    pub unseparated: String,
 }
 
 /// A step of a world whose bodies all start on one spot.
@@ -204,25 +211,29 @@ pub(super) fn crowd_error(
     Ok((rms, missed as f64 / contacts.max(1) as f64))
 }
 
-/// Steps per second of the crowd of `spec`, queued without waiting, for `time`.
-pub(super) fn crowd_speed(
-    device: &Device,
-    spec: &WorldSpec,
-    seed: u32,
-    time: Duration,
-) -> anyhow::Result<f64> {
-    let mut sim = scattered(device, spec, seed)?;
-    sim.step()?;
-    let start = Instant::now();
-    let mut steps = 0u64;
-    while steps < 3 || start.elapsed() < time {
-        for _ in 0..8 {
-            Pipeline::step(&mut sim)?;
-        }
-        steps += 8;
-        device.synchronize()?;
+/// Steps per second of each of `sims` (crowds made by [`scattered`]), timed in interleaved
+/// `rounds` after one step each; `tick` after each round.
+pub(super) fn crowd_rates(
+    sims: &mut [Simulation],
+    rounds: Rounds,
+    tick: impl FnMut(),
+) -> anyhow::Result<Vec<Rate>> {
+    for sim in sims.iter_mut() {
+        sim.step()?;
     }
-    Ok(steps as f64 / start.elapsed().as_secs_f64())
+    interleaved(
+        sims,
+        rounds,
+        |sim| {
+            const BATCH: u64 = 8;
+            for _ in 0..BATCH {
+                Pipeline::step(sim)?;
+            }
+            sim.device().synchronize()?;
+            Ok(BATCH)
+        },
+        tick,
+    )
 }
 
 /// The crowded cell's choices, `(neighbour_cap, contact_budget)`: neither bound, a cap of
@@ -262,16 +273,27 @@ pub(super) fn crowded(
     })
 }
 
-/// Marks the rows no other row beats on both error and speed.
+/// Marks the rows on the Pareto frontier of error against simulated seconds per second,
+/// beyond the speeds' spreads, and the rows each cannot be separated from.
 pub(super) fn mark_pareto(rows: &mut [PhysicsRow]) {
-    let points: Vec<(f64, f64)> = rows
+    let points: Vec<Option<Point>> = rows
         .iter()
-        .map(|r| (r.position_rms, r.sim_seconds_per_s))
+        .map(|r| {
+            let steps = Rate {
+                median: r.steps_per_s,
+                low: r.steps_per_s_low,
+                high: r.steps_per_s_high,
+            };
+            Some(Point {
+                error: r.position_rms,
+                speed: steps.scaled(r.dt),
+            })
+        })
         .collect();
-    for (i, row) in rows.iter_mut().enumerate() {
-        let (e, s) = points[i];
-        row.pareto = !points
-            .iter()
-            .any(|&(e2, s2)| e2 <= e && s2 >= s && (e2 < e || s2 > s));
+    let names: Vec<String> = rows.iter().map(|r| r.choice.clone()).collect();
+    for (row, (on, unseparated)) in rows.iter_mut().zip(frontier(&points)) {
+        row.pareto = on;
+        let names: Vec<&str> = unseparated.iter().map(|&i| names[i].as_str()).collect();
+        row.unseparated = names.join("; ");
     }
 }

@@ -1,13 +1,13 @@
 //! The game scene under each choice that applies to a game (and what each costs it, from an
 //! audit of its contacts), and with one feature off at a time.
 
-use std::time::Duration;
-
 use serde::{Deserialize, Serialize};
 
 use super::RunSizes;
 use crate::Device;
+use crate::benchmark::rounds::{Point, Rate, frontier, interleaved};
 use crate::game::accuracy::{AuditLength, GameAudit, audit_game};
+use crate::game::engine::footprint;
 use crate::game::spec::Machine;
 use crate::game::{Game, Options, Scene};
 use crate::pipeline::Profile;
@@ -21,15 +21,24 @@ pub struct GameRow {
     pub choice: String,
     /// Time step (s).
     pub dt: f64,
-    /// Steps per second, the step replayed as a graph.
+    /// Why the choice was not measured (it does not apply to the scene, or its game ended
+    /// first), in words; `None` where it was, and the figures below hold.
+    pub skipped: Option<String>,
+    /// Steps per second, the step replayed as a graph: the median of the timed rounds.
     pub steps_per_s: f64,
-    /// Simulated seconds per wall second (steps/s × dt).
+    /// The slowest and the fastest round's steps per second.
+    pub steps_per_s_range: (f64, f64),
+    /// Simulated seconds per wall second (the median steps/s × dt).
     pub sim_seconds_per_s: f64,
     /// What the choice costs the game, from an audit of its contacts (the game table's
     /// rows; none for the feature table's).
     pub accuracy: Option<GameAccuracy>,
-    /// Whether no other row of the game table misses fewer contacts and runs faster.
+    /// Whether no other row of the game table misses fewer contacts and runs faster beyond
+    /// the speeds' spreads (see [`crate::benchmark::rounds::frontier`]).
     pub pareto: bool,
+    /// The rows that beat this one on the frontier by their median speeds alone, inside the
+    /// spreads: the run cannot tell them apart.
+    pub unseparated: Vec<String>,
     /// Time per step over profiled steps (µs).
     pub step_us: f64,
     /// Each stage's µs, `stage=µs` joined by spaces.
@@ -103,21 +112,30 @@ impl GameAccuracy {
     }
 }
 
-/// Marks the game rows no other audited row beats on both contacts missed and simulated
-/// seconds per second (rows whose audit found no contact are left off).
+/// Marks the game rows on the Pareto frontier of contacts missed against simulated
+/// seconds per second, beyond the speeds' spreads (rows skipped, or whose audit found no
+/// contact, are left off), and the rows each cannot be separated from.
 pub(super) fn mark_game_pareto(rows: &mut [GameRow]) {
-    let point = |r: &GameRow| {
-        let missed = r.accuracy.as_ref().and_then(|a| a.missed)?;
-        Some((missed, r.sim_seconds_per_s))
-    };
-    let points: Vec<Option<(f64, f64)>> = rows.iter().map(point).collect();
-    for (row, p) in rows.iter_mut().zip(&points) {
-        row.pareto = p.is_some_and(|(m, s)| {
-            !points
-                .iter()
-                .flatten()
-                .any(|&(m2, s2)| m2 <= m && s2 >= s && (m2 < m || s2 > s))
-        });
+    let points: Vec<Option<Point>> = rows
+        .iter()
+        .map(|r| {
+            let missed = r.accuracy.as_ref().and_then(|a| a.missed)?;
+            let (low, high) = r.steps_per_s_range;
+            let steps = Rate {
+                median: r.steps_per_s,
+                low,
+                high,
+            };
+            r.skipped.is_none().then_some(Point {
+                error: missed,
+                speed: steps.scaled(r.dt),
+            })
+        })
+        .collect();
+    let names: Vec<String> = rows.iter().map(|r| r.choice.clone()).collect();
+    for (row, (on, unseparated)) in rows.iter_mut().zip(frontier(&points)) {
+        row.pareto = on;
+        row.unseparated = unseparated.into_iter().map(|i| names[i].clone()).collect();
     }
 }
 
@@ -132,7 +150,15 @@ pub(super) fn game_choices(scene: &Scene) -> Vec<(String, Scene)> {
     };
     let physics = |f: &dyn Fn(&mut Physics)| changed(None, &|w| f(&mut w.physics));
     let coarse = |w: &mut WorldSpec| w.dt *= 2.0;
-    let dt_label = |factor: f32| format!("dt 1/{:.0}", 1.0 / (scene.world.dt * factor));
+    // `dt 1/30`, or `dt 1.2 s` where the step is no whole fraction of a second.
+    let dt_label = |factor: f32| {
+        let dt = scene.world.dt * factor;
+        let hz = 1.0 / f64::from(dt);
+        match (hz - hz.round()).abs() < 1e-4 * hz {
+            true => format!("dt 1/{hz:.0}"),
+            false => format!("dt {} s", crate::files::number(dt)),
+        }
+    };
     let unswept = |w: &mut WorldSpec| w.kinds.iter_mut().for_each(|k| k.sweep = Sweep::Off);
     let mut out = vec![
         ("default".to_owned(), scene.clone()),
@@ -218,59 +244,200 @@ pub(super) fn feature_choices(scene: &Scene) -> Vec<(String, Scene)> {
     out
 }
 
-/// Steps per second, stage times and enemies alive of `scene`, the autopilot playing,
-/// after `warmup` steps, and if `audited` its contacts' audit over as many steps again (a
-/// game of its own, the same bit for bit); an error if the game is over before it is
-/// measured.
-pub(super) fn game_row(
+/// Most steps a game is played, past its warm-up, until its ship first fires (so that an
+/// audit starting there sees shots meet enemies): a minute at 60 Hz.
+const BUSY_WITHIN: u32 = 3600;
+
+/// A choice's game, played past its warm-up; or why it cannot be measured.
+fn warmed<'d>(
+    device: &'d Device,
+    scene: &Scene,
+    seed: u32,
+    sizes: &RunSizes,
+) -> Result<(Game<'d>, u32), String> {
+    scene
+        .validate()
+        .map_err(|e| format!("does not apply to this scene ({}: {})", e.field, e.problem))?;
+    let mut game =
+        Game::with_options(device, scene, seed, Options::default()).map_err(|e| e.to_string())?;
+    let steps = |game: &mut Game| -> Result<(), crate::Error> {
+        for _ in 0..sizes.game_warmup {
+            game.submit(None)?;
+        }
+        while game.next_status()?.is_some() {}
+        Ok(())
+    };
+    steps(&mut game).map_err(|e| e.to_string())?;
+    if game.status().game_over != 0 {
+        return Err(over_before(sizes.game_warmup));
+    }
+    let alive = game.snapshot().map_err(|e| e.to_string())?.live().count() as u32;
+    Ok((game, alive))
+}
+
+/// Why a game that ended after `steps` could not be measured, and what to do.
+fn over_before(steps: u32) -> String {
+    format!(
+        "its game was over after {steps} steps, before it was measured: the autopilot lost (a \
+         ship with more energy, or a lower fps.min, lasts longer)"
+    )
+}
+
+/// The rows of `choices` (`(label, scene)`), the autopilot playing each from `seed`: each
+/// game warmed up, then timed in interleaved rounds with the others (as many at a time as
+/// fit in half the device's free memory), profiled, and if `audited` its contacts audited
+/// over a game of its own, the same bit for bit. A choice that cannot be measured is a row
+/// that says why. `tick` is called as each choice is done.
+pub(super) fn game_rows(
     device: &Device,
-    (choice, scene): (String, &Scene),
+    choices: &[(String, Scene)],
     seed: u32,
     sizes: &RunSizes,
     audited: bool,
-) -> anyhow::Result<GameRow> {
-    let mut game = Game::with_options(device, scene, seed, Options::default())?;
+    mut tick: impl FnMut(&str),
+) -> anyhow::Result<Vec<GameRow>> {
+    let free = device.memory()?.map_or(u64::MAX, |(free, _)| free / 2);
+    let mut rows = Vec::with_capacity(choices.len());
+    let mut start = 0;
+    while start < choices.len() {
+        // The next group: as many choices as fit together, one at least.
+        let mut end = start + 1;
+        let mut bytes = footprint(&choices[start].1).1;
+        while end < choices.len() {
+            bytes = bytes.saturating_add(footprint(&choices[end].1).1);
+            if bytes > free {
+                break;
+            }
+            end += 1;
+        }
+        rows.extend(group_rows(
+            device,
+            &choices[start..end],
+            seed,
+            sizes,
+            audited,
+            &mut tick,
+        )?);
+        start = end;
+    }
+    Ok(rows)
+}
+
+/// [`game_rows`] of one group, timed together.
+fn group_rows(
+    device: &Device,
+    choices: &[(String, Scene)],
+    seed: u32,
+    sizes: &RunSizes,
+    audited: bool,
+    tick: &mut impl FnMut(&str),
+) -> anyhow::Result<Vec<GameRow>> {
+    let mut warm: Vec<Result<(Game, u32), String>> = choices
+        .iter()
+        .map(|(_, scene)| warmed(device, scene, seed, sizes))
+        .collect();
+    let mut games: Vec<&mut Game> = warm.iter_mut().flatten().map(|(g, _)| g).collect();
     // The autopilot flies.
-    let input = None;
-    for _ in 0..sizes.game_warmup {
-        game.submit(input)?;
+    let rates = interleaved(
+        &mut games,
+        sizes.speed,
+        |game| {
+            const BATCH: u64 = 8;
+            for _ in 0..BATCH {
+                game.submit(None)?;
+            }
+            while game.next_status()?.is_some() {}
+            game.pipeline().device().synchronize()?;
+            Ok(BATCH)
+        },
+        || {},
+    )?;
+    let mut rates = rates.into_iter();
+    let mut rows = Vec::with_capacity(choices.len());
+    for ((choice, scene), warm) in choices.iter().zip(warm) {
+        let dt = f64::from(scene.world.dt);
+        let row = match warm {
+            Ok((mut game, alive)) => {
+                let rate = rates.next().unwrap_or_default();
+                measured(device, &mut game, (scene, seed), sizes, audited)?.map(
+                    |(stages, step_us, accuracy)| GameRow {
+                        choice: choice.clone(),
+                        dt,
+                        skipped: None,
+                        steps_per_s: rate.median,
+                        steps_per_s_range: (rate.low, rate.high),
+                        sim_seconds_per_s: rate.median * dt,
+                        accuracy,
+                        pareto: false,
+                        unseparated: Vec::new(),
+                        step_us,
+                        stages,
+                        alive,
+                    },
+                )
+            }
+            Err(why) => Err(why),
+        };
+        rows.push(row.unwrap_or_else(|why| GameRow::skipped(choice, dt, why)));
+        tick(choice);
     }
-    while game.next_status()?.is_some() {}
-    if game.status().game_over != 0 {
-        // A frozen world would measure nothing.
-        anyhow::bail!("the game was over before it was measured");
-    }
-    let alive = game.snapshot()?.live().count() as u32;
-    let time = Duration::from_secs_f64(sizes.speed_seconds);
-    let steps_per_s = crate::benchmark::scale::rate(&mut game, time, |g| g.submit(input))?;
+    Ok(rows)
+}
+
+/// A timed game's stage times (over profiled steps), mean step (µs) and its contacts'
+/// audit, if asked for.
+type Measured = (String, f64, Option<GameAccuracy>);
+
+/// A timed game's [`Measured`], its contacts audited if `audited`; `Err` with the reason
+/// where its game ended meanwhile.
+fn measured(
+    device: &Device,
+    game: &mut Game,
+    (scene, seed): (&Scene, u32),
+    sizes: &RunSizes,
+    audited: bool,
+) -> anyhow::Result<Result<Measured, String>> {
     let mut profile = Profile::default();
     for _ in 0..sizes.profiled_steps {
-        game.submit_profiled(input, &mut profile)?;
+        game.submit_profiled(None, &mut profile)?;
     }
     if game.status().game_over != 0 {
-        anyhow::bail!("the game ended while it was measured (a frozen world is cheap)");
+        return Ok(Err(
+            "its game ended while it was timed (a frozen world is cheap): the autopilot lost"
+                .to_owned(),
+        ));
     }
-    let stages = profile.stage_line(1e-6, 1);
     let accuracy = match audited {
         true => {
             let length = AuditLength {
                 warmup: sizes.game_warmup,
+                busy_within: BUSY_WITHIN,
                 steps: sizes.audit_steps,
             };
             Some(GameAccuracy::of(&audit_game(device, scene, seed, length)?))
         }
         false => None,
     };
-    let dt = f64::from(scene.world.dt);
-    Ok(GameRow {
-        choice,
-        dt,
-        steps_per_s,
-        sim_seconds_per_s: steps_per_s * dt,
-        accuracy,
-        pareto: false,
-        step_us: profile.step_seconds() * 1e6,
-        stages,
-        alive,
-    })
+    let stages = profile.stage_line(1e-6, 1);
+    Ok(Ok((stages, profile.step_seconds() * 1e6, accuracy)))
+}
+
+impl GameRow {
+    /// The row of a choice that could not be measured, and why.
+    fn skipped(choice: &str, dt: f64, why: String) -> GameRow {
+        GameRow {
+            choice: choice.to_owned(),
+            dt,
+            skipped: Some(why),
+            steps_per_s: 0.0,
+            steps_per_s_range: (0.0, 0.0),
+            sim_seconds_per_s: 0.0,
+            accuracy: None,
+            pareto: false,
+            unseparated: Vec::new(),
+            step_us: 0.0,
+            stages: String::new(),
+            alive: 0,
+        }
+    }
 }

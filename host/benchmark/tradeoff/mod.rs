@@ -21,11 +21,12 @@ pub mod plots;
 pub mod reference;
 
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use anyhow::Context as _;
 use serde::{Deserialize, Serialize};
 
+use super::rounds::Rounds;
 use super::{Outputs, Provenance, write_csv, write_json};
 use crate::Device;
 use crate::files::write_atomically;
@@ -34,11 +35,11 @@ use crate::sim::Physics;
 use crate::terminal::progress;
 use analytic::AnalyticRow;
 use crowd::{
-    CROWDED_CHOICES, crowd_choices, crowd_error, crowd_speed, crowded, mark_pareto, scattered,
+    CROWDED_CHOICES, crowd_choices, crowd_error, crowd_rates, crowded, mark_pareto, scattered,
 };
 pub use crowd::{CrowdedRow, PhysicsRow, crowd};
 pub use game::{GameAccuracy, GameRow};
-use game::{feature_choices, game_choices, game_row, mark_game_pareto};
+use game::{feature_choices, game_choices, game_rows, mark_game_pareto};
 use reference::Reference;
 
 /// The crowd's time step (s).
@@ -51,6 +52,8 @@ const REFERENCE_SUBSTEPS: u32 = 32;
 pub struct TradeoffOptions {
     /// The game scene of the game and feature tables (built-in name or file).
     pub scene: Scene,
+    /// The scene as the user named it (`--scene`), for the tables' titles.
+    pub scene_given: String,
     /// Small sizes and short runs (CI).
     pub quick: bool,
     /// Seed of every world.
@@ -70,8 +73,8 @@ pub struct RunSizes {
     pub error_seconds: f64,
     /// Balls of the crowd whose speed is measured.
     pub speed_bodies: u32,
-    /// Wall seconds of each speed measurement.
-    pub speed_seconds: f64,
+    /// How every speed is timed: rounds, interleaved across the choices of a table.
+    pub speed: Rounds,
     /// Steps the game plays before it is measured.
     pub game_warmup: u32,
     /// Steps of the game profiled stage by stage (their mean is reported).
@@ -93,10 +96,13 @@ impl RunSizes {
                 error_bodies: 96,
                 error_seconds: 0.25,
                 speed_bodies: 1024,
-                speed_seconds: 0.05,
+                speed: Rounds {
+                    rounds: 3,
+                    seconds: 0.02,
+                },
                 game_warmup: 20,
                 profiled_steps: 3,
-                audit_steps: 40,
+                audit_steps: 240,
                 analytic_dts: [1.0 / 30.0, 1.0 / 60.0],
                 crowded: [256, 1024],
             },
@@ -105,7 +111,10 @@ impl RunSizes {
                 error_seconds: 0.25,
                 speed_bodies: 16_384,
                 // The emulator's figures vary more from second to second.
-                speed_seconds: 3.0,
+                speed: Rounds {
+                    rounds: 5,
+                    seconds: 0.6,
+                },
                 game_warmup: 600,
                 profiled_steps: 30,
                 audit_steps: 1200,
@@ -116,7 +125,10 @@ impl RunSizes {
                 error_bodies: 768,
                 error_seconds: 0.25,
                 speed_bodies: 262_144,
-                speed_seconds: 1.0,
+                speed: Rounds {
+                    rounds: 5,
+                    seconds: 0.2,
+                },
                 game_warmup: 600,
                 profiled_steps: 30,
                 audit_steps: 1200,
@@ -132,9 +144,9 @@ const PROBE_STEPS: u32 = 2;
 
 /// Roughly what a run of `rows` (crowd, game and feature choices) will take, in seconds,
 /// from the scene's game made and played for [`PROBE_STEPS`] steps: the game rows are most
-/// of a slow run, and each is made, played, measured for a fixed time and (the game
-/// table's) audited with a snapshot a step. The crowd's rows are measured for a fixed
-/// time each, their error runs being short.
+/// of a slow run, and each is made, played, timed in its rounds and (the game table's)
+/// audited with a snapshot a step. The crowd's rows are timed in their rounds, their error
+/// runs being short.
 fn estimate(
     device: &Device,
     options: &TradeoffOptions,
@@ -152,13 +164,12 @@ fn estimate(
     let start = Instant::now();
     game.snapshot()?;
     let snapshot = start.elapsed().as_secs_f64();
+    let timed = f64::from(sizes.speed.rounds + 1) * sizes.speed.seconds;
     let warmup = made + f64::from(sizes.game_warmup) * step;
-    let played = warmup + f64::from(sizes.profiled_steps) * step + sizes.speed_seconds;
+    let played = warmup + f64::from(sizes.profiled_steps) * step + timed;
     let audited = warmup + f64::from(sizes.audit_steps) * (step + snapshot);
     let rows = |n: usize| n as f64;
-    Ok(rows(crowd) * sizes.speed_seconds
-        + rows(games) * (played + audited)
-        + rows(features) * played)
+    Ok(rows(crowd) * timed + rows(games) * (played + audited) + rows(features) * played)
 }
 
 /// The summary of a run, written as JSON.
@@ -214,7 +225,7 @@ pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<Tradeof
     }
 
     let mut physics = Vec::new();
-    for (dt, p) in choices {
+    for &(dt, p) in &choices {
         let label = match dt {
             dt if dt == DT => p.label(),
             dt => format!("dt 1/{:.0}", 1.0 / dt),
@@ -228,13 +239,6 @@ pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<Tradeof
             &truth,
         )
         .with_context(|| format!("the crowd's error under {label}"))?;
-        let steps_per_s = crowd_speed(
-            device,
-            &crowd(sizes.speed_bodies, dt, p),
-            seed,
-            Duration::from_secs_f64(sizes.speed_seconds),
-        )
-        .with_context(|| format!("the crowd's speed under {label}"))?;
         physics.push(PhysicsRow {
             choice: label,
             integrator: p.integrator,
@@ -246,37 +250,40 @@ pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<Tradeof
             neighbour_cap: p.neighbour_cap,
             position_rms,
             contacts_missed,
-            steps_per_s,
-            sim_seconds_per_s: steps_per_s * f64::from(dt),
+            steps_per_s: 0.0,
+            steps_per_s_low: 0.0,
+            steps_per_s_high: 0.0,
+            sim_seconds_per_s: 0.0,
             pareto: false,
+            unseparated: String::new(),
         });
-        bar.inc(1);
     }
+    bar.set_message("the crowd's speeds, in rounds");
+    let mut sims = choices
+        .iter()
+        .map(|&(dt, p)| scattered(device, &crowd(sizes.speed_bodies, dt, p), seed))
+        .collect::<Result<Vec<_>, _>>()?;
+    let rates = crowd_rates(&mut sims, sizes.speed, || bar.inc(0))?;
+    for (row, rate) in physics.iter_mut().zip(rates) {
+        row.steps_per_s = rate.median;
+        (row.steps_per_s_low, row.steps_per_s_high) = (rate.low, rate.high);
+        row.sim_seconds_per_s = rate.median * row.dt;
+    }
+    bar.inc(choices.len() as u64);
     mark_pareto(&mut physics);
 
     bar.set_message("analytic cases");
     let analytic = analytic::run(device, &sizes.analytic_dts)?;
     bar.inc(1);
 
-    let mut game = Vec::new();
-    for (label, scene) in games {
-        bar.set_message(format!("{}: {label}", options.scene.name));
-        game.push(
-            game_row(device, (label.clone(), &scene), seed, &sizes, true)
-                .with_context(|| format!("{} under {label}", options.scene.name))?,
-        );
+    let name = &options.scene_given;
+    let mut tick = |choice: &str| {
+        bar.set_message(format!("{name}: {choice}"));
         bar.inc(1);
-    }
+    };
+    let mut game = game_rows(device, &games, seed, &sizes, true, &mut tick)?;
     mark_game_pareto(&mut game);
-    let mut feature_rows = Vec::new();
-    for (name, scene) in features {
-        bar.set_message(format!("{}: {name}", options.scene.name));
-        feature_rows.push(
-            game_row(device, (name.clone(), &scene), seed, &sizes, false)
-                .with_context(|| format!("{} with {name}", options.scene.name))?,
-        );
-        bar.inc(1);
-    }
+    let feature_rows = game_rows(device, &features, seed, &sizes, false, &mut tick)?;
     let mut crowded_rows = Vec::new();
     for bodies in sizes.crowded {
         for choice in CROWDED_CHOICES {
@@ -296,7 +303,7 @@ pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<Tradeof
         sizes,
         physics,
         analytic,
-        scene: options.scene.name.clone(),
+        scene: options.scene_given.clone(),
         game,
         features: feature_rows,
         crowded: crowded_rows,
@@ -310,6 +317,34 @@ pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<Tradeof
     plots::game_pareto(&game_png, &summary)
         .with_context(|| format!("plotting {}", game_png.display()))?;
     Ok(summary)
+}
+
+/// How the tables' speeds were taken, for their captions.
+const SPEEDS: &str = "each timed in interleaved rounds after a warm-up: the median, and the \
+                      slowest and fastest round. ✓: on the Pareto frontier, nothing more \
+                      accurate and faster beyond the spreads; ≈ names the choices that beat it \
+                      by their medians only, inside the spreads (the run cannot tell them apart).";
+
+/// [`SPEEDS`] for the game table, whose accuracy is its contacts missed.
+const SPEEDS_GAME: &str = "each choice's game timed in interleaved rounds with the others \
+                           after a warm-up: the median, and the slowest and fastest round. ✓: \
+                           on the Pareto frontier of missed against simulated seconds per \
+                           second, beyond the spreads; ≈ names the choices it cannot be told \
+                           apart from.";
+
+/// A speed as the tables show it: the median, then the slowest and fastest round.
+fn speed(median: f64, (low, high): (f64, f64)) -> String {
+    format!("{median:.0} ({low:.0}–{high:.0})")
+}
+
+/// The frontier column: ✓ for a point on it, with ≈ and the choices it cannot be told
+/// apart from.
+fn frontier_mark(on: bool, unseparated: &str) -> String {
+    match (on, unseparated.is_empty()) {
+        (false, _) => String::new(),
+        (true, true) => "✓".to_owned(),
+        (true, false) => format!("✓ ≈ {unseparated}"),
+    }
 }
 
 impl TradeoffSummary {
@@ -328,20 +363,20 @@ impl TradeoffSummary {
         out += &format!(
             "### Physics: a ring of balls around an attractor\n\nError on {} balls after {} s against \
              f64 with every pair tested and {REFERENCE_SUBSTEPS} substeps per step; speed on \
-             {} balls. ✓: on the Pareto frontier.\n\n",
+             {} balls, {SPEEDS}\n\n",
             s.error_bodies, s.error_seconds, s.speed_bodies
         );
         out += "| choice | position RMS | contacts missed | steps/s | simulated s/s | frontier |\n";
         out += "|---|---:|---:|---:|---:|:---:|\n";
         for r in &self.physics {
             out += &format!(
-                "| {} | {:.3} | {:.2}% | {:.0} | {:.2} | {} |\n",
+                "| {} | {:.3} | {:.2}% | {} | {:.2} | {} |\n",
                 r.choice,
                 r.position_rms,
                 100.0 * r.contacts_missed,
-                r.steps_per_s,
+                speed(r.steps_per_s, (r.steps_per_s_low, r.steps_per_s_high)),
                 r.sim_seconds_per_s,
-                if r.pareto { "✓" } else { "" }
+                frontier_mark(r.pareto, &r.unseparated)
             );
         }
         out += "\n### Analytic cases\n\n| case | measure | integrator | dt | error |\n";
@@ -362,8 +397,8 @@ impl TradeoffSummary {
              missed by class; pairs f32 cannot decide (their verdict or moment moves within \
              the audit's margin), counted apart; penetration at a step's end, mean and \
              deepest; body-steps over a limit; enemies killed per shot fired, the player's \
-             figure. ✓: on the Pareto frontier of missed against \
-             simulated seconds per second. –: no such contact in the audit.\n\n| choice | \
+             figure. Steps per second: {SPEEDS_GAME} –: no such contact in the audit; a choice \
+             that could not be measured says why.\n\n| choice | \
              steps/s | simulated s/s | contacts | between ends | missed ‰ | extra ‰ | wrong \
              partner ‰ | late ‰ | shot→enemy ‰ | enemy→ship ‰ | body→wall ‰ | undecidable | \
              depth mean / max | over a limit | kills per shot | frontier |\n|---|---:|---:|---:|\
@@ -375,12 +410,16 @@ impl TradeoffSummary {
         );
         let per_thousand = |v: Option<f64>| v.map_or("–".to_owned(), |v| format!("{v:.1}"));
         for r in &self.game {
+            if let Some(why) = &r.skipped {
+                out += &format!("| {} | not measured: {why} |\n", r.choice);
+                continue;
+            }
             let Some(a) = &r.accuracy else { continue };
             out += &format!(
-                "| {} | {:.0} | {:.2} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} / \
+                "| {} | {} | {:.2} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} / \
                  {:.2} | {} | {} | {} |\n",
                 r.choice,
-                r.steps_per_s,
+                speed(r.steps_per_s, r.steps_per_s_range),
                 r.sim_seconds_per_s,
                 a.expected,
                 a.tunnelling,
@@ -397,7 +436,7 @@ impl TradeoffSummary {
                 a.limit_violations,
                 a.kills_per_shot
                     .map_or("–".to_owned(), |k| format!("{k:.2}")),
-                if r.pareto { "✓" } else { "" }
+                frontier_mark(r.pareto, &r.unseparated.join("; "))
             );
         }
         for (title, rows) in [
@@ -417,10 +456,17 @@ impl TradeoffSummary {
                 s.game_warmup, s.profiled_steps
             );
             for r in rows {
-                out += &format!(
-                    "| {} | {} | {:.0} | {:.1} | {} |\n",
-                    r.choice, r.alive, r.steps_per_s, r.step_us, r.stages
-                );
+                out += &match &r.skipped {
+                    Some(why) => format!("| {} | not measured: {why} |\n", r.choice),
+                    None => format!(
+                        "| {} | {} | {} | {:.1} | {} |\n",
+                        r.choice,
+                        r.alive,
+                        speed(r.steps_per_s, r.steps_per_s_range),
+                        r.step_us,
+                        r.stages
+                    ),
+                };
             }
         }
         out += "\n### Every body in one cell\n\nThe first step of a world whose bodies all \
