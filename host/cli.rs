@@ -304,9 +304,8 @@ fn parse_lanes(text: &str) -> Result<Lanes, String> {
     }
     match text.parse::<u32>() {
         Ok(n) if n.is_power_of_two() && n <= 32 => Ok(Lanes::Fixed(n)),
-        _ => Err(format!(
-            "{text:?} is not allowed (allowed: auto, 1, 2, 4, 8, 16 or 32)"
-        )),
+        // The value itself is quoted by the error around this (shortened, escaped).
+        _ => Err("not allowed (allowed: auto, 1, 2, 4, 8, 16 or 32)".to_owned()),
     }
 }
 
@@ -484,7 +483,13 @@ pub fn defaults<T: Args + clap::FromArgMatches>() -> T {
         #[command(flatten)]
         args: T,
     }
-    Defaults::<T>::parse_from(["gpuwars"]).args
+    // A bad value from the environment is quoted as the command line's are.
+    Defaults::<T>::try_parse_from(["gpuwars"])
+        .unwrap_or_else(|mut e| {
+            quote_short(&mut e);
+            e.exit()
+        })
+        .args
 }
 
 /// The default demo: with no window, the last frame goes to a PNG, and the report says

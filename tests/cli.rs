@@ -973,6 +973,25 @@ fn flag_values_are_refused_in_words_and_quoted_short() {
     let text = refused(&["demo", "--steps", "1\nrm -rf /"]);
     assert!(text.contains("1\\nrm"), "{text}");
     assert!(!text.contains("1\nrm"), "{text}");
+    // A value parser's own words do not quote the value again, whole.
+    let text = refused(&["demo", "--lanes", &long, "--steps", "1"]);
+    assert!(text.len() < 1_000, "{} bytes: {}", text.len(), &text[..200]);
+    // The bare command's settings from the environment are quoted the same way.
+    for (variable, value) in [
+        ("GPUWARS_ZOOM", long.clone()),
+        ("GPUWARS_CAMERA", format!("a\u{1b}[31m{long}")),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
+            .env(variable, &value)
+            .env_remove("DISPLAY")
+            .env_remove("WAYLAND_DISPLAY")
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{variable}: {text}");
+        assert!(text.len() < 1_000, "{variable}: {} bytes", text.len());
+        assert!(!text.contains('\u{1b}'), "{variable}: {text:?}");
+    }
 }
 
 /// `replay --window` without a display names the replay as errors name files: a newline
