@@ -159,11 +159,17 @@ impl Report {
             "no".to_string()
         };
         line("game_over:", over);
-        for pair in &self.contacts {
-            let [a, b] = &pair.kinds;
-            let how = if pair.swept { "swept" } else { "at step ends" };
-            line("contacts:", format!("{a}–{b} {how} ({})", pair.rule));
-        }
+        // One line: each pair and the rule that decided it are in `--json`.
+        let swept = self.contacts.iter().filter(|p| p.swept).count();
+        line(
+            "contacts:",
+            format!(
+                "{} colliding pairs of kinds, {swept} swept, {} tested at step ends (each \
+                 pair's rule: --json)",
+                self.contacts.len(),
+                self.contacts.len() - swept
+            ),
+        );
         if let (Some(frame), Some(hash)) = (&self.frame, &self.frame_hash) {
             line(
                 "frame:",

@@ -951,6 +951,53 @@ fn a_world_larger_than_the_address_space_limit_is_an_error_in_words() {
     assert!(stderr.contains("ulimit"), "{stderr}");
 }
 
+/// The first thing a user reads: the bare command with no display is the headless demo,
+/// whose report fits in 25 lines (the colliding pairs in one); `demo --json` keeps every
+/// pair and the rule that decided it.
+#[test]
+fn the_headless_report_is_short_and_the_json_complete() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
+        .args(["--backend", "cpu"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env("GPUWARS_STEPS", "5")
+        .env("TMPDIR", dir.path())
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        text.lines().count() <= 25,
+        "{} lines:\n{text}",
+        text.lines().count()
+    );
+    let contacts: Vec<&str> = text
+        .lines()
+        .filter(|l| l.starts_with("contacts:"))
+        .collect();
+    assert_eq!(contacts.len(), 1, "{text}");
+    assert!(
+        contacts[0].contains("14 colliding pairs of kinds, 14 swept"),
+        "{text}"
+    );
+    let json: Value = serde_json::from_slice(
+        &gpuwars(&["--backend", "cpu", "demo", "--steps", "5", "--json"]).stdout,
+    )
+    .unwrap();
+    let pairs = json["contacts"].as_array().unwrap();
+    assert_eq!(pairs.len(), 14);
+    assert!(pairs.iter().all(|p| {
+        p["rule"]
+            .as_str()
+            .is_some_and(|r| r.contains("per thousand"))
+    }));
+}
+
 /// Flag errors in words: the choices the usage shows and where the value came from; bounds
 /// held for the number as written; a long or strange value quoted short and escaped.
 #[test]
