@@ -388,11 +388,19 @@ fn wrong_keys() {
     let (text, line) = mutate("\"backend\"", "\"seed\": 1,\n  \"backend\"");
     expect_error(&text, Some(line), "seed", &["appears twice"]);
 
+    // A missing key is placed where the object ends without it.
     let (text, _) = mutate("  \"backend\": \"cpu\",\n", "");
-    expect_error(&text, None, "backend", &["missing"]);
+    let end = text.lines().count();
+    expect_error(
+        &text,
+        Some(end),
+        "backend",
+        &["missing", &format!("ends at line {end}")],
+    );
 
     let (text, _) = mutate("  \"format\": \"gpuwars-replay\",\n", "");
-    expect_error(&text, None, "format", &["missing"]);
+    let end = text.lines().count();
+    expect_error(&text, Some(end), "format", &["missing"]);
 }
 
 #[test]

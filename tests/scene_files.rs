@@ -144,6 +144,17 @@ fn truncated_files() {
     );
 }
 
+/// A key written twice is named, at the line of its second writing; so is a table.
+#[test]
+fn a_duplicate_key_is_named() {
+    let text = mutate("capacity = 64", "capacity = 64\ncapacity = 65");
+    let line = line_of(&text, "capacity = 65");
+    assert_error(&text, line, "", &["duplicate key `capacity`"]);
+    let text = format!("{}\n[fps]\nstart = 60.0\n", paper());
+    let line = text.lines().count() - 1;
+    assert_error(&text, line, "", &["duplicate key `fps`"]);
+}
+
 #[test]
 fn wrong_types() {
     let text = mutate("capacity = 1\n", "capacity = \"ten\"\n");

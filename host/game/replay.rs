@@ -123,7 +123,7 @@ impl Replay {
         let doc = Doc { text, origin };
         let entries = read_header(&doc)?;
         let fields = read_fields(&entries, None)?;
-        let missing = |key: &str| ReplayError::new(origin, None, key, "missing");
+        let missing = |key: &str| missing(&doc, key);
         let version = fields.version.ok_or_else(|| missing("version"))?;
         let scene = fields.scene.ok_or_else(|| missing("scene"))?;
         let scene_toml = fields.scene_toml.ok_or_else(|| missing("scene_toml"))?;
@@ -256,10 +256,22 @@ fn read_header<'a>(doc: &'a Doc<'a>) -> Result<Vec<Entry<'a>>, ReplayError> {
         let problem = json_problem(&s.error);
         return Err(ReplayError::new(doc.origin, line, blame, problem));
     }
-    let missing = |key: &str| ReplayError::new(doc.origin, None, key, "missing");
-    header.format.ok_or_else(|| missing("format"))?;
-    header.version.ok_or_else(|| missing("version"))?;
+    header.format.ok_or_else(|| missing(doc, "format"))?;
+    header.version.ok_or_else(|| missing(doc, "version"))?;
     Ok(entries)
+}
+
+/// The error of a top-level `key` the replay lacks, at the line where its object ends.
+fn missing(doc: &Doc<'_>, key: &str) -> ReplayError {
+    let end = doc
+        .text
+        .rfind('}')
+        .map(|at| line_of(doc.text.as_bytes(), at));
+    let problem = match end {
+        Some(line) => format!("missing (the replay's object ends at line {line} without it)"),
+        None => "missing".to_owned(),
+    };
+    ReplayError::new(doc.origin, end, key, problem)
 }
 
 /// The values of the top-level keys, each read in the order written; `steps` with the line of

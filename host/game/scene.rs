@@ -111,7 +111,8 @@ impl Scene {
                 Some(span) => Some(line_of(text.as_bytes(), span.start)),
                 None => spanless_error_line(text, e.message()),
             };
-            SceneError::new(origin, line, "", parse_problem(e.message()))
+            let at = e.span().and_then(|span| text.get(span));
+            SceneError::new(origin, line, "", parse_problem(e.message(), at))
         })?;
         let root = Spanned::new(root.span(), DeValue::Table(root.into_inner()));
         let root = Node::toml(&doc, &root);
@@ -144,12 +145,19 @@ impl Scene {
     }
 }
 
-/// What the toml crate's parse error `message` says, in the scene's terms.
-fn parse_problem(message: &str) -> String {
+/// What the toml crate's parse error `message` says, in the scene's terms; `at` is the text
+/// its span covers, if any.
+fn parse_problem(message: &str, at: Option<&str>) -> String {
     // The parser's own words for its nesting limit (80 levels of tables, arrays or dotted
     // keys), which no scene comes near.
     if message == "recursion limit" || message.contains("max recursion depth") {
         "nested too deeply (allowed at most 80 levels of tables, arrays and dotted keys)".to_owned()
+    } else if let (true, Some(key)) = (message.starts_with("duplicate key"), at) {
+        // The parser's span is the key written the second time.
+        format!(
+            "duplicate key `{}` (allowed once in a table)",
+            excerpt(key.trim())
+        )
     } else {
         message.trim_end().to_owned()
     }
