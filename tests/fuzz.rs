@@ -15,6 +15,7 @@ use clap::Parser;
 use gpuwars::Device;
 use gpuwars::benchmark::compare;
 use gpuwars::cli::{BenchCommand, Cli, Command};
+use gpuwars::demo::{Report, RunOptions, demo};
 use gpuwars::files::FileError;
 use gpuwars::game::engine::footprint;
 use gpuwars::game::replay::{FIRST_VERSION, MAX_STEPS, Replay, VERSION};
@@ -671,6 +672,36 @@ fn plays_alike(scene: &Scene) -> Result<(), TestCaseError> {
     let a = timed("six steps", || hash(one))??;
     let b = timed("six steps", || hash(three))??;
     prop_assert_eq!(a, b, "the state depends on the thread count");
+    let (report, _) = demo(one, scene, 3, 6, RunOptions::default())
+        .map_err(|e| TestCaseError::fail(e.to_string()))?;
+    figures_are_plausible(&report)
+}
+
+/// Every figure of a demo's report is finite and none is negative (its JSON holds no
+/// `null` for a NaN), and its text says no `inf` or `NaN`.
+fn figures_are_plausible(report: &Report) -> Result<(), TestCaseError> {
+    fn walk(value: &serde_json::Value, path: &str) -> Result<(), TestCaseError> {
+        match value {
+            serde_json::Value::Null => Err(TestCaseError::fail(format!("{path} is null"))),
+            serde_json::Value::Number(n) => {
+                let x = n.as_f64().unwrap_or(f64::NAN);
+                prop_assert!(x.is_finite() && x >= 0.0, "{} is {}", path, n);
+                Ok(())
+            }
+            serde_json::Value::Array(items) => {
+                (items.iter().enumerate()).try_for_each(|(i, v)| walk(v, &format!("{path}[{i}]")))
+            }
+            serde_json::Value::Object(map) => map
+                .iter()
+                .try_for_each(|(k, v)| walk(v, &format!("{path}.{k}"))),
+            _ => Ok(()),
+        }
+    }
+    walk(&serde_json::to_value(report).unwrap(), "report")?;
+    let text = report.to_text();
+    for word in text.split(|c: char| !c.is_alphanumeric()) {
+        prop_assert!(word != "inf" && word != "NaN", "{}", text);
+    }
     Ok(())
 }
 
