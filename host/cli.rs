@@ -96,6 +96,32 @@ pub enum Command {
         #[command(flatten)]
         out: BenchOut,
     },
+    /// Measures a scene's game choices on this machine and writes, as a new scene file, the
+    /// most accurate one that holds a speed: fewest contacts missed first, then the rest of
+    /// the contacts' audit, then speed.
+    Tune {
+        /// The scene to tune: a built-in name or a TOML file (never written over).
+        #[arg(long, default_value = "paper")]
+        scene: String,
+        /// Steps per second the tuned scene must hold on this machine.
+        #[arg(long, value_parser = decimal(0.001, 1.0e9))]
+        steps_per_second: f64,
+        /// How far above the target the slowest timed round of a choice must be, in percent.
+        #[arg(long, default_value_t = 20.0, value_parser = decimal(0.0, 1000.0))]
+        margin: f64,
+        /// Small sizes and short runs (seconds; the figures less sure).
+        #[arg(long)]
+        quick: bool,
+        /// Seed of every game.
+        #[arg(long, default_value_t = 1, value_parser = whole(0, u32::MAX))]
+        seed: u32,
+        /// The tuned scene file to write.
+        #[arg(long)]
+        out: PathBuf,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
     /// Plays a recorded game again and checks that it ends in the recorded state: headless,
     /// or in a window to watch (Space or P pauses, `.` or N steps, 1 2 3 4 set the speed).
     Replay {
@@ -151,6 +177,11 @@ impl Command {
                 .reads("the high scores", highscore::default_path().as_deref())
                 .writes("--record", args.record.as_deref()),
             Command::Replay { file, .. } => RunFiles::new().reads("FILE", Some(file)),
+            Command::Tune {
+                scene: name, out, ..
+            } => RunFiles::new()
+                .reads("--scene", scene(name).as_deref())
+                .writes("--out", Some(out)),
             Command::Tradeoff {
                 scene: name, out, ..
             } => {

@@ -10,6 +10,7 @@ use gpuwars::benchmark::compare;
 use gpuwars::benchmark::paper::{self, PaperOptions, PaperSummary};
 use gpuwars::benchmark::scale::{self, ScaleOptions, ScaleSummary};
 use gpuwars::benchmark::tradeoff::{self, TradeoffOptions, TradeoffSummary};
+use gpuwars::benchmark::tune::{self, TuneOptions, TuneReport};
 use gpuwars::camera::{Camera, DEFAULT_ZOOM};
 use gpuwars::cli::{
     BenchCommand, Cli, Command, THREADS_PER_CPU, cpu_threads, default_demo, defaults,
@@ -156,14 +157,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let loaded = Scene::load(&scene)?;
             // Its game tables play the scene many times: a large one is said first.
             announce(&device, &loaded);
-            // Titled by the file the user gave, and the name it gives its scene.
-            let scene_given = match loaded.name == scene {
-                true => scene,
-                false => format!("{} ({})", loaded.name, shown(Path::new(&scene))),
-            };
             let options = TradeoffOptions {
+                scene_given: given_name(&loaded, scene),
                 scene: loaded,
-                scene_given,
                 quick,
                 seed,
                 out: out.out,
@@ -171,6 +167,30 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             };
             let summary = tradeoff::run(&device, &options)?;
             print_summary(&summary, out.json, TradeoffSummary::to_text)?;
+        }
+        Command::Tune {
+            scene,
+            steps_per_second,
+            margin,
+            quick,
+            seed,
+            out,
+            json,
+        } => {
+            let loaded = Scene::load(&scene)?;
+            announce(&device, &loaded);
+            let options = TuneOptions {
+                scene_given: given_name(&loaded, scene),
+                scene: loaded,
+                steps_per_second,
+                margin: margin / 100.0,
+                quick,
+                seed,
+                out,
+                progress: !json,
+            };
+            let report = tune::run(&device, &options)?;
+            print_summary(&report, json, TuneReport::to_text)?;
         }
         Command::Info { json } => {
             let info = Info::gather(&device);
@@ -307,6 +327,15 @@ fn print_report(report: &Report, json: bool, screenshot: Option<&Path>) -> anyho
 }
 
 /// Prints a summary as JSON or as its text.
+/// A scene as the user named it (`given`): its name, and the file it came from if that
+/// is not a built-in's name.
+fn given_name(scene: &Scene, given: String) -> String {
+    match scene.name == given {
+        true => given,
+        false => format!("{} ({})", scene.name, shown(Path::new(&given))),
+    }
+}
+
 fn print_summary<T: serde::Serialize>(
     summary: &T,
     json: bool,

@@ -998,6 +998,83 @@ fn the_headless_report_is_short_and_the_json_complete() {
     }));
 }
 
+/// `gpuwars tune` on the CPU: it writes a scene that reads, names its choice and what it
+/// rejected, plays, and replays to its hash; a target nothing reaches is refused in words
+/// naming the fastest choice, and nothing is written; the input is never written over.
+#[test]
+fn tune_writes_a_scene_that_plays_and_refuses_in_words() {
+    let dir = tempfile::tempdir().unwrap();
+    let tune = |scene: &str, target: &str, out: &std::path::Path| {
+        let out = out.to_str().unwrap();
+        gpuwars(&[
+            "--backend",
+            "cpu",
+            "tune",
+            "--scene",
+            scene,
+            "--steps-per-second",
+            target,
+            "--quick",
+            "--out",
+            out,
+        ])
+    };
+    let tuned = dir.path().join("tuned.toml");
+    let out = tune("kamikaze", "30", &tuned);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for part in [
+        "chosen:",
+        "speed:",
+        "contacts missed:",
+        "rejected:",
+        "written:",
+    ] {
+        assert!(text.contains(part), "{part}: {text}");
+    }
+    let scene = gpuwars::game::Scene::load(tuned.to_str().unwrap()).unwrap();
+    assert_eq!(scene.name, "kamikaze");
+    let replay = dir.path().join("tuned.json");
+    let (scene, replay) = (tuned.to_str().unwrap(), replay.to_str().unwrap());
+    for args in [
+        &[
+            "demo", "--scene", scene, "--steps", "30", "--record", replay,
+        ][..],
+        &["replay", replay],
+    ] {
+        let out = gpuwars(&[&["--backend", "cpu"][..], args].concat());
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+
+    let never = dir.path().join("never.toml");
+    let out = tune("kamikaze", "1000000000", &never);
+    let text = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("no choice holds") && text.contains("the fastest, `"),
+        "{text}"
+    );
+    assert!(!never.exists());
+
+    let before = std::fs::read(&tuned).unwrap();
+    let out = tune(scene, "30", &tuned);
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(std::fs::read(&tuned).unwrap(), before);
+}
+
 /// Flag errors in words: the choices the usage shows and where the value came from; bounds
 /// held for the number as written; a long or strange value quoted short and escaped.
 #[test]

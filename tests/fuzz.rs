@@ -1256,7 +1256,7 @@ fn checks_before_a_game(command: &Command) -> Result<(), TestCaseError> {
             scene(&args.scene)?;
         }
         Command::Play(args) => scene(&args.scene)?,
-        Command::Tradeoff { scene: name, .. } => scene(name)?,
+        Command::Tradeoff { scene: name, .. } | Command::Tune { scene: name, .. } => scene(name)?,
         Command::Replay { file, .. } => {
             if let Err(e) = timed("a replay", || Replay::load(file))? {
                 check_words(&e, &file.display().to_string())?;

@@ -8,6 +8,8 @@
 //! - [`compare`]: the change between two summaries, figure by figure.
 //! - [`rounds`]: speeds timed in interleaved rounds, with their spread.
 //! - [`tradeoff`]: speed against accuracy for each physics choice (`gpuwars tradeoff`).
+//! - [`tune`]: the most accurate choice that holds a speed, written as a scene (`gpuwars
+//!   tune`).
 
 pub mod compare;
 pub mod paper;
@@ -15,6 +17,7 @@ pub mod plot;
 pub mod rounds;
 pub mod scale;
 pub mod tradeoff;
+pub mod tune;
 
 use std::path::{Path, PathBuf};
 use std::time::SystemTime;

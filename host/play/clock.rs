@@ -15,6 +15,8 @@ pub(super) struct Clock {
     since: Option<Instant>,
     /// Game seconds per real second.
     rate: u32,
+    /// Game seconds given up because the steps could not keep up.
+    given_up: f64,
 }
 
 impl Clock {
@@ -24,6 +26,7 @@ impl Clock {
             banked: 0.0,
             since: None,
             rate: 1,
+            given_up: 0.0,
         }
     }
 
@@ -52,6 +55,11 @@ impl Clock {
         self.banked += self.dt;
     }
 
+    /// Game seconds given up so far because the steps could not keep up.
+    pub(super) fn given_up(&self) -> f64 {
+        self.given_up
+    }
+
     /// Steps due at `now` when `played` have been played; the time of the steps beyond
     /// [`MAX_CATCH_UP`] (times the rate) is given up (the game slows down, it does not skip).
     pub(super) fn due(&mut self, played: u64, now: Instant) -> u64 {
@@ -60,7 +68,9 @@ impl Clock {
         let due = ((elapsed / self.dt) as u64).saturating_sub(played);
         let most = MAX_CATCH_UP * u64::from(self.rate);
         if due > most {
-            self.banked -= (due - most) as f64 * self.dt;
+            let late = (due - most) as f64 * self.dt;
+            self.banked -= late;
+            self.given_up += late;
         }
         due.min(most)
     }
@@ -92,6 +102,15 @@ mod tests {
         // Catching up is capped at MAX_CATCH_UP times the rate, the rest given up.
         assert_eq!(clock.due(9, t0 + ms(1050)), MAX_CATCH_UP * 4);
         assert_eq!(clock.due(9 + MAX_CATCH_UP * 4, t0 + ms(1050)), 0);
+        // 4,050 ms of game time were due by then (to a step: whole steps are due), 9 +
+        // MAX_CATCH_UP × 4 steps played: the rest was given up.
+        let due_ms = 50.0 + 1000.0 * 4.0;
+        let played_ms = 10.0 * (9 + MAX_CATCH_UP * 4) as f64;
+        let given_up_ms = clock.given_up() * 1000.0;
+        assert!(
+            (given_up_ms - (due_ms - played_ms)).abs() <= 10.0,
+            "{given_up_ms}"
+        );
     }
 
     #[test]

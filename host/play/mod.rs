@@ -133,6 +133,27 @@ pub struct PlayReport {
     /// For a replay: whether its end state matched the recording, or where it stopped.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub replay: Option<String>,
+    /// Where this machine could not play the scene's steps in real time: how far behind,
+    /// and the command that would tune the scene for it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub behind: Option<String>,
+}
+
+/// The advice for a game of `scene` (time step `dt`) that played `played` steps and gave up
+/// `given_up` seconds of game time to keep up, where it gave up more than 2%.
+pub fn behind(scene: &str, dt: f32, played: u64, given_up: f64) -> Option<String> {
+    let played_s = played as f64 * f64::from(dt);
+    let share = given_up / (played_s + given_up);
+    let hz = 1.0 / f64::from(dt);
+    (share > 0.02).then(|| {
+        format!(
+            "this machine played {:.0}% of the game's time ({:.0} of the {hz:.0} steps a second \
+             the scene asks for): `gpuwars tune --scene {scene} --steps-per-second {hz:.0} --out \
+             tuned.toml` writes the most accurate scene it holds",
+            100.0 * (1.0 - share),
+            hz * (1.0 - share)
+        )
+    })
 }
 
 impl PlayReport {
@@ -162,7 +183,8 @@ impl PlayReport {
             ),
         ];
         let replay = self.replay.iter().map(|r| ("replay:", r.clone()));
-        let rows = rows.into_iter().chain(replay);
+        let behind = self.behind.iter().map(|b| ("behind:", b.clone()));
+        let rows = rows.into_iter().chain(replay).chain(behind);
         rows.map(|(k, v)| format!("{k:<18}{v}\n")).collect()
     }
 }
@@ -455,6 +477,15 @@ impl<'d> App<'d> {
             game_over: status.is_over(),
             frames: self.frames,
             frame_rate: self.frames as f64 / seconds,
+            behind: match self.watch {
+                Some(_) => None,
+                None => behind(
+                    &self.scene.name,
+                    self.scene.world.dt,
+                    played,
+                    self.round.clock.given_up(),
+                ),
+            },
             replay: self.watch.as_ref().map(|w| match w.checked {
                 true => "the end state matches the recording".into(),
                 false => format!(
@@ -485,5 +516,27 @@ impl<'d> Round<'d> {
             clock: Clock::new(scene.world.dt),
             scored: false,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::behind;
+
+    #[test]
+    fn a_game_that_fell_behind_is_told_how_to_tune_its_scene() {
+        // Kept up, or gave up 1%: nothing to say.
+        assert_eq!(behind("paper", 1.0 / 60.0, 6000, 0.0), None);
+        assert_eq!(behind("paper", 1.0 / 60.0, 6000, 1.0), None);
+        // 60 s of game time played, 60 s given up: half the steps a second.
+        let advice = behind("paper", 1.0 / 60.0, 3600, 60.0).unwrap();
+        assert!(
+            advice.contains("played 50%") && advice.contains("30 of the 60"),
+            "{advice}"
+        );
+        assert!(
+            advice.contains("gpuwars tune --scene paper --steps-per-second 60"),
+            "{advice}"
+        );
     }
 }

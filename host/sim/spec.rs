@@ -108,7 +108,7 @@ impl fmt::Display for Integrator {
 
 /// How a world's physics is computed: the choices that trade speed against accuracy. The
 /// default reproduces the paper's game bit for bit.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Physics {
     /// The integrator.
     pub integrator: Integrator,
@@ -138,10 +138,12 @@ pub struct Physics {
     /// Every how many steps the bodies move to slots in the grid's order (0: never, at most
     /// [`MAX_RENUMBER_EVERY`]); `None` lets the world's size choose (see
     /// [`Physics::renumber_period`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub renumber_every: Option<u32>,
     /// Whether each body's last path is kept even where no pair is swept, and the narrow
     /// phase logs every contact it counts, for an audit of the contacts
     /// (`crate::sim::audit`): a store a body a step and one a contact, nothing else changes.
+    #[serde(skip)]
     pub trace_paths: bool,
 }
 

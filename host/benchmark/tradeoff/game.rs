@@ -142,7 +142,7 @@ pub(super) fn mark_game_pareto(rows: &mut [GameRow]) {
 /// The game's choices, each a changed copy of `scene`: the physics choices that apply to a
 /// game, a coarser and a finer time step, and its swept contacts off (every kind's, the
 /// ship's, the shots'; and at the coarser step) or on for every kind of known speed.
-pub(super) fn game_choices(scene: &Scene) -> Vec<(String, Scene)> {
+pub(crate) fn game_choices(scene: &Scene) -> Vec<(String, Scene)> {
     let changed = |label: Option<String>, f: &dyn Fn(&mut WorldSpec)| {
         let mut s = scene.clone();
         f(&mut s.world);
@@ -288,7 +288,7 @@ fn over_before(steps: u32) -> String {
 /// fit in half the device's free memory), profiled, and if `audited` its contacts audited
 /// over a game of its own, the same bit for bit. A choice that cannot be measured is a row
 /// that says why. `tick` is called as each choice is done.
-pub(super) fn game_rows(
+pub(crate) fn game_rows(
     device: &Device,
     choices: &[(String, Scene)],
     seed: u32,

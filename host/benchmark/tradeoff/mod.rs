@@ -39,7 +39,8 @@ use crowd::{
 };
 pub use crowd::{CrowdedRow, PhysicsRow, crowd};
 pub use game::{GameAccuracy, GameRow};
-use game::{feature_choices, game_choices, game_rows, mark_game_pareto};
+use game::{feature_choices, mark_game_pareto};
+pub(crate) use game::{game_choices, game_rows};
 use reference::Reference;
 
 /// The crowd's time step (s).
@@ -89,7 +90,7 @@ pub struct RunSizes {
 
 impl RunSizes {
     /// The sizes of a full run on `device`, or of a quick one.
-    fn new(device: &Device, quick: bool) -> Self {
+    pub(crate) fn new(device: &Device, quick: bool) -> Self {
         let gpu = device.kind() == crate::BackendKind::Cuda;
         match (quick, gpu) {
             (true, _) => RunSizes {

@@ -1,0 +1,424 @@
+//! `gpuwars tune`: the trade made for the user. A scene's game choices (those of
+//! `tradeoff`'s game table) are measured on this machine and backend, speeds in interleaved
+//! rounds and contacts against the exact audit; the most accurate choice that holds the
+//! target speed with a margin is written as a new scene file, edited from the given one.
+
+use std::path::PathBuf;
+
+use anyhow::{Context as _, bail};
+use serde::Serialize;
+use toml_edit::{DocumentMut, Item, Table, value};
+
+use super::Provenance;
+use super::tradeoff::{GameRow, RunSizes, game_choices, game_rows};
+use crate::Device;
+use crate::files::{figure, shown, write_atomically};
+use crate::game::Scene;
+use crate::sim::{Physics, Sweep};
+use crate::terminal::progress;
+
+/// How `gpuwars tune` runs.
+#[derive(Clone, Debug)]
+pub struct TuneOptions {
+    /// The scene to tune.
+    pub scene: Scene,
+    /// The scene as the user named it.
+    pub scene_given: String,
+    /// Steps per second the tuned scene must hold.
+    pub steps_per_second: f64,
+    /// How far above the target the slowest timed round must be (0.2: 20%).
+    pub margin: f64,
+    /// Small sizes and short runs.
+    pub quick: bool,
+    /// Seed of every game.
+    pub seed: u32,
+    /// Where the tuned scene goes.
+    pub out: PathBuf,
+    /// Show a progress bar (on a terminal).
+    pub progress: bool,
+}
+
+/// What `tune` found and chose.
+#[derive(Clone, Debug, Serialize)]
+pub struct TuneReport {
+    /// Where and when.
+    pub machine: Provenance,
+    /// The scene as the user named it.
+    pub scene: String,
+    /// The target, steps per second.
+    pub target: f64,
+    /// The margin asked for.
+    pub margin: f64,
+    /// Every choice measured, as `tradeoff`'s game table has it.
+    pub rows: Vec<GameRow>,
+    /// The row chosen.
+    pub chosen: usize,
+    /// Each other row, and why it was not chosen.
+    pub rejected: Vec<(usize, String)>,
+    /// Where the tuned scene was written.
+    pub out: String,
+}
+
+/// The slowest round a choice may have and still hold `target` with `margin`.
+pub fn needed(target: f64, margin: f64) -> f64 {
+    target * (1.0 + margin)
+}
+
+/// How good a measured row is, best first: contacts missed per thousand, then what else
+/// the audit holds against it (contacts counted extra, with the wrong body or late, per
+/// thousand), then the mean penetration at a step's end; then speed, fastest first.
+fn rank(row: &GameRow) -> (f64, f64, f64, f64) {
+    let a = row.accuracy.as_ref();
+    let per = |v: Option<f64>| v.unwrap_or(0.0);
+    let missed = a.map_or(f64::INFINITY, |a| per(a.missed));
+    let wrong = a.map_or(f64::INFINITY, |a| {
+        per(a.extra) + per(a.wrong_partner) + per(a.late)
+    });
+    let depth = a.map_or(f64::INFINITY, |a| a.depth_mean.unwrap_or(0.0));
+    (missed, wrong, depth, -row.steps_per_s)
+}
+
+/// The most accurate of `rows` whose slowest round holds `needed` steps per second (see
+/// [`rank`]), and why each other was not chosen; an error in words naming the fastest
+/// choice and its speed where none holds it.
+pub fn choose(rows: &[GameRow], needed: f64) -> Result<(usize, Vec<(usize, String)>), String> {
+    let holds = |r: &GameRow| r.skipped.is_none() && r.steps_per_s_range.0 >= needed;
+    let best = (0..rows.len())
+        .filter(|&i| holds(&rows[i]))
+        .min_by(|&i, &j| {
+            rank(&rows[i])
+                .partial_cmp(&rank(&rows[j]))
+                .unwrap_or(std::cmp::Ordering::Equal)
+        })
+        .ok_or_else(|| {
+            match (rows.iter())
+                .filter(|r| r.skipped.is_none())
+                .max_by(|a, b| a.steps_per_s_range.0.total_cmp(&b.steps_per_s_range.0))
+            {
+                Some(fastest) => format!(
+                    "no choice holds {} steps/s with its slowest round: the fastest, `{}`, ran {} \
+                     ({}–{}); lower the target, or tune a smaller scene",
+                    figure(needed),
+                    fastest.choice,
+                    figure(fastest.steps_per_s),
+                    figure(fastest.steps_per_s_range.0),
+                    figure(fastest.steps_per_s_range.1),
+                ),
+                None => "no choice could be measured (each row says why)".to_owned(),
+            }
+        })?;
+    let rejected = (0..rows.len())
+        .filter(|&i| i != best)
+        .map(|i| {
+            let r = &rows[i];
+            let why = match &r.skipped {
+                Some(why) => format!("not measured: {why}"),
+                None if !holds(r) => format!(
+                    "too slow: its slowest round ran {} steps/s, {} needed",
+                    figure(r.steps_per_s_range.0),
+                    figure(needed)
+                ),
+                None => worse_than(r, &rows[best]),
+            };
+            (i, why)
+        })
+        .collect();
+    Ok((best, rejected))
+}
+
+/// Why `row`, fast enough, ranks after `chosen` (see [`rank`]), in words.
+fn worse_than(row: &GameRow, chosen: &GameRow) -> String {
+    let (r, c) = (rank(row), rank(chosen));
+    if r.0 != c.0 {
+        format!(
+            "misses more contacts ({} per thousand, against {})",
+            figure(r.0),
+            figure(c.0)
+        )
+    } else if r.1 != c.1 {
+        format!(
+            "as many missed, more counted extra, with the wrong body or late ({} per thousand, \
+             against {})",
+            figure(r.1),
+            figure(c.1)
+        )
+    } else if r.2 != c.2 {
+        format!(
+            "as exact in its contacts, deeper in them at a step's end (mean {}, against {})",
+            figure(r.2),
+            figure(c.2)
+        )
+    } else {
+        format!(
+            "as accurate, slower ({} steps/s, against {})",
+            figure(row.steps_per_s),
+            figure(chosen.steps_per_s)
+        )
+    }
+}
+
+/// The text of `given` (read from `source`) changed to `tuned`: the world's step, the
+/// physics keys that differ, and each kind's `swept`; comments and layout kept. Only those
+/// may differ between the two scenes.
+pub fn tuned_toml(given: &Scene, tuned: &Scene, note: &str) -> anyhow::Result<String> {
+    let mut doc: DocumentMut = given.source.parse().context("the scene's own text")?;
+    let (g, t) = (&given.world, &tuned.world);
+    if g.dt != t.dt {
+        table(&mut doc, "world")["dt"] = value(f64::from(t.dt));
+    }
+    // The physics as the scene file's [physics] table writes it; the keys that differ.
+    let keys = |p: &Physics| toml::Table::try_from(p).context("the physics as TOML");
+    let (gp, tp) = (keys(&g.physics)?, keys(&t.physics)?);
+    if gp != tp {
+        let table = table(&mut doc, "physics");
+        for (key, v) in &tp {
+            if gp.get(key) != Some(v) {
+                table[key] = value(v.to_string().parse::<toml_edit::Value>()?);
+            }
+        }
+        for key in gp.keys().filter(|k| !tp.contains_key(*k)) {
+            table.remove(key);
+        }
+    }
+    for (k, (gk, tk)) in g.kinds.iter().zip(&t.kinds).enumerate() {
+        if gk.sweep == tk.sweep {
+            continue;
+        }
+        let kinds = doc["kinds"]
+            .as_array_of_tables_mut()
+            .context("the scene's [[kinds]]")?;
+        let kind = kinds.get_mut(k).context("a kind of the scene")?;
+        match tk.sweep {
+            Sweep::On => kind["swept"] = value(true),
+            Sweep::Off => kind["swept"] = value(false),
+            Sweep::Auto => {
+                kind.remove("swept");
+            }
+        }
+    }
+    let text = format!("{note}{doc}");
+    // The file must read back as the scene chosen, whatever the edit did.
+    let read = Scene::from_toml(&text, "the tuned scene")?;
+    if read.world != tuned.world || read.game != tuned.game {
+        bail!("the tuned scene does not read back as the choice (a bug)");
+    }
+    Ok(text)
+}
+
+/// The table `key` of `doc`, made if missing.
+fn table<'d>(doc: &'d mut DocumentMut, key: &str) -> &'d mut Table {
+    if !doc.contains_table(key) {
+        doc[key] = Item::Table(Table::new());
+    }
+    doc[key]
+        .as_table_mut()
+        .expect("a table, made above if missing")
+}
+
+/// Measures `options.scene`'s game choices on `device` and writes the most accurate that
+/// holds the target at `options.out`.
+pub fn run(device: &Device, options: &TuneOptions) -> anyhow::Result<TuneReport> {
+    let machine = Provenance::now(device);
+    let sizes = RunSizes::new(device, options.quick);
+    let choices = game_choices(&options.scene);
+    let mut bar = progress(choices.len() as u64, options.progress, "tune", "choices");
+    let mut tick = |choice: &str| {
+        bar.set_message(choice.to_owned());
+        bar.inc(1);
+    };
+    let rows = game_rows(device, &choices, options.seed, &sizes, true, &mut tick)?;
+    bar.finish_and_clear();
+    let need = needed(options.steps_per_second, options.margin);
+    let (chosen, rejected) = choose(&rows, need).map_err(anyhow::Error::msg)?;
+    let row = &rows[chosen];
+    let note = format!(
+        "# Tuned by `gpuwars tune` from {} on {} ({}), {}: `{}`, {} steps/s ({}–{}) for a \
+         target of {} with a margin of {}%.\n",
+        options.scene_given,
+        machine.device,
+        machine.backend,
+        machine.date,
+        row.choice,
+        figure(row.steps_per_s),
+        figure(row.steps_per_s_range.0),
+        figure(row.steps_per_s_range.1),
+        figure(options.steps_per_second),
+        figure(100.0 * options.margin),
+    );
+    let text = tuned_toml(&options.scene, &choices[chosen].1, &note)?;
+    write_atomically(&options.out, text.as_bytes())?;
+    Ok(TuneReport {
+        machine,
+        scene: options.scene_given.clone(),
+        target: options.steps_per_second,
+        margin: options.margin,
+        rows,
+        chosen,
+        rejected,
+        out: shown(&options.out),
+    })
+}
+
+impl TuneReport {
+    /// What was chosen, what it costs against the scene as given, and why each other
+    /// choice was not.
+    pub fn to_text(&self) -> String {
+        let row = &self.rows[self.chosen];
+        let given = self.rows.iter().find(|r| r.choice == "default");
+        let missed = |r: &GameRow| {
+            let a = r.accuracy.as_ref();
+            a.and_then(|a| a.missed)
+                .map_or("–".to_owned(), |m| format!("{m:.1}"))
+        };
+        let kills = |r: &GameRow| {
+            let a = r.accuracy.as_ref();
+            a.and_then(|a| a.kills_per_shot)
+                .map_or("–".to_owned(), |k| format!("{k:.2}"))
+        };
+        let mut out = format!(
+            "chosen:           {} for {} steps/s with {}% margin ({} needed in the slowest \
+             round)\nspeed:            {} steps/s ({}–{} over the rounds)\n",
+            row.choice,
+            figure(self.target),
+            figure(100.0 * self.margin),
+            figure(needed(self.target, self.margin)),
+            figure(row.steps_per_s),
+            figure(row.steps_per_s_range.0),
+            figure(row.steps_per_s_range.1),
+        );
+        out += &format!(
+            "contacts missed:  {} per thousand; kills per shot {}\n",
+            missed(row),
+            kills(row)
+        );
+        if let Some(g) = given.filter(|g| g.choice != row.choice) {
+            out += &format!(
+                "as given:         {} steps/s ({}–{}), {} missed per thousand, kills per shot {}\n",
+                figure(g.steps_per_s),
+                figure(g.steps_per_s_range.0),
+                figure(g.steps_per_s_range.1),
+                missed(g),
+                kills(g)
+            );
+        }
+        out += &format!("written:          {}\n", self.out);
+        for (i, why) in &self.rejected {
+            out += &format!("rejected:         {}: {why}\n", self.rows[*i].choice);
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::benchmark::tradeoff::GameAccuracy;
+
+    /// A measured row: speed `(low, median, high)`, contacts missed and the mean depth.
+    fn row(choice: &str, (low, median, high): (f64, f64, f64), missed: f64, depth: f64) -> GameRow {
+        GameRow {
+            choice: choice.into(),
+            dt: 1.0 / 60.0,
+            skipped: None,
+            steps_per_s: median,
+            steps_per_s_range: (low, high),
+            sim_seconds_per_s: median / 60.0,
+            accuracy: Some(GameAccuracy {
+                steps: 100,
+                expected: 50,
+                tunnelling: 5,
+                missed: Some(missed),
+                extra: Some(0.0),
+                wrong_partner: Some(0.0),
+                late: Some(0.0),
+                undecidable: 0,
+                moment_undecidable: 0,
+                shot_enemy: Some(missed),
+                enemy_ship: None,
+                body_wall: None,
+                depth_mean: Some(depth),
+                depth_max: depth,
+                limit_violations: 0,
+                kills_per_shot: Some(0.5),
+            }),
+            pareto: false,
+            unseparated: Vec::new(),
+            step_us: 1e6 / median,
+            stages: String::new(),
+            alive: 100,
+        }
+    }
+
+    fn table() -> Vec<GameRow> {
+        let mut skipped = row("dt 1.2 s", (0.0, 0.0, 0.0), 0.0, 0.0);
+        skipped.skipped = Some("does not apply".into());
+        skipped.accuracy = None;
+        vec![
+            row("default", (90.0, 100.0, 110.0), 0.0, 3.0),
+            row("4 substeps", (40.0, 45.0, 50.0), 0.0, 0.5),
+            row("2 substeps", (70.0, 75.0, 80.0), 0.0, 1.5),
+            row("nothing swept", (150.0, 160.0, 170.0), 250.0, 3.0),
+            row("cap 8", (95.0, 120.0, 130.0), 200.0, 3.0),
+            skipped,
+        ]
+    }
+
+    #[test]
+    fn the_most_accurate_choice_that_holds_the_target_is_chosen() {
+        let rows = table();
+        let pick =
+            |target: f64| choose(&rows, needed(target, 0.2)).map(|(i, _)| rows[i].choice.clone());
+        // Every choice holds 30 (36 needed): the shallowest contacts win.
+        assert_eq!(pick(30.0).unwrap(), "4 substeps");
+        // 50 needs 60 in the slowest round: 4 substeps' 40 is too slow.
+        assert_eq!(pick(50.0).unwrap(), "2 substeps");
+        // 70 needs 84: of the exact choices only the default holds it.
+        assert_eq!(pick(70.0).unwrap(), "default");
+        // 100 needs 120: only the choice that misses contacts holds it.
+        assert_eq!(pick(100.0).unwrap(), "nothing swept");
+        // A slowest round decides, not a median: cap 8's median of 120 does not hold 96.
+        let (chosen, rejected) = choose(&rows, 96.0).unwrap();
+        assert_eq!(rows[chosen].choice, "nothing swept");
+        let why = |name: &str| {
+            let i = rows.iter().position(|r| r.choice == name).unwrap();
+            rejected.iter().find(|(j, _)| *j == i).unwrap().1.clone()
+        };
+        assert!(why("cap 8").contains("too slow"), "{}", why("cap 8"));
+        assert!(why("dt 1.2 s").contains("not measured: does not apply"));
+        let (_, rejected) = choose(&rows, 36.0).unwrap();
+        let default = rejected.iter().find(|(i, _)| *i == 0).unwrap();
+        assert!(default.1.contains("deeper"), "{}", default.1);
+    }
+
+    #[test]
+    fn a_target_nothing_holds_is_refused_naming_the_fastest() {
+        let rows = table();
+        let e = choose(&rows, needed(1000.0, 0.2)).unwrap_err();
+        assert!(
+            e.contains("`nothing swept`") && e.contains("160") && e.contains("1200"),
+            "{e}"
+        );
+        let none: Vec<GameRow> = rows.into_iter().filter(|r| r.skipped.is_some()).collect();
+        assert!(
+            choose(&none, 1.0)
+                .unwrap_err()
+                .contains("could be measured")
+        );
+    }
+
+    /// Every game choice of each built-in game scene written into the scene's own text
+    /// reads back as the choice (the function checks it), with the text's comments kept.
+    #[test]
+    fn a_tuned_scene_is_the_given_text_with_the_choice_written_in() {
+        for name in ["paper", "arena", "kamikaze"] {
+            let given = Scene::load(name).unwrap();
+            for (label, tuned) in game_choices(&given) {
+                let text = tuned_toml(&given, &tuned, "# tuned\n")
+                    .unwrap_or_else(|e| panic!("{name} under {label}: {e:#}"));
+                assert!(text.starts_with("# tuned\n"));
+                let first_comment = given.source.lines().find(|l| l.starts_with('#')).unwrap();
+                assert!(text.contains(first_comment), "{name} under {label}");
+            }
+        }
+    }
+}
