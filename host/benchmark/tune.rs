@@ -78,8 +78,9 @@ fn rank(row: &GameRow) -> (f64, f64, f64, f64) {
     (missed, wrong, depth, -row.steps_per_s)
 }
 
-/// The most accurate of `rows` whose slowest round holds `needed` steps per second (see
-/// [`rank`]), and why each other was not chosen; an error in words naming the fastest
+/// The most accurate of `rows` whose slowest round holds `needed` steps per second (fewest
+/// contacts missed, then fewest extra, with the wrong body or late, then the shallowest
+/// penetration, then the fastest), and why each other was not chosen; an error in words naming the fastest
 /// choice and its speed where none holds it.
 pub fn choose(rows: &[GameRow], needed: f64) -> Result<(usize, Vec<(usize, String)>), String> {
     let holds = |r: &GameRow| r.skipped.is_none() && r.steps_per_s_range.0 >= needed;
