@@ -115,8 +115,14 @@ fn check_words(e: &FileError, text: &str) -> Result<(), TestCaseError> {
 /// What a scene's number may be.
 #[derive(Clone, Copy, Debug)]
 enum Rule {
-    /// A number in `(low, high]`, or `[low, high]` when `closed`.
-    Real { low: f32, closed: bool, high: f32 },
+    /// A number in `(low, high]`, or `[low, high]` when `closed`; compared as it will be
+    /// stored (an `f32`) where `stored`, the bound being another value of the file.
+    Real {
+        low: f32,
+        closed: bool,
+        high: f32,
+        stored: bool,
+    },
     /// A whole number in `low..=high`.
     Whole { low: i128, high: i128 },
     /// A mass: `[MIN_MASS, MAX_MASS]`, or infinity.
@@ -130,6 +136,7 @@ fn above(low: f32, high: f32) -> Rule {
         low,
         closed: false,
         high,
+        stored: false,
     }
 }
 
@@ -138,6 +145,22 @@ fn within(low: f32, high: f32) -> Rule {
         low,
         closed: true,
         high,
+        stored: false,
+    }
+}
+
+/// `rule` with its upper bound another value of the file: compared as stored.
+fn as_stored(rule: Rule) -> Rule {
+    match rule {
+        Rule::Real {
+            low, closed, high, ..
+        } => Rule::Real {
+            low,
+            closed,
+            high,
+            stored: true,
+        },
+        rule => rule,
     }
 }
 
@@ -183,7 +206,7 @@ impl Site {
             ("ship", "fire_rate") => above(0.0, 1000.0),
             ("ship", _) => above(0.0, SIDE),
             ("fps", "start") => above(0.0, 10000.0),
-            ("fps", "min") => within(0.0, scene.game.fps.start),
+            ("fps", "min") => as_stored(within(0.0, scene.game.fps.start)),
             ("fps", "recovery") => within(0.0, 10000.0),
             ("spawn", "distance") | ("waves", "at" | "speed") => within(0.0, SIDE),
             ("waves", "every") => above(0.0, SIDE),
@@ -199,7 +222,7 @@ impl Site {
             ("kinds", "energy") => whole(1, i32::MAX),
             ("kinds", "damage") => whole(0, i32::MAX),
             ("behaviour", "vision") => above(0.0, SIDE),
-            ("behaviour", "speed") => above(0.0, kind?.max_speed.min(SIDE)),
+            ("behaviour", "speed") => as_stored(above(0.0, kind?.max_speed.min(SIDE))),
             ("behaviour", "low_energy") if tricky => whole(0, kind?.energy - 1),
             ("behaviour", "low_energy") => whole(0, 0),
             ("behaviour", "recovery") if tricky => within(0.0, SIDE),
@@ -438,9 +461,19 @@ fn follows(rule: Rule, value: &str) -> bool {
         Rule::Whole { low, high } => {
             integer && written_int(value).is_some_and(|v| (low..=high).contains(&v))
         }
-        Rule::Real { low, closed, high } => {
+        Rule::Real {
+            low,
+            closed,
+            high,
+            stored: as_stored,
+        } => {
             let (low, high) = (f64::from(low), f64::from(high));
-            let inside = if closed { x >= low } else { x > low } && x <= high;
+            let compared = if as_stored { f64::from(x as f32) } else { x };
+            let inside = if closed {
+                compared >= low
+            } else {
+                compared > low
+            } && compared <= high;
             let stored = x as f32;
             let storable = !(x.is_finite() && stored.is_infinite())
                 && (x == 0.0 || x.abs() >= f64::from(f32::MIN_POSITIVE));
