@@ -17,6 +17,10 @@ pub struct Change {
     pub a: f64,
     /// Its value in B.
     pub b: f64,
+    /// Where the figure is a median of a spread both summaries give (`x.median` beside
+    /// `x.min` and `x.max`; `steps_per_s` beside `steps_per_s_low` and `steps_per_s_high`,
+    /// or `steps_per_s_range`), its `(least, most)` in A and in B.
+    pub spreads: Option<((f64, f64), (f64, f64))>,
 }
 
 impl Change {
@@ -27,6 +31,29 @@ impl Change {
         // near the largest number.
         let p = (self.b / self.a.abs() - self.a.signum()) * 100.0;
         (self.a.abs() >= f64::MIN_POSITIVE && p.is_finite()).then_some(p)
+    }
+
+    /// Whether each run's median lies inside the other's spread: a change the runs cannot
+    /// tell from their own variation.
+    pub fn inside_spreads(&self) -> bool {
+        self.spreads.is_some_and(|((a_lo, a_hi), (b_lo, b_hi))| {
+            (a_lo..=a_hi).contains(&self.b) && (b_lo..=b_hi).contains(&self.a)
+        })
+    }
+}
+
+/// The paths of the least and most of the spread whose median is at `figure`, if it is
+/// one (see [`Change::spreads`]).
+fn spread_of(figure: &str) -> Vec<(String, String)> {
+    if let Some(stem) = figure.strip_suffix(".median") {
+        return vec![(format!("{stem}.min"), format!("{stem}.max"))];
+    }
+    match figure.strip_suffix("steps_per_s") {
+        Some(stem) if stem.is_empty() || stem.ends_with('.') => vec![
+            (format!("{figure}_low"), format!("{figure}_high")),
+            (format!("{figure}_range[0]"), format!("{figure}_range[1]")),
+        ],
+        _ => Vec::new(),
     }
 }
 
@@ -96,8 +123,21 @@ pub fn compare(a: &Value, a_name: &str, b: &Value, b_name: &str) -> anyhow::Resu
     let (mut xs, mut ys) = (Vec::new(), Vec::new());
     leaves(a, "", &mut xs);
     leaves(b, "", &mut ys);
+    let number = |leaves: &[(String, &Value)], path: &str| {
+        leaves
+            .iter()
+            .find(|(f, _)| f == path)
+            .and_then(|(_, v)| v.as_f64())
+    };
+    let spreads = |figure: &str| {
+        spread_of(figure).into_iter().find_map(|(low, high)| {
+            let range = |l: &[(String, &Value)]| Some((number(l, &low)?, number(l, &high)?));
+            Some((range(&xs)?, range(&ys)?))
+        })
+    };
     let mut changes = Vec::new();
-    for (figure, x) in xs {
+    for (figure, x) in &xs {
+        let figure = figure.clone();
         let Some((_, y)) = ys.iter().find(|(f, _)| *f == figure) else {
             continue;
         };
@@ -107,7 +147,15 @@ pub fn compare(a: &Value, a_name: &str, b: &Value, b_name: &str) -> anyhow::Resu
             FileError::new(name, None, &figure, problem)
         };
         match (x.as_f64(), y.as_f64()) {
-            (Some(a), Some(b)) => changes.push(Change { figure, a, b }),
+            (Some(a), Some(b)) => {
+                let spreads = spreads(&figure);
+                changes.push(Change {
+                    figure,
+                    a,
+                    b,
+                    spreads,
+                });
+            }
             (Some(_), None) => return Err(not_a_number(b_name, y).into()),
             (None, Some(_)) => return Err(not_a_number(a_name, x).into()),
             (None, None) => {}
@@ -130,6 +178,9 @@ pub fn to_text(changes: &[Change], a: &Value, b: &Value) -> String {
         )
     };
     let mut out = format!("A: {}\nB: {}\n", machine(a), machine(b));
+    if changes.iter().any(Change::inside_spreads) {
+        out += "≈: each run's median inside the other's spread (no difference they can tell)\n";
+    }
     let width = changes
         .iter()
         .map(|c| c.figure.len())
@@ -147,8 +198,9 @@ pub fn to_text(changes: &[Change], a: &Value, b: &Value) -> String {
                 true => format!("{p:+.1}%"),
                 false => format!("{p:+.1e}%"),
             });
+        let same = if c.inside_spreads() { " ≈" } else { "" };
         out += &format!(
-            "{:<width$} {:>16} {:>16} {:>9}\n",
+            "{:<width$} {:>16} {:>16} {:>9}{same}\n",
             c.figure,
             figure(c.a),
             figure(c.b),
@@ -164,5 +216,50 @@ fn figure(x: f64) -> String {
     match x == 0.0 || (1e-3..1e12).contains(&x.abs()) {
         true => format!("{x:.3}"),
         false => format!("{x:.3e}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use serde_json::json;
+
+    use super::*;
+
+    #[test]
+    fn a_median_inside_both_spreads_is_no_difference() {
+        let run = |median: f64, (min, max): (f64, f64), rate: f64, range: (f64, f64)| {
+            json!({
+                "benchmark": "paper",
+                "frames_per_s": { "min": min, "median": median, "mean": median, "max": max },
+                "game": [ { "choice": "default", "steps_per_s": rate,
+                            "steps_per_s_range": [range.0, range.1] } ],
+            })
+        };
+        let a = run(100.0, (90.0, 110.0), 500.0, (480.0, 520.0));
+        let b = run(104.0, (95.0, 115.0), 700.0, (690.0, 710.0));
+        let changes = compare(&a, "a", &b, "b").unwrap();
+        let change = |name: &str| changes.iter().find(|c| c.figure == name).unwrap();
+        // 100 and 104, each inside the other's range: no difference.
+        assert!(change("frames_per_s.median").inside_spreads());
+        // 500 against 690-710: a difference; the minimum has no spread of its own.
+        assert!(!change("game[0].steps_per_s").inside_spreads());
+        assert_eq!(change("frames_per_s.min").spreads, None);
+        let text = to_text(&changes, &a, &b);
+        let line = |name: &str| {
+            text.lines()
+                .find(|l| l.starts_with(name))
+                .unwrap()
+                .to_owned()
+        };
+        assert!(line("frames_per_s.median").ends_with(" ≈"), "{text}");
+        assert!(!line("game[0].steps_per_s ").ends_with(" ≈"), "{text}");
+        // One spread inside the other's but not the reverse: a difference.
+        let c = run(112.0, (111.0, 113.0), 500.0, (480.0, 520.0));
+        let changes = compare(&a, "a", &c, "c").unwrap();
+        assert!(
+            !changes
+                .iter()
+                .any(|c| c.figure == "frames_per_s.median" && c.inside_spreads())
+        );
     }
 }
