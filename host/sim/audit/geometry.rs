@@ -342,16 +342,21 @@ mod tests {
 
     use super::*;
 
-    #[test]
-    fn paths_that_meet_a_set_near_one_end_only() {
-        let sets = [
+    /// A set of each shape whose boundary passes through (5, 0), with the normal along x.
+    fn reaching_five() -> [Overlap; 3] {
+        [
             Overlap::Disk(5.0),
             Overlap::Rounded {
                 half: DVec2::new(4.0, 3.0),
                 radius: 1.0,
             },
             Overlap::Rect(DVec2::new(5.0, 3.0)),
-        ];
+        ]
+    }
+
+    #[test]
+    fn paths_that_meet_a_set_near_one_end_only() {
+        let sets = reaching_five();
         // Each reaches 5 along x: a path from 100 away enters it in its last 0.5%, or
         // leaves it in its first.
         let far = DVec2::new(-100.0, 0.0);
@@ -373,14 +378,7 @@ mod tests {
 
     #[test]
     fn a_path_along_the_boundary_from_touching_is_undecidable() {
-        let sets = [
-            Overlap::Disk(5.0),
-            Overlap::Rounded {
-                half: DVec2::new(4.0, 3.0),
-                radius: 1.0,
-            },
-            Overlap::Rect(DVec2::new(5.0, 3.0)),
-        ];
+        let sets = reaching_five();
         for set in sets {
             // Each set's boundary passes through (5, 0) with the normal along x.
             let touching = DVec2::new(5.0, 0.0);
