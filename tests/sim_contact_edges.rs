@@ -12,10 +12,18 @@
 //! stay the same when the set grows or shrinks by a few units in the last place of the
 //! case's coordinates ([`band`]). The others are counted and printed, never dropped
 //! silently; the exact-touching families must have none.
+//!
+//! Each family runs on both backends through the `sweep_cases` kernel; on the GPU every
+//! verdict is also the CPU's, bit for bit.
+
+mod common;
 
 use glam::{DVec2, Vec2};
-use gpuwars::kernels::sim::contact::{contact, sweep};
+use gpuwars::backend::{Binder, Launch, Op};
+use gpuwars::kernels::registry;
+use gpuwars::kernels::sim::contact::{SweepCase, SweepCasesArgs, SweepVerdict, contact, sweep};
 use gpuwars::kernels::sim::kinds::Bound;
+use gpuwars::{BackendKind, Device};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 
@@ -123,16 +131,81 @@ fn band(set: Set, d0: DVec2, d1: DVec2) -> f64 {
     8.0 * f64::from(f32::EPSILON) * scale(set, d0, d1)
 }
 
-/// What the kernels make of one motion: the moment they count a contact of it.
-fn found(a: Bound, b: Bound, d0: Vec2, d1: Vec2) -> Option<f32> {
-    if contact(a, b, d0, Vec2::X).is_some() {
-        // Counted at the end of the motion before.
-        return Some(0.0);
+/// One motion to judge: the bounds, the f32 offsets the kernels see, the exact ones the
+/// reference takes (the f32 ones where those are exact), and how far f32 may be off (0 where
+/// every input and the kernels' arithmetic on it are exact).
+#[derive(Clone, Copy, Debug)]
+struct Case {
+    bounds: (Bound, Bound),
+    offsets: (Vec2, Vec2),
+    exact: (DVec2, DVec2),
+    band: f64,
+}
+
+impl Case {
+    /// The f32 offsets as they are, judged everywhere (`exact`: no rounding band) or where
+    /// f32 decides.
+    fn of_offsets(bounds: (Bound, Bound), d0: Vec2, d1: Vec2, exact: bool) -> Case {
+        let (e0, e1) = (d0.as_dvec2(), d1.as_dvec2());
+        let band = match exact {
+            true => 0.0,
+            false => band(Set::of(bounds.0, bounds.1), e0, e1),
+        };
+        Case {
+            bounds,
+            offsets: (d0, d1),
+            exact: (e0, e1),
+            band,
+        }
     }
-    if let Some(s) = sweep(a, b, d0, d1) {
-        return Some(s.time);
+
+    fn plain(&self) -> SweepCase {
+        SweepCase {
+            a: self.bounds.0.into(),
+            b: self.bounds.1.into(),
+            d0: self.offsets.0,
+            d1: self.offsets.1,
+        }
     }
-    contact(a, b, d1, Vec2::X).map(|_| 1.0)
+}
+
+/// The kernels' verdicts on `cases`, from the `sweep_cases` kernel on `device`. On the GPU
+/// they must be those of the same functions compiled for this machine, bit for bit.
+fn judged(device: &Device, cases: &[Case]) -> Vec<SweepVerdict> {
+    let plain: Vec<SweepCase> = cases.iter().map(Case::plain).collect();
+    let input = device.upload(&plain).unwrap();
+    let output = device.alloc_zeroed::<SweepVerdict>(plain.len()).unwrap();
+    // SAFETY: the views go into this op only.
+    let mut b = unsafe { Binder::new() };
+    let args = SweepCasesArgs {
+        cases: b.read(&input),
+        verdicts: b.view(&output),
+    };
+    let launch = Launch {
+        kernel: registry::SWEEP_CASES,
+        grid: (plain.len() as u32).div_ceil(128),
+        block: 128,
+        args,
+    };
+    // SAFETY: a thread a case; each verdict has one writer.
+    device.launch(unsafe { Op::launch(launch, b, 0) }).unwrap();
+    let verdicts = device.download(&output).unwrap();
+    if device.kind() == BackendKind::Cuda {
+        for (case, verdict) in plain.iter().zip(&verdicts) {
+            let here = SweepVerdict::of(case);
+            assert_eq!(
+                bytemuck::bytes_of(&here),
+                bytemuck::bytes_of(verdict),
+                "{case:?}: the GPU's {verdict:?}, the CPU's {here:?}"
+            );
+        }
+    }
+    verdicts
+}
+
+/// A sweep's time and normal from a verdict's (a time of −1: none).
+fn swept(time: f32, normal: Vec2) -> Option<(f32, Vec2)> {
+    (time != -1.0).then_some((time, normal))
 }
 
 /// One family's tally.
@@ -145,28 +218,32 @@ struct Tally {
 }
 
 impl Tally {
-    /// Checks the case of bounds `a`, `b` whose offset went from `d0` to `d1`: against the
-    /// reference on the exact f64 offsets `e0`, `e1` (the f32 ones where those are exact).
-    /// `band`: how far f32 may be off (0 where every input and the kernels' arithmetic on
-    /// it are exact).
-    fn check(
-        &mut self,
-        (a, b): (Bound, Bound),
-        (d0, d1): (Vec2, Vec2),
-        (e0, e1): (DVec2, DVec2),
-        band: f64,
-    ) {
+    /// Judges every case of a family on `device` and tallies them.
+    fn of_family(device: &Device, cases: &[Case]) -> Tally {
+        let mut tally = Tally::default();
+        for (case, verdict) in cases.iter().zip(judged(device, cases)) {
+            tally.check(case, &verdict);
+        }
+        tally
+    }
+
+    /// Checks the kernels' verdict on one case against the reference.
+    fn check(&mut self, case: &Case, verdict: &SweepVerdict) {
+        let ((a, b), (d0, d1), (e0, e1)) = (case.bounds, case.offsets, case.exact);
         self.cases += 1;
         let set = Set::of(a, b);
         let truth = entry(set, e0, e1, 0.0);
-        let (shrunk, grown) = (entry(set, e0, e1, -band), entry(set, e0, e1, band));
+        let (shrunk, grown) = (
+            entry(set, e0, e1, -case.band),
+            entry(set, e0, e1, case.band),
+        );
         let verdict_decided =
             shrunk.is_some() == truth.is_some() && grown.is_some() == truth.is_some();
         let time_decided = match (shrunk, grown) {
             (Some(s), Some(g)) => (s - g).abs() <= 0.5 * TIME_TOLERANCE,
             _ => false,
         };
-        let kernels = found(a, b, d0, d1);
+        let kernels = (verdict.counted != -1.0).then_some(verdict.counted);
         let case = || format!("{a:?} {b:?} from {d0:?} to {d1:?}");
         self.contacts += u64::from(truth.is_some());
         if !verdict_decided {
@@ -183,39 +260,28 @@ impl Tally {
             self.undecidable += 1;
         }
         // Both bodies find the same moment, bit for bit, with opposite normals.
-        let ab = sweep(a, b, d0, d1);
-        let ba = sweep(b, a, -d0, -d1);
-        if ab.map(|s| (s.time.to_bits(), -s.normal)) != ba.map(|s| (s.time.to_bits(), s.normal)) {
+        let ab = swept(verdict.ab_time, verdict.ab_normal);
+        let ba = swept(verdict.ba_time, verdict.ba_normal);
+        if ab.map(|(t, n)| (t.to_bits(), -n)) != ba.map(|(t, n)| (t.to_bits(), n)) {
             self.failures
                 .push(format!("{}: not antisymmetric: {ab:?} {ba:?}", case()));
         }
-        if let Some(s) = ab.filter(|_| contact(a, b, d0, Vec2::X).is_none()) {
+        if let Some((time, normal)) = ab.filter(|_| verdict.started_overlapping == 0) {
             // Going back to that moment never places the pair inside each other (beyond
             // the rounding of the offset there), and the normal is a unit vector.
-            let at = e0 + (e1 - e0) * f64::from(s.time);
+            let at = e0 + (e1 - e0) * f64::from(time);
             if set.distance(at) < -self::band(set, e0, e1) {
                 self.failures.push(format!(
-                    "{}: at {} the pair is {} inside",
+                    "{}: at {time} the pair is {} inside",
                     case(),
-                    s.time,
                     -set.distance(at)
                 ));
             }
-            if (s.normal.length() - 1.0).abs() > 1e-5 || !(0.0..1.0).contains(&s.time) {
-                self.failures.push(format!("{}: {s:?}", case()));
+            if (normal.length() - 1.0).abs() > 1e-5 || !(0.0..1.0).contains(&time) {
+                self.failures
+                    .push(format!("{}: at {time} along {normal}", case()));
             }
         }
-    }
-
-    /// The f32 offsets as they are, judged everywhere (`exact`: no rounding band) or where
-    /// f32 decides.
-    fn check_offsets(&mut self, bounds: (Bound, Bound), d0: Vec2, d1: Vec2, exact: bool) {
-        let (e0, e1) = (d0.as_dvec2(), d1.as_dvec2());
-        let band = match exact {
-            true => 0.0,
-            false => band(Set::of(bounds.0, bounds.1), e0, e1),
-        };
-        self.check(bounds, (d0, d1), (e0, e1), band);
     }
 
     fn report(&self, family: &str) {
@@ -331,15 +397,14 @@ fn a_touching_pair_moving_through_each_other_is_swept_at_once() {
     assert_eq!(sweep(rects.0, rects.1, d0, d0 + Vec2::Y * 0.5), None);
 }
 
-#[test]
-fn touching_starts_of_every_shape_pair_are_found_at_once_when_they_close_in() {
-    let mut tally = Tally::default();
+fn touching_starts_of_every_shape_pair_are_found_at_once_when_they_close_in(device: &Device) {
+    let mut cases = Vec::new();
     for (bounds, d0, n) in touching_starts() {
         for v in motions(n, size_of(bounds)) {
-            tally.check_offsets(bounds, d0, d0 + v, true);
+            cases.push(Case::of_offsets(bounds, d0, d0 + v, true));
         }
     }
-    tally.report("touching starts");
+    Tally::of_family(device, &cases).report("touching starts");
 }
 
 /// `x` moved by `ulps` units in the last place (negative: towards −∞).
@@ -347,18 +412,17 @@ fn ulps(x: f32, ulps: i32) -> f32 {
     (0..ulps.unsigned_abs()).fold(x, |x, _| if ulps > 0 { x.next_up() } else { x.next_down() })
 }
 
-#[test]
-fn starts_one_ulp_either_side_of_touching_are_found_where_f32_decides() {
-    let mut tally = Tally::default();
+fn starts_one_ulp_either_side_of_touching_are_found_where_f32_decides(device: &Device) {
+    let mut cases = Vec::new();
     for (bounds, d0, n) in touching_starts() {
         for (dx, dy) in [(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, -1), (2, -2)] {
             let start = Vec2::new(ulps(d0.x, dx), ulps(d0.y, dy));
             for v in motions(n, size_of(bounds)) {
-                tally.check_offsets(bounds, start, start + v, false);
+                cases.push(Case::of_offsets(bounds, start, start + v, false));
             }
         }
     }
-    tally.report("one ulp either side");
+    Tally::of_family(device, &cases).report("one ulp either side");
 }
 
 /// A random shape pair of sizes from `1e-3` to `1e4` (a world's sizes go up to 1e6).
@@ -396,11 +460,10 @@ fn boundary_point(rng: &mut StdRng, set: Set) -> (DVec2, DVec2) {
     (p, grad.normalize())
 }
 
-#[test]
-fn fast_passes_starting_within_1e_5_of_touching_are_found_at_once() {
+fn fast_passes_starting_within_1e_5_of_touching_are_found_at_once(device: &Device) {
     let mut rng = StdRng::seed_from_u64(57);
-    let mut tally = Tally::default();
-    while tally.cases < 200_000 {
+    let mut cases = Vec::new();
+    while cases.len() < 200_000 {
         let bounds = random_bounds(&mut rng);
         let set = Set::of(bounds.0, bounds.1);
         let (p, n) = boundary_point(&mut rng, set);
@@ -417,17 +480,17 @@ fn fast_passes_starting_within_1e_5_of_touching_are_found_at_once() {
         // Through a point well inside: clearly across the set, and out the far side.
         let target = -p * rng.random_range(0.0..0.5);
         let d1 = (d0.as_dvec2() + (target - d0.as_dvec2()) * rng.random_range(2.5..4.0)).as_vec2();
-        tally.check_offsets(bounds, d0, d1, false);
+        cases.push(Case::of_offsets(bounds, d0, d1, false));
     }
+    let tally = Tally::of_family(device, &cases);
     tally.report("fast passes within 1e-5 of touching");
     assert!(tally.contacts > 190_000, "{tally:?}");
 }
 
-#[test]
-fn boundary_starts_in_every_direction_agree_with_the_reference() {
+fn boundary_starts_in_every_direction_agree_with_the_reference(device: &Device) {
     let mut rng = StdRng::seed_from_u64(5757);
-    let mut tally = Tally::default();
-    while tally.cases < 100_000 {
+    let mut cases = Vec::new();
+    while cases.len() < 100_000 {
         let bounds = random_bounds(&mut rng);
         let set = Set::of(bounds.0, bounds.1);
         let (p, _) = boundary_point(&mut rng, set);
@@ -435,19 +498,18 @@ fn boundary_starts_in_every_direction_agree_with_the_reference() {
         let travel = set.extent() * 10f64.powf(rng.random_range(-2.0..1.0));
         let d0 = p.as_vec2();
         let d1 = (p + DVec2::new(angle.cos(), angle.sin()) * travel).as_vec2();
-        tally.check_offsets(bounds, d0, d1, false);
+        cases.push(Case::of_offsets(bounds, d0, d1, false));
     }
-    tally.report("boundary starts in every direction");
+    Tally::of_family(device, &cases).report("boundary starts in every direction");
 }
 
 /// Both bodies moving, the offsets made from their positions in f32 as the narrow phase
 /// makes them, far from the origin (up to a world's side, 1e6) and at every speed; the
 /// reference takes the positions' exact differences.
-#[test]
-fn both_bodies_moving_anywhere_in_a_world_agree_with_the_reference() {
+fn both_bodies_moving_anywhere_in_a_world_agree_with_the_reference(device: &Device) {
     let mut rng = StdRng::seed_from_u64(575757);
-    let mut tally = Tally::default();
-    while tally.cases < 100_000 {
+    let mut cases = Vec::new();
+    while cases.len() < 100_000 {
         let bounds = random_bounds(&mut rng);
         let set = Set::of(bounds.0, bounds.1);
         let (p, _) = boundary_point(&mut rng, set);
@@ -468,7 +530,20 @@ fn both_bodies_moving_anywhere_in_a_world_agree_with_the_reference() {
         );
         let exact = |a: Vec2, b: Vec2| b.as_dvec2() - a.as_dvec2();
         let (e0, e1) = (exact(a0, b0), exact(a1, b1));
-        tally.check(bounds, (b0 - a0, b1 - a1), (e0, e1), band(set, e0, e1));
+        cases.push(Case {
+            bounds,
+            offsets: (b0 - a0, b1 - a1),
+            exact: (e0, e1),
+            band: band(set, e0, e1),
+        });
     }
-    tally.report("both bodies moving");
+    Tally::of_family(device, &cases).report("both bodies moving");
 }
+
+on_both_backends!(
+    touching_starts_of_every_shape_pair_are_found_at_once_when_they_close_in,
+    starts_one_ulp_either_side_of_touching_are_found_where_f32_decides,
+    fast_passes_starting_within_1e_5_of_touching_are_found_at_once,
+    boundary_starts_in_every_direction_agree_with_the_reference,
+    both_bodies_moving_anywhere_in_a_world_agree_with_the_reference,
+);

@@ -9,7 +9,7 @@ use crate::math;
 use crate::primitives::{histogram, scan, sort, touch};
 use crate::render::{self, camera, particles, radar};
 use crate::rng::streams;
-use crate::sim::{broad, free_list, integrate, narrow, renumber, scatter};
+use crate::sim::{broad, contact, free_list, integrate, narrow, renumber, scatter};
 use crate::{Kernel, KernelInfo};
 
 macro_rules! kernels {
@@ -81,6 +81,9 @@ kernels! {
     /// Counts the `f32`s of a range whose fast reciprocal square root differs from the
     /// correctly rounded one's (the check of `math::recip_sqrt`).
     CHECK_RECIP_SQRT = check_recip_sqrt(math::RecipSqrtCheckArgs) => math::check_recip_sqrt;
+    /// The contact geometry's verdict on each of a list of motions (a check against the CPU's
+    /// and a reference's).
+    SWEEP_CASES = sweep_cases(contact::SweepCasesArgs) => contact::sweep_cases;
     /// Rounds of one touch a thread with a block barrier between them: the one-block floor.
     TOUCH_ROUNDS = touch_rounds(touch::TouchRoundsArgs) => touch::touch_rounds;
     /// Counts the digits of each tile of keys (one counting-sort pass).

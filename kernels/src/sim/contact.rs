@@ -8,8 +8,9 @@
 
 use glam::Vec2;
 
-use super::kinds::Bound;
+use super::kinds::{Bound, PlainBound};
 use crate::math::{length, sqrt};
+use crate::{DevSlice, Thread, kernel_args};
 
 /// An overlap between bodies `a` and `b`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -305,4 +306,94 @@ fn slab(p: f32, v: f32, half: f32) -> (f32, f32) {
 #[inline(always)]
 fn sign(x: f32) -> f32 {
     if x > 0.0 { 1.0 } else { -1.0 }
+}
+
+/// The moment the narrow phase counts the contact of one motion of a pair, as a fraction of
+/// the motion (see [`Swept`]): 0 for a pair overlapping where the motion began (the motion
+/// before counted it), the swept moment for one apart or touching there, 1 for a contact
+/// reached at the end alone; `None` for no contact.
+#[inline(always)]
+pub fn counted(a: Bound, b: Bound, d0: Vec2, d1: Vec2) -> Option<f32> {
+    if contact(a, b, d0, Vec2::X).is_some() {
+        return Some(0.0);
+    }
+    if let Some(s) = sweep(a, b, d0, d1) {
+        return Some(s.time);
+    }
+    contact(a, b, d1, Vec2::X).map(|_| 1.0)
+}
+
+/// One motion of a pair for [`sweep_cases`]: the offset from `a` to `b` goes from `d0` to
+/// `d1`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SweepCase {
+    /// The first body's bound.
+    pub a: PlainBound,
+    /// The second body's bound.
+    pub b: PlainBound,
+    /// The offset where the motion began.
+    pub d0: Vec2,
+    /// The offset where it ended.
+    pub d1: Vec2,
+}
+
+/// What the narrow phase's geometry makes of a [`SweepCase`]; a time of −1 stands for none.
+/// (The vectors first: on the GPU they are aligned to 8 bytes.)
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SweepVerdict {
+    /// The normal of [`sweep`] of `a` and `b` from `d0` to `d1`.
+    pub ab_normal: Vec2,
+    /// The normal of [`sweep`] of `b` and `a` from `−d0` to `−d1`: the other body's view.
+    pub ba_normal: Vec2,
+    /// The time of the first sweep.
+    pub ab_time: f32,
+    /// The time of the other body's.
+    pub ba_time: f32,
+    /// 1 where the pair overlaps at `d0` ([`contact`]), else 0.
+    pub started_overlapping: u32,
+    /// [`counted`]'s moment.
+    pub counted: f32,
+}
+
+impl SweepVerdict {
+    /// The verdict on `case`.
+    #[inline(always)]
+    pub fn of(case: &SweepCase) -> SweepVerdict {
+        let (a, b) = (case.a.bound(), case.b.bound());
+        let (d0, d1) = (case.d0, case.d1);
+        let swept = |s: Option<Swept>| s.map_or((-1.0, Vec2::ZERO), |s| (s.time, s.normal));
+        let (ab_time, ab_normal) = swept(sweep(a, b, d0, d1));
+        let (ba_time, ba_normal) = swept(sweep(b, a, -d0, -d1));
+        SweepVerdict {
+            started_overlapping: u32::from(contact(a, b, d0, Vec2::X).is_some()),
+            counted: counted(a, b, d0, d1).unwrap_or(-1.0),
+            ab_time,
+            ab_normal,
+            ba_time,
+            ba_normal,
+        }
+    }
+}
+
+kernel_args! {
+    /// Arguments of [`sweep_cases`].
+    pub struct SweepCasesArgs {
+        /// The motions judged.
+        pub cases: DevSlice<SweepCase>,
+        /// Output: one verdict a case.
+        pub verdicts: DevSlice<SweepVerdict>,
+    }
+}
+
+/// Thread `i` writes the [`SweepVerdict`] of case `i`: the contact geometry on the device, for
+/// the checks that compare it with a higher-precision reference and with the CPU's, bit for
+/// bit.
+#[inline(always)]
+pub fn sweep_cases(t: Thread, args: &SweepCasesArgs) {
+    let i = t.global();
+    if i < args.cases.len() {
+        args.verdicts.set(i, SweepVerdict::of(&args.cases.get(i)));
+    }
 }

@@ -20,6 +20,56 @@ pub enum Bound {
     Rect(Vec2),
 }
 
+impl Bound {
+    /// The bound of shape `shape` ([`SHAPE_RECT`]: a rectangle of half extents `half`; any
+    /// other: a circle of radius `radius`).
+    #[inline(always)]
+    pub fn of_shape(shape: u32, half: Vec2, radius: f32) -> Bound {
+        if shape == SHAPE_RECT {
+            Bound::Rect(half)
+        } else {
+            Bound::Circle(radius)
+        }
+    }
+}
+
+/// A [`Bound`] as plain data, for device arrays.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct PlainBound {
+    /// Half extents of a rectangle (zero for a circle).
+    pub half: Vec2,
+    /// Radius of a circle (zero for a rectangle).
+    pub radius: f32,
+    /// [`SHAPE_CIRCLE`] or [`SHAPE_RECT`].
+    pub shape: u32,
+}
+
+impl PlainBound {
+    /// The bound it holds.
+    #[inline(always)]
+    pub fn bound(&self) -> Bound {
+        Bound::of_shape(self.shape, self.half, self.radius)
+    }
+}
+
+impl From<Bound> for PlainBound {
+    fn from(bound: Bound) -> PlainBound {
+        match bound {
+            Bound::Circle(radius) => PlainBound {
+                half: Vec2::ZERO,
+                radius,
+                shape: SHAPE_CIRCLE,
+            },
+            Bound::Rect(half) => PlainBound {
+                half,
+                radius: 0.0,
+                shape: SHAPE_RECT,
+            },
+        }
+    }
+}
+
 /// One kind of body, as the kernels see it (one entry per kind, indexed by [`Bodies::kind`]).
 ///
 /// [`Bodies::kind`]: crate::sim::Bodies::kind
@@ -68,11 +118,7 @@ impl KindInfo {
     /// The narrow-phase bound of this kind's bodies.
     #[inline(always)]
     pub fn bound(&self) -> Bound {
-        if self.shape == SHAPE_RECT {
-            Bound::Rect(self.half)
-        } else {
-            Bound::Circle(self.radius)
-        }
+        Bound::of_shape(self.shape, self.half, self.radius)
     }
 
     /// Whether this kind's bodies die as soon as their energy runs out (no controller decides).
