@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{anyhow, bail};
-use clap::{Args, Parser, Subcommand};
+use clap::{ArgGroup, Args, Parser, Subcommand};
 
 use crate::BackendRequest;
 use crate::benchmark::{Outputs, scale};
@@ -14,6 +14,9 @@ use crate::demo::{DemoFlyer, Frames, RunOptions};
 use crate::files::{RunFiles, shown, thousands};
 use crate::game::Options;
 use crate::game::replay::MAX_STEPS;
+
+/// `play`'s window size where `--size` is not given (its flag's default says the same).
+pub const PLAY_WINDOW: (u32, u32) = (1280, 720);
 use crate::game::{highscore, scene};
 use crate::graphics::Renderer;
 use crate::pipeline::Lanes;
@@ -99,13 +102,22 @@ pub enum Command {
     /// Measures a scene's game choices on this machine and writes, as a new scene file, the
     /// most accurate one that holds a speed: fewest contacts missed first, then the rest of
     /// the contacts' audit, then speed.
+    #[command(group(ArgGroup::new("target").required(true).args(["steps_per_second", "fps"])))]
     Tune {
         /// The scene to tune: a built-in name or a TOML file (never written over).
         #[arg(long, default_value = "paper")]
         scene: String,
         /// Steps per second the tuned scene must hold on this machine.
         #[arg(long, value_parser = decimal(0.001, 1.0e9))]
-        steps_per_second: f64,
+        steps_per_second: Option<f64>,
+        /// Frames per second the tuned scene must hold, each frame the steps due and the
+        /// frame drawn as `play` draws it (instead of --steps-per-second).
+        #[arg(long, value_parser = decimal(0.001, 1.0e6))]
+        fps: Option<f64>,
+        /// With --fps: the frame's size, WIDTHxHEIGHT in pixels [default: 1280x720, `play`'s
+        /// window].
+        #[arg(long, value_parser = parse_size)]
+        size: Option<(u32, u32)>,
         /// How far above the target the slowest timed round of a choice must be, in percent.
         #[arg(long, default_value_t = 20.0, value_parser = decimal(0.0, 1000.0))]
         margin: f64,

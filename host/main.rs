@@ -5,15 +5,15 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::bail;
-use clap::Parser;
+use clap::{CommandFactory, Parser};
 use gpuwars::benchmark::compare;
 use gpuwars::benchmark::paper::{self, PaperOptions, PaperSummary};
 use gpuwars::benchmark::scale::{self, ScaleOptions, ScaleSummary};
 use gpuwars::benchmark::tradeoff::{self, TradeoffOptions, TradeoffSummary};
-use gpuwars::benchmark::tune::{self, TuneOptions, TuneReport};
+use gpuwars::benchmark::tune::{self, Target, TuneOptions, TuneReport};
 use gpuwars::camera::{Camera, DEFAULT_ZOOM};
 use gpuwars::cli::{
-    BenchCommand, Cli, Command, THREADS_PER_CPU, cpu_threads, default_demo, defaults,
+    BenchCommand, Cli, Command, PLAY_WINDOW, THREADS_PER_CPU, cpu_threads, default_demo, defaults,
 };
 use gpuwars::demo::{self, Report, RunOptions};
 use gpuwars::files::{excerpt, shown, thousands};
@@ -171,18 +171,35 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Tune {
             scene,
             steps_per_second,
+            fps,
+            size,
             margin,
             quick,
             seed,
             out,
             json,
         } => {
+            if size.is_some() && fps.is_none() {
+                // Checked here: clap's `requires` lets it through beside the target group.
+                Cli::command()
+                    .error(
+                        clap::error::ErrorKind::MissingRequiredArgument,
+                        "--size sets the frame of --fps: give --fps too",
+                    )
+                    .exit();
+            }
             let loaded = Scene::load(&scene)?;
             announce(&device, &loaded);
             let options = TuneOptions {
                 scene_given: given_name(&loaded, scene),
                 scene: loaded,
-                steps_per_second,
+                target: match (steps_per_second, fps) {
+                    (Some(rate), _) => Target::StepsPerSecond(rate),
+                    (None, fps) => Target::FramesPerSecond {
+                        fps: fps.expect("clap requires one of the two"),
+                        size: size.unwrap_or(PLAY_WINDOW),
+                    },
+                },
                 margin: margin / 100.0,
                 quick,
                 seed,

@@ -1079,6 +1079,70 @@ fn tune_writes_a_scene_that_plays_and_refuses_in_words() {
     assert_eq!(std::fs::read(&tuned).unwrap(), before);
 }
 
+/// `gpuwars tune --fps` on the CPU: every choice it measured has its frames timed in rounds
+/// (slowest ≤ median ≤ fastest), the chosen one's slowest round holds the target with the
+/// margin, and the text speaks in frames; one target at a time, one at least.
+#[test]
+fn tune_for_a_frame_rate_times_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let tuned = dir.path().join("tuned.toml");
+    let tuned = tuned.to_str().unwrap();
+    let base = ["--backend", "cpu", "tune", "--scene", "kamikaze", "--quick"];
+    let framed = [
+        &base[..],
+        &["--fps", "5", "--size", "320x180", "--out", tuned],
+    ]
+    .concat();
+    let out = gpuwars(&[&framed[..], &["--json"]].concat());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["target"]["frames_per_second"]["fps"], 5.0);
+    let rows = report["rows"].as_array().unwrap();
+    let measured: Vec<_> = rows.iter().filter(|r| r["skipped"].is_null()).collect();
+    assert!(!measured.is_empty());
+    for row in &measured {
+        let f = &row["frames_per_s"];
+        let (low, median, high) = (
+            f["low"].as_f64().unwrap(),
+            f["median"].as_f64().unwrap(),
+            f["high"].as_f64().unwrap(),
+        );
+        assert!(0.0 < low && low <= median && median <= high, "{row}");
+    }
+    let chosen = &rows[report["chosen"].as_u64().unwrap() as usize];
+    assert!(
+        chosen["frames_per_s"]["low"].as_f64().unwrap() >= 6.0,
+        "{chosen}"
+    );
+    let out = gpuwars(&framed);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("frames/s") && text.contains("320x180 pixels"),
+        "{text}"
+    );
+
+    for args in [
+        &[
+            &base[..],
+            &["--fps", "5", "--steps-per-second", "5", "--out", tuned],
+        ]
+        .concat(),
+        &[&base[..], &["--out", tuned]].concat(),
+        &[
+            &base[..],
+            &["--steps-per-second", "5", "--size", "64x64", "--out", tuned],
+        ]
+        .concat(),
+    ] {
+        let out = gpuwars(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+    }
+}
+
 /// Flag errors in words: the choices the usage shows and where the value came from; bounds
 /// held for the number as written; a long or strange value quoted short and escaped.
 #[test]

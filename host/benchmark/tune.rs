@@ -10,7 +10,8 @@ use serde::Serialize;
 use toml_edit::{DocumentMut, Item, Table, value};
 
 use super::Provenance;
-use super::tradeoff::{GameRow, RunSizes, game_choices, game_rows};
+use super::rounds::Rate;
+use super::tradeoff::{FrameTiming, GameRow, Measure, RunSizes, estimate, game_choices, game_rows};
 use crate::Device;
 use crate::files::{figure, shown, write_atomically};
 use crate::game::Scene;
@@ -24,8 +25,8 @@ pub struct TuneOptions {
     pub scene: Scene,
     /// The scene as the user named it.
     pub scene_given: String,
-    /// Steps per second the tuned scene must hold.
-    pub steps_per_second: f64,
+    /// What the tuned scene must hold.
+    pub target: Target,
     /// How far above the target the slowest timed round must be (0.2: 20%).
     pub margin: f64,
     /// Small sizes and short runs.
@@ -45,8 +46,8 @@ pub struct TuneReport {
     pub machine: Provenance,
     /// The scene as the user named it.
     pub scene: String,
-    /// The target, steps per second.
-    pub target: f64,
+    /// What the tuned scene must hold.
+    pub target: Target,
     /// The margin asked for.
     pub margin: f64,
     /// Every choice measured, as `tradeoff`'s game table has it.
@@ -59,6 +60,71 @@ pub struct TuneReport {
     pub out: String,
 }
 
+/// What a tuned scene must hold on this machine.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Target {
+    /// Steps per second of the game alone.
+    StepsPerSecond(f64),
+    /// Frames per second, each frame the steps due in its share of game time and the
+    /// frame drawn as `play` draws it, at this size.
+    FramesPerSecond {
+        /// Frames a second.
+        fps: f64,
+        /// The frame's width and height in pixels.
+        size: (u32, u32),
+    },
+}
+
+impl Target {
+    /// The rate asked for.
+    fn value(self) -> f64 {
+        match self {
+            Target::StepsPerSecond(rate) => rate,
+            Target::FramesPerSecond { fps, .. } => fps,
+        }
+    }
+
+    /// Its unit.
+    fn unit(self) -> &'static str {
+        match self {
+            Target::StepsPerSecond(_) => "steps/s",
+            Target::FramesPerSecond { .. } => "frames/s",
+        }
+    }
+
+    /// The frames [`game_rows`] must time for it.
+    fn frames(self) -> Option<FrameTiming> {
+        match self {
+            Target::StepsPerSecond(_) => None,
+            Target::FramesPerSecond { fps, size } => Some(FrameTiming { fps, size }),
+        }
+    }
+
+    /// `row`'s rate in this target's unit.
+    fn rate(self, row: &GameRow) -> Rate {
+        match self {
+            Target::StepsPerSecond(_) => Rate {
+                median: row.steps_per_s,
+                low: row.steps_per_s_range.0,
+                high: row.steps_per_s_range.1,
+            },
+            Target::FramesPerSecond { .. } => row.frames_per_s.unwrap_or_default(),
+        }
+    }
+
+    /// `rate` in words: `median unit (slowest–fastest)`.
+    fn shown(self, rate: Rate) -> String {
+        format!(
+            "{} {} ({}–{})",
+            figure(rate.median),
+            self.unit(),
+            figure(rate.low),
+            figure(rate.high)
+        )
+    }
+}
+
 /// The slowest round a choice may have and still hold `target` with `margin`.
 pub fn needed(target: f64, margin: f64) -> f64 {
     target * (1.0 + margin)
@@ -66,8 +132,9 @@ pub fn needed(target: f64, margin: f64) -> f64 {
 
 /// How good a measured row is, best first: contacts missed per thousand, then what else
 /// the audit holds against it (contacts counted extra, with the wrong body or late, per
-/// thousand), then the mean penetration at a step's end; then speed, fastest first.
-fn rank(row: &GameRow) -> (f64, f64, f64, f64) {
+/// thousand), then the mean penetration at a step's end; then speed in `target`'s unit,
+/// fastest first.
+fn rank(row: &GameRow, target: Target) -> (f64, f64, f64, f64) {
     let a = row.accuracy.as_ref();
     let per = |v: Option<f64>| v.unwrap_or(0.0);
     let missed = a.map_or(f64::INFINITY, |a| per(a.missed));
@@ -75,35 +142,39 @@ fn rank(row: &GameRow) -> (f64, f64, f64, f64) {
         per(a.extra) + per(a.wrong_partner) + per(a.late)
     });
     let depth = a.map_or(f64::INFINITY, |a| a.depth_mean.unwrap_or(0.0));
-    (missed, wrong, depth, -row.steps_per_s)
+    (missed, wrong, depth, -target.rate(row).median)
 }
 
-/// The most accurate of `rows` whose slowest round holds `needed` steps per second (fewest
+/// The most accurate of `rows` whose slowest round holds `target` with `margin` (fewest
 /// contacts missed, then fewest extra, with the wrong body or late, then the shallowest
-/// penetration, then the fastest), and why each other was not chosen; an error in words naming the fastest
-/// choice and its speed where none holds it.
-pub fn choose(rows: &[GameRow], needed: f64) -> Result<(usize, Vec<(usize, String)>), String> {
-    let holds = |r: &GameRow| r.skipped.is_none() && r.steps_per_s_range.0 >= needed;
+/// penetration, then the fastest), and why each other was not chosen; an error in words
+/// naming the fastest choice and its speed where none holds it.
+pub fn choose(
+    rows: &[GameRow],
+    target: Target,
+    margin: f64,
+) -> Result<(usize, Vec<(usize, String)>), String> {
+    let need = needed(target.value(), margin);
+    let unit = target.unit();
+    let holds = |r: &GameRow| r.skipped.is_none() && target.rate(r).low >= need;
     let best = (0..rows.len())
         .filter(|&i| holds(&rows[i]))
         .min_by(|&i, &j| {
-            rank(&rows[i])
-                .partial_cmp(&rank(&rows[j]))
+            rank(&rows[i], target)
+                .partial_cmp(&rank(&rows[j], target))
                 .unwrap_or(std::cmp::Ordering::Equal)
         })
         .ok_or_else(|| {
             match (rows.iter())
                 .filter(|r| r.skipped.is_none())
-                .max_by(|a, b| a.steps_per_s_range.0.total_cmp(&b.steps_per_s_range.0))
+                .max_by(|a, b| target.rate(a).low.total_cmp(&target.rate(b).low))
             {
                 Some(fastest) => format!(
-                    "no choice holds {} steps/s with its slowest round: the fastest, `{}`, ran {} \
-                     ({}–{}); lower the target, or tune a smaller scene",
-                    figure(needed),
+                    "no choice holds {} {unit} with its slowest round: the fastest, `{}`, ran \
+                     {}; lower the target, or tune a smaller scene",
+                    figure(need),
                     fastest.choice,
-                    figure(fastest.steps_per_s),
-                    figure(fastest.steps_per_s_range.0),
-                    figure(fastest.steps_per_s_range.1),
+                    target.shown(target.rate(fastest)),
                 ),
                 None => "no choice could be measured (each row says why)".to_owned(),
             }
@@ -115,11 +186,11 @@ pub fn choose(rows: &[GameRow], needed: f64) -> Result<(usize, Vec<(usize, Strin
             let why = match &r.skipped {
                 Some(why) => format!("not measured: {why}"),
                 None if !holds(r) => format!(
-                    "too slow: its slowest round ran {} steps/s, {} needed",
-                    figure(r.steps_per_s_range.0),
-                    figure(needed)
+                    "too slow: its slowest round ran {} {unit}, {} needed",
+                    figure(target.rate(r).low),
+                    figure(need)
                 ),
-                None => worse_than(r, &rows[best]),
+                None => worse_than(r, &rows[best], target),
             };
             (i, why)
         })
@@ -128,8 +199,8 @@ pub fn choose(rows: &[GameRow], needed: f64) -> Result<(usize, Vec<(usize, Strin
 }
 
 /// Why `row`, fast enough, ranks after `chosen` (see [`rank`]), in words.
-fn worse_than(row: &GameRow, chosen: &GameRow) -> String {
-    let (r, c) = (rank(row), rank(chosen));
+fn worse_than(row: &GameRow, chosen: &GameRow, target: Target) -> String {
+    let (r, c) = (rank(row, target), rank(chosen, target));
     if r.0 != c.0 {
         format!(
             "misses more contacts ({} per thousand, against {})",
@@ -151,9 +222,10 @@ fn worse_than(row: &GameRow, chosen: &GameRow) -> String {
         )
     } else {
         format!(
-            "as accurate, slower ({} steps/s, against {})",
-            figure(row.steps_per_s),
-            figure(chosen.steps_per_s)
+            "as accurate, slower ({} {}, against {})",
+            figure(-r.3),
+            target.unit(),
+            figure(-c.3)
         )
     }
 }
@@ -223,27 +295,42 @@ pub fn run(device: &Device, options: &TuneOptions) -> anyhow::Result<TuneReport>
     let sizes = RunSizes::new(device, options.quick);
     let choices = game_choices(&options.scene);
     let mut bar = progress(choices.len() as u64, options.progress, "tune", "choices");
+    // Said before anything is measured: the choices are warmed up and timed together before
+    // the first is done, so a rate taken from the first would be far too slow.
+    let rows = (0, choices.len(), 0);
+    let framed = options.target.frames().is_some();
+    bar.announce(estimate(
+        device,
+        (&options.scene, options.seed),
+        &sizes,
+        rows,
+        framed,
+    )?);
     let mut tick = |choice: &str| {
         bar.set_message(choice.to_owned());
         bar.inc(1);
     };
-    let rows = game_rows(device, &choices, options.seed, &sizes, true, &mut tick)?;
+    let measure = Measure {
+        audited: true,
+        frames: options.target.frames(),
+    };
+    let rows = game_rows(device, &choices, options.seed, &sizes, measure, &mut tick)?;
     bar.finish_and_clear();
-    let need = needed(options.steps_per_second, options.margin);
-    let (chosen, rejected) = choose(&rows, need).map_err(anyhow::Error::msg)?;
+    let (chosen, rejected) =
+        choose(&rows, options.target, options.margin).map_err(anyhow::Error::msg)?;
     let row = &rows[chosen];
+    let target = options.target;
     let note = format!(
-        "# Tuned by `gpuwars tune` from {} on {} ({}), {}: `{}`, {} steps/s ({}–{}) for a \
-         target of {} with a margin of {}%.\n",
+        "# Tuned by `gpuwars tune` from {} on {} ({}), {}: `{}`, {} for a target of {} {} \
+         with a margin of {}%.\n",
         options.scene_given,
         machine.device,
         machine.backend,
         machine.date,
         row.choice,
-        figure(row.steps_per_s),
-        figure(row.steps_per_s_range.0),
-        figure(row.steps_per_s_range.1),
-        figure(options.steps_per_second),
+        target.shown(target.rate(row)),
+        figure(target.value()),
+        target.unit(),
         figure(100.0 * options.margin),
     );
     let text = tuned_toml(&options.scene, &choices[chosen].1, &note)?;
@@ -251,7 +338,7 @@ pub fn run(device: &Device, options: &TuneOptions) -> anyhow::Result<TuneReport>
     Ok(TuneReport {
         machine,
         scene: options.scene_given.clone(),
-        target: options.steps_per_second,
+        target: options.target,
         margin: options.margin,
         rows,
         chosen,
@@ -276,17 +363,26 @@ impl TuneReport {
             a.and_then(|a| a.kills_per_shot)
                 .map_or("–".to_owned(), |k| format!("{k:.2}"))
         };
+        let target = self.target;
         let mut out = format!(
-            "chosen:           {} for {} steps/s with {}% margin ({} needed in the slowest \
-             round)\nspeed:            {} steps/s ({}–{} over the rounds)\n",
+            "chosen:           {} for {} {} with {}% margin ({} needed in the slowest \
+             round)\nspeed:            {} over the rounds\n",
             row.choice,
-            figure(self.target),
+            figure(target.value()),
+            target.unit(),
             figure(100.0 * self.margin),
-            figure(needed(self.target, self.margin)),
-            figure(row.steps_per_s),
-            figure(row.steps_per_s_range.0),
-            figure(row.steps_per_s_range.1),
+            figure(needed(target.value(), self.margin)),
+            target.shown(target.rate(row)),
         );
+        if let Target::FramesPerSecond { size, .. } = target {
+            out += &format!(
+                "frames:           {}x{} pixels, each the steps due and the frame as `play` \
+                 draws it; steps alone {}\n",
+                size.0,
+                size.1,
+                Target::StepsPerSecond(0.0).shown(Target::StepsPerSecond(0.0).rate(row))
+            );
+        }
         out += &format!(
             "contacts missed:  {} per thousand; kills per shot {}\n",
             missed(row),
@@ -294,10 +390,8 @@ impl TuneReport {
         );
         if let Some(g) = given.filter(|g| g.choice != row.choice) {
             out += &format!(
-                "as given:         {} steps/s ({}–{}), {} missed per thousand, kills per shot {}\n",
-                figure(g.steps_per_s),
-                figure(g.steps_per_s_range.0),
-                figure(g.steps_per_s_range.1),
+                "as given:         {}, {} missed per thousand, kills per shot {}\n",
+                target.shown(target.rate(g)),
                 missed(g),
                 kills(g)
             );
@@ -347,6 +441,7 @@ mod tests {
             step_us: 1e6 / median,
             stages: String::new(),
             alive: 100,
+            frames_per_s: None,
         }
     }
 
@@ -367,8 +462,9 @@ mod tests {
     #[test]
     fn the_most_accurate_choice_that_holds_the_target_is_chosen() {
         let rows = table();
-        let pick =
-            |target: f64| choose(&rows, needed(target, 0.2)).map(|(i, _)| rows[i].choice.clone());
+        let pick = |target: f64| {
+            choose(&rows, Target::StepsPerSecond(target), 0.2).map(|(i, _)| rows[i].choice.clone())
+        };
         // Every choice holds 30 (36 needed): the shallowest contacts win.
         assert_eq!(pick(30.0).unwrap(), "4 substeps");
         // 50 needs 60 in the slowest round: 4 substeps' 40 is too slow.
@@ -378,7 +474,7 @@ mod tests {
         // 100 needs 120: only the choice that misses contacts holds it.
         assert_eq!(pick(100.0).unwrap(), "nothing swept");
         // A slowest round decides, not a median: cap 8's median of 120 does not hold 96.
-        let (chosen, rejected) = choose(&rows, 96.0).unwrap();
+        let (chosen, rejected) = choose(&rows, Target::StepsPerSecond(96.0), 0.0).unwrap();
         assert_eq!(rows[chosen].choice, "nothing swept");
         let why = |name: &str| {
             let i = rows.iter().position(|r| r.choice == name).unwrap();
@@ -386,7 +482,7 @@ mod tests {
         };
         assert!(why("cap 8").contains("too slow"), "{}", why("cap 8"));
         assert!(why("dt 1.2 s").contains("not measured: does not apply"));
-        let (_, rejected) = choose(&rows, 36.0).unwrap();
+        let (_, rejected) = choose(&rows, Target::StepsPerSecond(30.0), 0.2).unwrap();
         let default = rejected.iter().find(|(i, _)| *i == 0).unwrap();
         assert!(default.1.contains("deeper"), "{}", default.1);
     }
@@ -394,17 +490,46 @@ mod tests {
     #[test]
     fn a_target_nothing_holds_is_refused_naming_the_fastest() {
         let rows = table();
-        let e = choose(&rows, needed(1000.0, 0.2)).unwrap_err();
+        let e = choose(&rows, Target::StepsPerSecond(1000.0), 0.2).unwrap_err();
         assert!(
             e.contains("`nothing swept`") && e.contains("160") && e.contains("1200"),
             "{e}"
         );
         let none: Vec<GameRow> = rows.into_iter().filter(|r| r.skipped.is_some()).collect();
         assert!(
-            choose(&none, 1.0)
+            choose(&none, Target::StepsPerSecond(1.0), 0.0)
                 .unwrap_err()
                 .contains("could be measured")
         );
+    }
+
+    /// A frame-rate target is held by the frames' slowest round, not the steps': a choice
+    /// fast in steps but slow to draw (its frame plays many steps) is too slow for it.
+    #[test]
+    fn a_frame_rate_target_is_held_by_the_frames() {
+        let mut rows = table();
+        for (r, frames) in rows
+            .iter_mut()
+            .zip([(50.0, 55.0, 60.0), (58.0, 59.0, 60.0)])
+        {
+            r.frames_per_s = Some(Rate {
+                low: frames.0,
+                median: frames.1,
+                high: frames.2,
+            });
+        }
+        let fps = |fps: f64| Target::FramesPerSecond {
+            fps,
+            size: (1280, 720),
+        };
+        // 4 substeps holds 30 steps/s but draws 58 frames/s at worst: it holds 48 (57.6
+        // needed), the default's 50 does not.
+        let (chosen, rejected) = choose(&rows, fps(48.0), 0.2).unwrap();
+        assert_eq!(rows[chosen].choice, "4 substeps");
+        assert!(rejected[0].1.contains("ran 50.0 frames/s"), "{:?}", rejected[0]);
+        // Rows without frames (not timed) hold no frame rate.
+        let e = choose(&rows, fps(60.0), 0.2).unwrap_err();
+        assert!(e.contains("`4 substeps`") && e.contains("frames/s"), "{e}");
     }
 
     /// Every game choice of each built-in game scene written into the scene's own text

@@ -4,8 +4,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::RunSizes;
-use crate::Device;
 use crate::benchmark::rounds::{Point, Rate, frontier, interleaved};
+use crate::camera::Camera;
 use crate::game::accuracy::{AuditLength, GameAudit, audit_game};
 use crate::game::engine::footprint;
 use crate::game::spec::Machine;
@@ -13,6 +13,7 @@ use crate::game::{Game, Options, Scene};
 use crate::pipeline::Profile;
 use crate::sim::audit::{BODY_WALL, ENEMY_SHIP, SHOT_ENEMY};
 use crate::sim::{Integrator, Physics, Shape, Sweep, WorldSpec};
+use crate::{BackendKind, Device, Error};
 
 /// One configuration of the game scene.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -45,6 +46,50 @@ pub struct GameRow {
     pub stages: String,
     /// Enemies alive when measured.
     pub alive: u32,
+    /// Frames per second over the timed rounds, each frame the steps due at the asked rate
+    /// and the frame drawn as `play` draws it (`tune --fps`; `None` where not asked).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frames_per_s: Option<Rate>,
+}
+
+/// What [`game_rows`] measures of each choice besides its speed in steps.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Measure {
+    /// Its contacts, audited over a game of its own.
+    pub audited: bool,
+    /// Its frames, timed as `play` draws them.
+    pub frames: Option<FrameTiming>,
+}
+
+/// Frames timed as `play` draws them, for `tune --fps`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameTiming {
+    /// Frames a second; each frame plays the steps due in 1/fps seconds of game time.
+    pub fps: f64,
+    /// The frame's width and height in pixels (`play`'s window).
+    pub size: (u32, u32),
+}
+
+impl FrameTiming {
+    /// One frame of `game`, whose steps due not yet played (a fraction of one) are
+    /// `banked`: those steps, then the kernel renderer's frame as `play` shows it, read
+    /// back where the window uploads it (the CPU emulation), left in device memory where
+    /// CUDA hands it to GL.
+    fn frame(self, game: &mut Game, banked: &mut f64) -> Result<(), Error> {
+        *banked += 1.0 / (self.fps * f64::from(game.scene().world.dt));
+        let due = banked.floor();
+        *banked -= due;
+        for _ in 0..due as u64 {
+            game.submit(None)?;
+        }
+        while game.next_status()?.is_some() {}
+        let (width, height) = self.size;
+        game.render(width, height, &Camera::default(), (1.0 / self.fps) as f32)?;
+        match game.pipeline().device().kind() {
+            BackendKind::Cpu => game.pipeline().frame().map(drop),
+            BackendKind::Cuda => game.pipeline().device().synchronize(),
+        }
+    }
 }
 
 /// The game's accuracy under one choice: its contacts over the audited steps against an
@@ -285,15 +330,16 @@ fn over_before(steps: u32) -> String {
 
 /// The rows of `choices` (`(label, scene)`), the autopilot playing each from `seed`: each
 /// game warmed up, then timed in interleaved rounds with the others (as many at a time as
-/// fit in half the device's free memory), profiled, and if `audited` its contacts audited
-/// over a game of its own, the same bit for bit. A choice that cannot be measured is a row
-/// that says why. `tick` is called as each choice is done.
+/// fit in half the device's free memory), in steps and, if `measure` asks, in frames;
+/// profiled, and if `measure` asks its contacts audited over a game of its own, the same bit
+/// for bit. A choice that cannot be measured is a row that says why. `tick` is called as
+/// each choice is done.
 pub(crate) fn game_rows(
     device: &Device,
     choices: &[(String, Scene)],
     seed: u32,
     sizes: &RunSizes,
-    audited: bool,
+    measure: Measure,
     mut tick: impl FnMut(&str),
 ) -> anyhow::Result<Vec<GameRow>> {
     let free = device.memory()?.map_or(u64::MAX, |(free, _)| free / 2);
@@ -315,7 +361,7 @@ pub(crate) fn game_rows(
             &choices[start..end],
             seed,
             sizes,
-            audited,
+            measure,
             &mut tick,
         )?);
         start = end;
@@ -329,7 +375,7 @@ fn group_rows(
     choices: &[(String, Scene)],
     seed: u32,
     sizes: &RunSizes,
-    audited: bool,
+    measure: Measure,
     tick: &mut impl FnMut(&str),
 ) -> anyhow::Result<Vec<GameRow>> {
     let mut warm: Vec<Result<(Game, u32), String>> = choices
@@ -352,6 +398,23 @@ fn group_rows(
         },
         || {},
     )?;
+    let mut frame_rates = match measure.frames {
+        Some(timing) => {
+            let mut framed: Vec<(&mut Game, f64)> = games.into_iter().map(|g| (g, 0.0)).collect();
+            let rates = interleaved(
+                &mut framed,
+                sizes.speed,
+                |(game, banked)| {
+                    timing.frame(game, banked)?;
+                    Ok(1)
+                },
+                || {},
+            )?;
+            rates.into_iter().map(Some).collect()
+        }
+        None => Vec::new(),
+    }
+    .into_iter();
     let mut rates = rates.into_iter();
     let mut rows = Vec::with_capacity(choices.len());
     for ((choice, scene), warm) in choices.iter().zip(warm) {
@@ -359,7 +422,8 @@ fn group_rows(
         let row = match warm {
             Ok((mut game, alive)) => {
                 let rate = rates.next().unwrap_or_default();
-                measured(device, &mut game, (scene, seed), sizes, audited)?.map(
+                let frames_per_s = frame_rates.next().flatten();
+                measured(device, &mut game, (scene, seed), sizes, measure.audited)?.map(
                     |(stages, step_us, accuracy)| GameRow {
                         choice: choice.clone(),
                         dt,
@@ -373,6 +437,7 @@ fn group_rows(
                         step_us,
                         stages,
                         alive,
+                        frames_per_s,
                     },
                 )
             }
@@ -438,6 +503,7 @@ impl GameRow {
             step_us: 0.0,
             stages: String::new(),
             alive: 0,
+            frames_per_s: None,
         }
     }
 }

@@ -38,9 +38,9 @@ use crowd::{
     CROWDED_CHOICES, crowd_choices, crowd_error, crowd_rates, crowded, mark_pareto, scattered,
 };
 pub use crowd::{CrowdedRow, PhysicsRow, crowd};
-pub use game::{GameAccuracy, GameRow};
+pub use game::{FrameTiming, GameAccuracy, GameRow};
+pub(crate) use game::{Measure, game_choices, game_rows};
 use game::{feature_choices, mark_game_pareto};
-pub(crate) use game::{game_choices, game_rows};
 use reference::Reference;
 
 /// The crowd's time step (s).
@@ -144,18 +144,19 @@ impl RunSizes {
 const PROBE_STEPS: u32 = 2;
 
 /// Roughly what a run of `rows` (crowd, game and feature choices) will take, in seconds,
-/// from the scene's game made and played for [`PROBE_STEPS`] steps: the game rows are most
-/// of a slow run, and each is made, played, timed in its rounds and (the game table's)
-/// audited with a snapshot a step. The crowd's rows are timed in their rounds, their error
-/// runs being short.
-fn estimate(
+/// from `scene`'s game made and played from `seed` for [`PROBE_STEPS`] steps: the game rows
+/// are most of a slow run, and each is made, played, timed in its rounds (twice if its
+/// `frames` are timed too) and (the game table's) audited with a snapshot a step. The
+/// crowd's rows are timed in their rounds, their error runs being short.
+pub(crate) fn estimate(
     device: &Device,
-    options: &TradeoffOptions,
+    (scene, seed): (&Scene, u32),
     sizes: &RunSizes,
     (crowd, games, features): (usize, usize, usize),
+    frames: bool,
 ) -> anyhow::Result<f64> {
     let start = Instant::now();
-    let mut game = Game::with_options(device, &options.scene, options.seed, Options::default())?;
+    let mut game = Game::with_options(device, scene, seed, Options::default())?;
     let made = start.elapsed().as_secs_f64();
     let start = Instant::now();
     for _ in 0..PROBE_STEPS {
@@ -168,6 +169,7 @@ fn estimate(
     let timed = f64::from(sizes.speed.rounds + 1) * sizes.speed.seconds;
     let warmup = made + f64::from(sizes.game_warmup) * step;
     let played = warmup + f64::from(sizes.profiled_steps) * step + timed;
+    let played = played + f64::from(u8::from(frames)) * timed;
     let audited = warmup + f64::from(sizes.audit_steps) * (step + snapshot);
     let rows = |n: usize| n as f64;
     Ok(rows(crowd) * timed + rows(games) * (played + audited) + rows(features) * played)
@@ -214,7 +216,13 @@ pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<Tradeof
     );
     let seed = options.seed;
     let rows = (choices.len(), games.len(), features.len());
-    bar.announce(estimate(device, options, &sizes, rows)?);
+    bar.announce(estimate(
+        device,
+        (&options.scene, seed),
+        &sizes,
+        rows,
+        false,
+    )?);
 
     // The truth: the default crowd's start, in f64 with many substeps.
     let base = crowd(sizes.error_bodies, DT, Physics::default());
@@ -282,9 +290,17 @@ pub fn run(device: &Device, options: &TradeoffOptions) -> anyhow::Result<Tradeof
         bar.set_message(format!("{name}: {choice}"));
         bar.inc(1);
     };
-    let mut game = game_rows(device, &games, seed, &sizes, true, &mut tick)?;
+    let audited = Measure {
+        audited: true,
+        frames: None,
+    };
+    let mut game = game_rows(device, &games, seed, &sizes, audited, &mut tick)?;
     mark_game_pareto(&mut game);
-    let feature_rows = game_rows(device, &features, seed, &sizes, false, &mut tick)?;
+    let timed = Measure {
+        audited: false,
+        frames: None,
+    };
+    let feature_rows = game_rows(device, &features, seed, &sizes, timed, &mut tick)?;
     let mut crowded_rows = Vec::new();
     for bodies in sizes.crowded {
         for choice in CROWDED_CHOICES {
