@@ -194,6 +194,9 @@ fn bench_scale_measures_each_size_and_compare_reads_two_runs() {
     for r in &table {
         assert!(r.steps_per_s > 0.0 && r.frames_per_s > 0.0 && r.bytes_per_step > 0);
         assert!(r.floor_us > 0.0);
+        // Medians of timed rounds, inside their spreads.
+        assert!(r.steps_per_s_low <= r.steps_per_s && r.steps_per_s <= r.steps_per_s_high);
+        assert!(r.frames_per_s_low <= r.frames_per_s && r.frames_per_s <= r.frames_per_s_high);
         let rate = r.bytes_per_step as f64 / (r.step_us / 1e6);
         assert!((r.achieved_bandwidth - rate).abs() <= rate * 1e-9);
         assert!((r.fraction_of_copy - rate / summary.copy_bandwidth).abs() < 1e-9);
@@ -211,6 +214,16 @@ fn bench_scale_measures_each_size_and_compare_reads_two_runs() {
     let summary: ScaleSummary = serde_json::from_str(&out).unwrap();
     assert_eq!(summary.camera, CameraMode::Follow);
     assert!(summary.rows.iter().all(|r| r.frames_per_s > 0.0));
+    // A run against itself: each size's rates are medians inside both spreads, marked so.
+    let scale_json = dir.path().join("bench-scale.json");
+    let scale_json = scale_json.to_str().unwrap();
+    let text = ok(&gpuwars(&["bench", "compare", scale_json, scale_json]));
+    for figure in ["steps_per_s", "frames_per_s"] {
+        let line = (text.lines())
+            .find(|l| l.contains(&format!("rows[enemies=1024].{figure} ")))
+            .unwrap_or_else(|| panic!("{figure}: {text}"));
+        assert!(line.ends_with(" ≈"), "{line}");
+    }
 
     // Compare: two runs of one benchmark, figure by figure; two benchmarks are refused.
     let other = tempfile::tempdir().unwrap();

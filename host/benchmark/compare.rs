@@ -19,7 +19,7 @@ pub struct Change {
     pub b: f64,
     /// Where the figure is a median of a spread both summaries give (`x.median` beside
     /// `x.min` and `x.max`; `steps_per_s` beside `steps_per_s_low` and `steps_per_s_high`,
-    /// or `steps_per_s_range`), its `(least, most)` in A and in B.
+    /// or `steps_per_s_range`; `frames_per_s` likewise), its `(least, most)` in A and in B.
     pub spreads: Option<((f64, f64), (f64, f64))>,
 }
 
@@ -48,12 +48,17 @@ fn spread_of(figure: &str) -> Vec<(String, String)> {
     if let Some(stem) = figure.strip_suffix(".median") {
         return vec![(format!("{stem}.min"), format!("{stem}.max"))];
     }
-    match figure.strip_suffix("steps_per_s") {
-        Some(stem) if stem.is_empty() || stem.ends_with('.') => vec![
+    let rate = ["steps_per_s", "frames_per_s"].into_iter().any(|name| {
+        figure
+            .strip_suffix(name)
+            .is_some_and(|stem| stem.is_empty() || stem.ends_with('.'))
+    });
+    match rate {
+        true => vec![
             (format!("{figure}_low"), format!("{figure}_high")),
             (format!("{figure}_range[0]"), format!("{figure}_range[1]")),
         ],
-        _ => Vec::new(),
+        false => Vec::new(),
     }
 }
 

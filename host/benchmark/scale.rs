@@ -11,10 +11,11 @@ use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::plot::{legend, log_range, png};
+use super::rounds::Rate;
 use super::{Outputs, Provenance, write_csv, write_json};
 use crate::backend::floor;
 use crate::camera::{Camera, CameraMode, DEFAULT_ZOOM};
-use crate::files::thousands;
+use crate::files::{figure, thousands};
 use crate::game::scene::built_in;
 use crate::game::{Game, Options, Scene};
 use crate::pipeline::Profile;
@@ -56,8 +57,13 @@ pub struct ScaleRow {
     pub enemies: u64,
     /// Seconds to set the world up.
     pub setup_s: f64,
-    /// Steps per second, the step replayed as a CUDA graph (no frames).
+    /// Steps per second, the step replayed as a CUDA graph (no frames): the median of
+    /// [`ROUNDS`] rounds.
     pub steps_per_s: f64,
+    /// The slowest round's steps per second.
+    pub steps_per_s_low: f64,
+    /// The fastest round's.
+    pub steps_per_s_high: f64,
     /// Time per step over the profiled steps, stage by stage summed (µs).
     pub step_us: f64,
     /// The launch floor of a step this size: as many one-touch launches as it makes over
@@ -72,8 +78,13 @@ pub struct ScaleRow {
     pub achieved_bandwidth: f64,
     /// That over the copy bandwidth measured in the same run.
     pub fraction_of_copy: f64,
-    /// Frames per second, one step and one kernel-rendered frame each.
+    /// Frames per second, one step and one kernel-rendered frame each: the median of
+    /// [`ROUNDS`] rounds.
     pub frames_per_s: f64,
+    /// The slowest round's frames per second.
+    pub frames_per_s_low: f64,
+    /// The fastest round's.
+    pub frames_per_s_high: f64,
 }
 
 /// The summary of a run, written as JSON.
@@ -272,22 +283,30 @@ pub fn scaling(path: &Path, summary: &ScaleSummary) -> anyhow::Result<()> {
     })
 }
 
-/// Runs `work` on `game` for at least `time` and 3 times, then waits for everything queued;
-/// returns runs per second.
-pub(super) fn rate(
+/// Timed rounds of each figure of a size: one world at a time fits (the largest take most of
+/// the memory), so its rounds follow each other rather than interleave with other sizes'.
+pub const ROUNDS: u32 = 5;
+
+/// Runs `work` on `game` in [`ROUNDS`] rounds, each for at least `time / ROUNDS` and 3
+/// times, then waits for everything queued; returns runs per second over the rounds.
+fn rate(
     game: &mut Game,
     time: Duration,
     mut work: impl FnMut(&mut Game) -> Result<(), Error>,
-) -> anyhow::Result<f64> {
-    let start = Instant::now();
-    let mut runs = 0u64;
-    while runs < 3 || start.elapsed() < time {
-        work(game)?;
-        runs += 1;
+) -> anyhow::Result<Rate> {
+    let mut samples = Vec::with_capacity(ROUNDS as usize);
+    for _ in 0..ROUNDS {
+        let start = Instant::now();
+        let mut runs = 0u64;
+        while runs < 3 || start.elapsed() < time / ROUNDS {
+            work(game)?;
+            runs += 1;
+        }
+        while game.next_status()?.is_some() {}
+        game.pipeline().device().synchronize()?;
+        samples.push(runs as f64 / start.elapsed().as_secs_f64());
     }
-    while game.next_status()?.is_some() {}
-    game.pipeline().device().synchronize()?;
-    Ok(runs as f64 / start.elapsed().as_secs_f64())
+    Ok(Rate::of(&samples))
 }
 
 /// The figures of `enemies`.
@@ -327,14 +346,18 @@ fn measure(
     Ok(ScaleRow {
         enemies,
         setup_s,
-        steps_per_s,
+        steps_per_s: steps_per_s.median,
+        steps_per_s_low: steps_per_s.low,
+        steps_per_s_high: steps_per_s.high,
         step_us: step_s * 1e6,
         floor_us: floor.graph_like_step_s(device.dependent_launch()) * 1e6,
         stages,
         bytes_per_step: bytes,
         achieved_bandwidth: achieved,
         fraction_of_copy: achieved / copy_bandwidth,
-        frames_per_s,
+        frames_per_s: frames_per_s.median,
+        frames_per_s_low: frames_per_s.low,
+        frames_per_s_high: frames_per_s.high,
     })
 }
 
@@ -348,19 +371,28 @@ impl ScaleSummary {
             self.copy_bandwidth / 1e9
         );
         out += &format!(
-            "{:>10} {:>12} {:>10} {:>10} {:>12} {:>9} {:>12}\n",
-            "enemies", "steps/s", "step µs", "floor µs", "GB/s", "of copy", "frames/s"
+            "{:>10} {:>26} {:>10} {:>10} {:>12} {:>9} {:>26}\n",
+            "enemies",
+            "steps/s (slowest–fastest)",
+            "step µs",
+            "floor µs",
+            "GB/s",
+            "of copy",
+            "frames/s (slowest–fastest)"
         );
+        let spread = |median: f64, low: f64, high: f64| {
+            format!("{} ({}–{})", figure(median), figure(low), figure(high))
+        };
         for r in &self.rows {
             out += &format!(
-                "{:>10} {:>12.1} {:>10.1} {:>10.1} {:>12.1} {:>8.1}% {:>12.1}\n",
+                "{:>10} {:>26} {:>10.1} {:>10.1} {:>12.1} {:>8.1}% {:>26}\n",
                 r.enemies,
-                r.steps_per_s,
+                spread(r.steps_per_s, r.steps_per_s_low, r.steps_per_s_high),
                 r.step_us,
                 r.floor_us,
                 r.achieved_bandwidth / 1e9,
                 100.0 * r.fraction_of_copy,
-                r.frames_per_s
+                spread(r.frames_per_s, r.frames_per_s_low, r.frames_per_s_high),
             );
         }
         out += &format!(

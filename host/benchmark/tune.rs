@@ -526,7 +526,11 @@ mod tests {
         // needed), the default's 50 does not.
         let (chosen, rejected) = choose(&rows, fps(48.0), 0.2).unwrap();
         assert_eq!(rows[chosen].choice, "4 substeps");
-        assert!(rejected[0].1.contains("ran 50.0 frames/s"), "{:?}", rejected[0]);
+        assert!(
+            rejected[0].1.contains("ran 50.0 frames/s"),
+            "{:?}",
+            rejected[0]
+        );
         // Rows without frames (not timed) hold no frame rate.
         let e = choose(&rows, fps(60.0), 0.2).unwrap_err();
         assert!(e.contains("`4 substeps`") && e.contains("frames/s"), "{e}");
