@@ -327,29 +327,67 @@ fn the_reference_orbits_and_collides_as_the_closed_forms_say() {
     );
 }
 
+/// The pixels of a 1280x720 plot where `label` drawn at `at` in the plots' labels' font
+/// puts ink, grown by one pixel each way: two labels whose sets meet touch or overlap.
+fn inked(label: &str, at: (i32, i32)) -> std::collections::HashSet<(i32, i32)> {
+    use plotters::prelude::*;
+    let (w, h) = (1280i32, 720i32);
+    let mut rgb = vec![255u8; (w * h * 3) as usize];
+    {
+        let area = BitMapBackend::with_buffer(&mut rgb, (w as u32, h as u32)).into_drawing_area();
+        area.draw(&Text::new(label.to_owned(), at, ("sans-serif", 14)))
+            .unwrap();
+    }
+    let mut ink = std::collections::HashSet::new();
+    for (i, px) in rgb.chunks_exact(3).enumerate() {
+        if px != [255, 255, 255] {
+            let (x, y) = (i as i32 % w, i as i32 / w);
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    ink.insert((x + dx, y + dy));
+                }
+            }
+        }
+    }
+    assert!(!ink.is_empty(), "{label:?} drew nothing");
+    ink
+}
+
 #[test]
 fn labels_of_a_cluster_of_points_do_not_overlap() {
-    use gpuwars::benchmark::plot::place_labels;
-    // Six choices plotted on one spot, as the default's neighbours often are: each name
-    // goes to its own place around it, no two overlapping, all inside the plot.
-    let names: Vec<String> = [
-        "default", "explicit", "verlet", "averaged", "cap 32", "cell x2",
-    ]
-    .map(String::from)
-    .to_vec();
-    let size = 14;
-    let points = vec![(600, 300); names.len()];
-    let at = place_labels(&points, &names, size, (0, 0, 1280, 720));
-    let rect = |(x, y): (i32, i32), name: &String| {
-        let w = (name.chars().count() as f32 * size as f32 * 0.6).ceil() as i32;
-        (x, y, x + w, y + size as i32)
-    };
-    let rects: Vec<_> = at.iter().zip(&names).map(|(&p, n)| rect(p, n)).collect();
-    for (i, a) in rects.iter().enumerate() {
-        assert!(a.0 >= 0 && a.1 >= 0 && a.2 <= 1280 && a.3 <= 720);
-        for b in &rects[i + 1..] {
-            let apart = a.2 <= b.0 || b.2 <= a.0 || a.3 <= b.1 || b.3 <= a.1;
-            assert!(apart, "{a:?} and {b:?} overlap");
+    use gpuwars::benchmark::plot::{label_extent, place_labels};
+    // Six choices plotted on one spot, as the default's neighbours often are, and one near
+    // the plot's corner: each name goes to its own place, and the pixels each one inks
+    // when drawn there (drawn here, one name at a time) meet no other name's, all of them
+    // inside the plot.
+    let names = [
+        "default",
+        "explicit",
+        "verlet",
+        "averaged",
+        "cap 32",
+        "cell x2",
+        "dt 1/30, nothing swept",
+    ];
+    let extents: Vec<_> = names.iter().map(|n| label_extent(n).unwrap()).collect();
+    let mut points = vec![(600, 300); names.len() - 1];
+    points.push((1275, 5));
+    let at = place_labels(&points, &extents, (0, 0, 1280, 720));
+    let inks: Vec<_> = (names.iter().zip(&at)).map(|(n, &p)| inked(n, p)).collect();
+    for (i, a) in inks.iter().enumerate() {
+        assert!(
+            a.iter()
+                .all(|&(x, y)| (-1..=1280).contains(&x) && (-1..=720).contains(&y))
+        );
+        for (j, b) in inks.iter().enumerate().skip(i + 1) {
+            assert!(
+                a.is_disjoint(b),
+                "{} at {:?} and {} at {:?} meet",
+                names[i],
+                at[i],
+                names[j],
+                at[j]
+            );
         }
     }
 }

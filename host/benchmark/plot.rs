@@ -106,7 +106,11 @@ where
     let pixels: Vec<(i32, i32)> = points.iter().map(|p| chart.backend_coord(p)).collect();
     let bounds = chart.plotting_area().get_pixel_range();
     let bounds = (bounds.0.start, bounds.1.start, bounds.0.end, bounds.1.end);
-    for (at, name) in place_labels(&pixels, names, LABEL_SIZE, bounds)
+    let extents = names
+        .iter()
+        .map(|n| label_extent(n))
+        .collect::<Result<Vec<_>, _>>()?;
+    for (at, name) in place_labels(&pixels, &extents, bounds)
         .into_iter()
         .zip(names)
     {
@@ -122,16 +126,57 @@ const LABEL_SIZE: u32 = 14;
 /// Rows of names stacked above and below a point's own beside it (see [`place_labels`]).
 const STACKED: i32 = 4;
 
-/// Where to write each of `labels` (its top-left corner, in pixels) beside its point of
-/// `points`, inside `bounds` (left, top, right, bottom): of the places around the point
-/// (beside it, in rows stacked a few deep, or above or below it), nearest
-/// first, the first that overlaps no label placed before and no point, else the one that
-/// overlaps least. Widths are estimated from the character count (a proportional
-/// font's average), so the check is conservative, not exact.
+/// A label's ink relative to where it is drawn: left, top, right and bottom, in pixels.
+pub type Extent = (i32, i32, i32, i32);
+
+/// Where `label`, written in the plots' labels' font at (0, 0), puts ink: found by drawing it
+/// (the font's layout box leaves out the ascenders above the anchor and the descenders).
+pub fn label_extent(label: &str) -> anyhow::Result<Extent> {
+    font();
+    let size = LABEL_SIZE as i32;
+    let (w, h) = ((label.chars().count() as i32 + 2) * size, 4 * size);
+    let origin = (size, 2 * size);
+    let mut rgb = vec![255u8; (w * h * 3) as usize];
+    {
+        let area = BitMapBackend::with_buffer(&mut rgb, (w as u32, h as u32)).into_drawing_area();
+        area.draw(&Text::new(
+            label.to_owned(),
+            origin,
+            ("sans-serif", LABEL_SIZE),
+        ))
+        .map_err(|e| anyhow!("measuring the label {label:?}: {e}"))?;
+    }
+    let mut ink = (i32::MAX, i32::MAX, i32::MIN, i32::MIN);
+    for (i, px) in rgb.chunks_exact(3).enumerate() {
+        if px != [255, 255, 255] {
+            let (x, y) = (i as i32 % w, i as i32 / w);
+            ink = (
+                ink.0.min(x),
+                ink.1.min(y),
+                ink.2.max(x + 1),
+                ink.3.max(y + 1),
+            );
+        }
+    }
+    Ok(match ink.0 <= ink.2 {
+        true => (
+            ink.0 - origin.0,
+            ink.1 - origin.1,
+            ink.2 - origin.0,
+            ink.3 - origin.1,
+        ),
+        false => (0, 0, 0, 0),
+    })
+}
+
+/// Where to draw each label (see [`label_extent`]: `extents`, its ink around that place)
+/// beside its point of `points`, its ink inside `bounds` (left, top, right, bottom): of the
+/// places around the point (beside it, in rows stacked a few deep, or above or below it),
+/// nearest first, the first whose ink overlaps no label placed before and no point, else the
+/// one that overlaps least.
 pub fn place_labels(
     points: &[(i32, i32)],
-    labels: &[String],
-    size: u32,
+    extents: &[Extent],
     bounds: (i32, i32, i32, i32),
 ) -> Vec<(i32, i32)> {
     type Rect = (i32, i32, i32, i32);
@@ -147,10 +192,9 @@ pub fn place_labels(
     let mut placed: Vec<Rect> = Vec::new();
     points
         .iter()
-        .zip(labels)
-        .map(|(&(x, y), label)| {
-            let h = size as i32;
-            let w = (label.chars().count() as f32 * size as f32 * 0.6).ceil() as i32;
+        .zip(extents)
+        .map(|(&(x, y), &extent)| {
+            let (w, h) = (extent.2 - extent.0, extent.3 - extent.1);
             let gap = 8;
             // Beside the point, left or right, in rows stacked up and down from its own
             // height, nearest first; above and below it after the first rows.
@@ -175,7 +219,8 @@ pub fn place_labels(
                 .min_by_key(cost)
                 .expect("a place to try");
             placed.push((best.0, best.1, best.0 + w, best.1 + h));
-            best
+            // Drawn where its ink's corner lands there.
+            (best.0 - extent.0, best.1 - extent.1)
         })
         .collect()
 }
