@@ -325,17 +325,24 @@ impl<T: Copy> DevSlice<T> {
 
     /// Reads element `index`; traps (GPU) or panics (CPU) when it is out of bounds.
     #[inline(always)]
-    pub fn get(&self, index: u32) -> T {
+    pub fn get(&self, index: u32) -> T
+    where
+        T: bytemuck::Pod,
+    {
         // SAFETY: in bounds (checked), and valid per `from_raw_parts`.
-        unsafe { self.ptr(index).read() }
+        unsafe { memory::load(self.ptr(index)) }
     }
 
     /// Writes element `index`; traps (GPU) or panics (CPU) when it is out of bounds.
     #[inline(always)]
-    pub fn set(&self, index: u32, value: T) {
+    pub fn set(&self, index: u32, value: T)
+    where
+        T: bytemuck::Pod,
+    {
         // SAFETY: in bounds (checked), and valid per `from_raw_parts`; the kernel's contract
-        // gives each element at most one writing thread per launch.
-        unsafe { self.ptr(index).write(value) }
+        // gives each element at most one writing thread per launch (and a breach of it is a
+        // race of relaxed atomics on the CPU, see `memory`).
+        unsafe { memory::store(self.ptr(index), value) }
     }
 
     /// Pointer to `N` elements from `start`, after one bounds check for all of them.
@@ -350,15 +357,21 @@ impl<T: Copy> DevSlice<T> {
     /// Reads the `N` elements from `start` with a single bounds check: independent loads the
     /// GPU can keep in flight together, where a loop of [`DevSlice::get`] waits on each check.
     #[inline(always)]
-    pub fn get_run<const N: usize>(&self, start: u32) -> [T; N] {
+    pub fn get_run<const N: usize>(&self, start: u32) -> [T; N]
+    where
+        T: bytemuck::Pod,
+    {
         // SAFETY: in bounds (checked); `[T; N]` has the alignment of `T`.
-        unsafe { self.run_ptr::<N>(start).read() }
+        unsafe { memory::load(self.run_ptr::<N>(start)) }
     }
 
     /// Calls `f(i, element i)` for each `i` in `start..end`, in order. A range of exactly `N`
     /// elements (a full tile) is read with [`DevSlice::get_run`].
     #[inline(always)]
-    pub fn for_each_in<const N: usize>(&self, start: u32, end: u32, mut f: impl FnMut(u32, T)) {
+    pub fn for_each_in<const N: usize>(&self, start: u32, end: u32, mut f: impl FnMut(u32, T))
+    where
+        T: bytemuck::Pod,
+    {
         if end.wrapping_sub(start) == N as u32 {
             let values: [T; N] = self.get_run(start);
             for (k, value) in values.into_iter().enumerate() {
@@ -390,7 +403,7 @@ impl<T: Copy> DevSlice<T> {
             return init;
         };
         // SAFETY (both loops): every index read is below `end`, at most the length (checked).
-        let read = |i: u64| unsafe { base.wrapping_add(i as usize).read() };
+        let read = |i: u64| unsafe { memory::load(base.wrapping_add(i as usize)) };
         let (mut acc, mut i) = (init, u64::from(first));
         while i + 3 * stride < end {
             let values = [
@@ -464,7 +477,7 @@ impl<T: Copy> DevSlice<T> {
         };
         let last = end - N as u64;
         // SAFETY: every run read ends by `end`, at most the length (checked).
-        let read = |i: u64| unsafe { base.wrapping_add(i as usize).cast::<[T; N]>().read() };
+        let read = |i: u64| unsafe { memory::load(base.wrapping_add(i as usize).cast::<[T; N]>()) };
         let (mut acc, mut i) = (init, u64::from(first));
         while i < end {
             // Every load before the first use, and no branch around `f`: the thread waits
@@ -509,6 +522,109 @@ impl DevSlice<u32> {
         // SAFETY: as in `atomic_add`.
         let atomic = unsafe { AtomicU32::from_ptr(ptr) };
         atomic.fetch_max(value, Ordering::Relaxed)
+    }
+}
+
+/// Device memory as the CPU emulation models it: every element read and written as relaxed
+/// atomic words, each as wide as the element's alignment allows (up to 8 bytes). Threads of
+/// a launch that race on an element against their kernel's contract then each read some
+/// value, as on a GPU, instead of making the host program's behaviour undefined: such a race
+/// stays a logic error, which the shuffled schedules and the determinism tests can show and
+/// which Miri and ThreadSanitizer accept as defined. On x86-64 relaxed loads and stores are
+/// the plain instructions; on the GPU the accesses are the plain ones.
+mod memory {
+    #[cfg(not(target_arch = "nvptx64"))]
+    use core::sync::atomic::{AtomicU8, AtomicU16, AtomicU32, AtomicU64, Ordering::Relaxed};
+
+    /// The width of the words a `T` is accessed in: the widest of 8, 4, 2 and 1 bytes that its
+    /// alignment and size are multiples of.
+    #[cfg(not(target_arch = "nvptx64"))]
+    const fn word<T>() -> usize {
+        let mut width = 8;
+        while width > 1 && (align_of::<T>() < width || !size_of::<T>().is_multiple_of(width)) {
+            width /= 2;
+        }
+        width
+    }
+
+    /// Reads the `T` at `ptr`.
+    ///
+    /// # Safety
+    /// `ptr` is aligned and points to an initialised `T` without padding bytes (a plain
+    /// element, or an array of them), which stays allocated meanwhile and is accessed
+    /// concurrently by these functions and `DevSlice`'s atomics alone.
+    #[inline(always)]
+    pub(super) unsafe fn load<T: Copy>(ptr: *const T) -> T {
+        #[cfg(target_arch = "nvptx64")]
+        {
+            // SAFETY: as the caller promises.
+            unsafe { ptr.read() }
+        }
+        #[cfg(not(target_arch = "nvptx64"))]
+        {
+            let mut value = core::mem::MaybeUninit::<T>::uninit();
+            let to = value.as_mut_ptr().cast::<u8>();
+            macro_rules! words {
+                ($atomic:ty, $n:literal) => {
+                    for k in 0..size_of::<T>() / $n {
+                        // SAFETY: word `k` of the aligned `T` (its alignment is a multiple of
+                        // the word's), accessed atomically by every thread; written into
+                        // `value`'s bytes, which it fits.
+                        unsafe {
+                            let word =
+                                <$atomic>::from_ptr(ptr.cast::<u8>().add(k * $n).cast_mut().cast());
+                            to.add(k * $n)
+                                .cast::<[u8; $n]>()
+                                .write_unaligned(word.load(Relaxed).to_ne_bytes());
+                        }
+                    }
+                };
+            }
+            match word::<T>() {
+                8 => words!(AtomicU64, 8),
+                4 => words!(AtomicU32, 4),
+                2 => words!(AtomicU16, 2),
+                _ => words!(AtomicU8, 1),
+            }
+            // SAFETY: every byte copied from an initialised `T` without padding.
+            unsafe { value.assume_init() }
+        }
+    }
+
+    /// Writes `value` to the `T` at `ptr`.
+    ///
+    /// # Safety
+    /// As for [`load`].
+    #[inline(always)]
+    pub(super) unsafe fn store<T: Copy>(ptr: *mut T, value: T) {
+        #[cfg(target_arch = "nvptx64")]
+        {
+            // SAFETY: as the caller promises.
+            unsafe { ptr.write(value) }
+        }
+        #[cfg(not(target_arch = "nvptx64"))]
+        {
+            let from = (&raw const value).cast::<u8>();
+            macro_rules! words {
+                ($atomic:ty, $int:ty, $n:literal) => {
+                    for k in 0..size_of::<T>() / $n {
+                        // SAFETY: as in `load`; `value` has no padding, so its bytes are
+                        // initialised.
+                        unsafe {
+                            let bytes = from.add(k * $n).cast::<[u8; $n]>().read_unaligned();
+                            let word = <$atomic>::from_ptr(ptr.cast::<u8>().add(k * $n).cast());
+                            word.store(<$int>::from_ne_bytes(bytes), Relaxed);
+                        }
+                    }
+                };
+            }
+            match word::<T>() {
+                8 => words!(AtomicU64, u64, 8),
+                4 => words!(AtomicU32, u32, 4),
+                2 => words!(AtomicU16, u16, 2),
+                _ => words!(AtomicU8, u8, 1),
+            }
+        }
     }
 }
 
