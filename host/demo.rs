@@ -80,7 +80,7 @@ pub struct Report {
     pub frame: Option<Frame>,
 }
 
-/// How one colliding pair of kinds has its contacts tested (see [`WorldSpec::sweeps`]).
+/// How one colliding pair of kinds has its contacts tested (see [`WorldSpec::pair_sweeps`]).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PairReport {
     /// The two kinds' names.
@@ -95,7 +95,7 @@ impl PairReport {
     /// Every colliding pair of `world`'s kinds.
     pub fn all(world: &WorldSpec) -> Vec<PairReport> {
         world
-            .sweeps()
+            .pair_sweeps()
             .into_iter()
             .map(|p| PairReport {
                 kinds: [p.kinds.0, p.kinds.1].map(|k| world.kinds[k].name.clone()),

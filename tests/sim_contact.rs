@@ -2,7 +2,7 @@
 //! symmetry that lets both bodies of a pair respond alone.
 
 use glam::Vec2;
-use gpuwars::kernels::sim::contact::{Contact, contact, sweep, tie_break};
+use gpuwars::kernels::sim::contact::{Contact, contact, first_overlap, tie_break};
 use gpuwars::kernels::sim::kinds::Bound;
 use gpuwars::kernels::sim::narrow::respond;
 use proptest::prelude::*;
@@ -202,21 +202,21 @@ fn a_fast_circle_crossing_another_is_swept_at_the_moment_they_first_touch() {
     let (d0, d1) = (Vec2::new(10.0, -1.0), Vec2::new(-10.0, -1.0));
     assert!(contact(Bound::Circle(2.0), Bound::Circle(5.0), d0, X).is_none());
     assert!(contact(Bound::Circle(2.0), Bound::Circle(5.0), d1, X).is_none());
-    let s = sweep(Bound::Circle(2.0), Bound::Circle(5.0), d0, d1).expect("a swept contact");
+    let s = first_overlap(Bound::Circle(2.0), Bound::Circle(5.0), d0, d1).expect("a swept contact");
     let t = (10.0 - 48f32.sqrt()) / 20.0;
     assert!((s.time - t).abs() < 1e-6, "time {} instead of {t}", s.time);
     // At that moment the enemy is at (√48, −1) from the shot: the normal points there.
     let normal = Vec2::new(48f32.sqrt(), -1.0) / 7.0;
     assert!((s.normal - normal).length() < 1e-5, "normal {}", s.normal);
     // Passing 7.5 off the centre line misses; a path that stops short never touches.
-    let wide = sweep(
+    let wide = first_overlap(
         Bound::Circle(2.0),
         Bound::Circle(5.0),
         Vec2::new(10.0, 7.5),
         Vec2::new(-10.0, 7.5),
     );
     assert_eq!(wide, None);
-    let short = sweep(
+    let short = first_overlap(
         Bound::Circle(2.0),
         Bound::Circle(5.0),
         Vec2::new(20.0, 0.0),
@@ -230,7 +230,7 @@ fn a_circle_swept_past_a_rectangle_touches_its_face_or_its_corner() {
     let wall = Bound::Rect(Vec2::new(0.5, 3.0));
     // Head on through the face: the ball (radius 1) touches the face x = −0.5 from the
     // left when its centre is at −1.5, from −10 to +10: t = 8.5 / 20.
-    let s = sweep(
+    let s = first_overlap(
         Bound::Circle(1.0),
         wall,
         Vec2::new(10.0, 0.0),
@@ -242,7 +242,7 @@ fn a_circle_swept_past_a_rectangle_touches_its_face_or_its_corner() {
     // Past the corner (−0.5, 3) at height 3.6 (in the wall's frame the ball goes from −10 to
     // +10): it touches the corner when its centre is 1 from it, 0.6 above and 0.8 before,
     // at x = −1.3, so t = 8.7 / 20, the normal pointing from the ball to the corner.
-    let s = sweep(
+    let s = first_overlap(
         Bound::Circle(1.0),
         wall,
         Vec2::new(10.0, -3.6),
@@ -256,7 +256,7 @@ fn a_circle_swept_past_a_rectangle_touches_its_face_or_its_corner() {
         s.normal
     );
     // Above the corner's reach: nothing.
-    let above = sweep(
+    let above = first_overlap(
         Bound::Circle(1.0),
         wall,
         Vec2::new(10.0, -4.1),
@@ -286,8 +286,8 @@ proptest! {
     ) {
         let (d0, d1) = (Vec2::from(d0), Vec2::from(d1));
         prop_assume!(contact(a, b, d0, X).is_none());
-        let ab = sweep(a, b, d0, d1);
-        let ba = sweep(b, a, -d0, -d1);
+        let ab = first_overlap(a, b, d0, d1);
+        let ba = first_overlap(b, a, -d0, -d1);
         prop_assert_eq!(ab.map(|s| (s.time, -s.normal)), ba.map(|s| (s.time, s.normal)));
         let n = 4000;
         let sampled = sampled_overlap(a, b, d0, d1, n);

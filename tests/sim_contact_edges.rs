@@ -21,7 +21,9 @@ mod common;
 use glam::{DVec2, Vec2};
 use gpuwars::backend::{Binder, Launch, Op};
 use gpuwars::kernels::registry;
-use gpuwars::kernels::sim::contact::{SweepCase, SweepCasesArgs, SweepVerdict, contact, sweep};
+use gpuwars::kernels::sim::contact::{
+    SweepCase, SweepCasesArgs, SweepVerdict, contact, first_overlap,
+};
 use gpuwars::kernels::sim::kinds::Bound;
 use gpuwars::{BackendKind, Device};
 use rand::rngs::StdRng;
@@ -383,18 +385,24 @@ fn a_touching_pair_moving_through_each_other_is_swept_at_once() {
     let (d0, d1) = (Vec2::new(2.0, 0.0), Vec2::new(-2.5, 0.0));
     assert_eq!(contact(circles.0, circles.1, d0, Vec2::X), None);
     assert_eq!(contact(circles.0, circles.1, d1, Vec2::X), None);
-    let s = sweep(circles.0, circles.1, d0, d1).expect("swept at the start");
+    let s = first_overlap(circles.0, circles.1, d0, d1).expect("swept at the start");
     assert_eq!((s.time.to_bits(), s.normal), (0, Vec2::X));
     let rects = (Bound::Rect(Vec2::ONE), Bound::Rect(Vec2::ONE));
-    let s = sweep(rects.0, rects.1, d0, d1).expect("swept at the start");
+    let s = first_overlap(rects.0, rects.1, d0, d1).expect("swept at the start");
     assert_eq!((s.time.to_bits(), s.normal), (0, Vec2::X));
     // Mirrored, the face is reached with v < 0 and the time is +0, not −0.
-    let s = sweep(rects.0, rects.1, -d0, -d1).expect("swept at the start");
+    let s = first_overlap(rects.0, rects.1, -d0, -d1).expect("swept at the start");
     assert_eq!((s.time.to_bits(), s.normal), (0, Vec2::NEG_X));
     // Touching and moving away, or along the face: nothing.
-    assert_eq!(sweep(rects.0, rects.1, d0, d0 * 2.0), None);
-    assert_eq!(sweep(circles.0, circles.1, d0, d0 + Vec2::Y * 0.5), None);
-    assert_eq!(sweep(rects.0, rects.1, d0, d0 + Vec2::Y * 0.5), None);
+    assert_eq!(first_overlap(rects.0, rects.1, d0, d0 * 2.0), None);
+    assert_eq!(
+        first_overlap(circles.0, circles.1, d0, d0 + Vec2::Y * 0.5),
+        None
+    );
+    assert_eq!(
+        first_overlap(rects.0, rects.1, d0, d0 + Vec2::Y * 0.5),
+        None
+    );
 }
 
 fn touching_starts_of_every_shape_pair_are_found_at_once_when_they_close_in(device: &Device) {

@@ -1,5 +1,5 @@
 //! The rule that decides which pairs are swept (`gpuwars::sim::spec::miss_fraction` and
-//! `WorldSpec::sweeps`), at every travel from 10⁻³⁰ to 10³⁰ of the contact: its figure
+//! `WorldSpec::pair_sweeps`), at every travel from 10⁻³⁰ to 10³⁰ of the contact: its figure
 //! against a numerical integration in f64 written here, its verdict, and its words.
 
 mod common;
@@ -105,7 +105,7 @@ fn rule(speed: f32, radius: f32, dt: f32) -> (bool, String) {
     let mut spec = world(Vec2::splat(1000.0), Boundary::Wrap, vec![a, b]);
     spec.dt = dt;
     spec.validate().unwrap();
-    let pair = spec.sweeps().remove(0);
+    let pair = spec.pair_sweeps().remove(0);
     (pair.swept, pair.rule)
 }
 

@@ -470,7 +470,7 @@ fn read_kind(node: &Node<'_>) -> Result<(KindSpec, Option<Behaviour>), SceneErro
             n.real(above(0.0, f32::INFINITY))
         })?,
         controlled: behaviour.is_some(),
-        // Left out: the rule decides (`WorldSpec::sweeps`).
+        // Left out: the rule decides (`WorldSpec::pair_sweeps`).
         sweep: kind.or("swept", Sweep::Auto, |n| {
             n.flag().map(|on| if on { Sweep::On } else { Sweep::Off })
         })?,

@@ -59,7 +59,7 @@ impl Layout {
 
 /// The kernels' table of kinds.
 pub fn kind_table(spec: &WorldSpec) -> Vec<KindInfo> {
-    let sweeps = spec.sweep_masks();
+    let swept_kinds = spec.sweep_masks();
     let step = spec.dt / spec.physics.substeps as f32;
     // How far a body of each kind may travel in a (sub)step, for swept pairs' reach.
     let travel: Vec<f32> = (spec.kinds.iter())
@@ -79,7 +79,7 @@ pub fn kind_table(spec: &WorldSpec) -> Vec<KindInfo> {
             let partner = (0..spec.kinds.len())
                 .filter(|&k| collides_with & (1 << k) != 0)
                 .map(|k| {
-                    let swept = sweeps[i] & (1 << k) != 0;
+                    let swept = swept_kinds[i] & (1 << k) != 0;
                     let extra = if swept { travel[i] + travel[k] } else { 0.0 };
                     spec.kinds[k].shape.reach() + extra
                 })
@@ -90,7 +90,7 @@ pub fn kind_table(spec: &WorldSpec) -> Vec<KindInfo> {
             };
             KindInfo {
                 half,
-                radius: reach,
+                reach,
                 shape,
                 collides_with,
                 damage: kind.damage,
@@ -102,7 +102,7 @@ pub fn kind_table(spec: &WorldSpec) -> Vec<KindInfo> {
                 // its machines to its own kernels.
                 controlled: u32::from(kind.controlled),
                 contact_reach: partner.map_or(0.0, |partner| reach + partner),
-                sweeps_with: sweeps[i],
+                swept_kinds: swept_kinds[i],
                 travel: travel[i],
             }
         })

@@ -350,7 +350,7 @@ impl KindSpec {
 /// Whether a kind's contacts are swept: tested over the whole of each step's motion (the
 /// earliest time of impact), not only at its end, so that a fast body cannot pass through
 /// what it should hit between two steps. A pair is swept if either kind says `On`, or
-/// neither says `Off` and the rule of [`WorldSpec::sweeps`] finds that it needs it.
+/// neither says `Off` and the rule of [`WorldSpec::pair_sweeps`] finds that it needs it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Sweep {
     /// Where the pair's speeds could carry it past a contact (a scene's default).
@@ -410,7 +410,7 @@ fn w_minus_sin(w: f64) -> f64 {
     w * w2 * series
 }
 
-/// Whether one colliding pair of kinds is swept, and why (see [`WorldSpec::sweeps`]).
+/// Whether one colliding pair of kinds is swept, and why (see [`WorldSpec::pair_sweeps`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PairSweep {
     /// The two kinds (the first index is the smaller, or both the same).
@@ -629,7 +629,7 @@ impl WorldSpec {
     /// ([`miss_fraction`] of the distance the pair closes in a (sub)step at the kinds' top
     /// speeds, against their contact distance; a kind whose speed is unknown counts as
     /// still). Assumes a valid spec.
-    pub fn sweeps(&self) -> Vec<PairSweep> {
+    pub fn pair_sweeps(&self) -> Vec<PairSweep> {
         let masks = self.collision_masks();
         let step = self.dt / self.physics.substeps as f32;
         let bound = |k: &KindSpec| {
@@ -677,10 +677,10 @@ impl WorldSpec {
     }
 
     /// Each kind's mask of the kinds its contacts with are swept (symmetric; see
-    /// [`WorldSpec::sweeps`]).
+    /// [`WorldSpec::pair_sweeps`]).
     pub fn sweep_masks(&self) -> Vec<u32> {
         let mut masks = vec![0u32; self.kinds.len()];
-        for pair in self.sweeps().iter().filter(|p| p.swept) {
+        for pair in self.pair_sweeps().iter().filter(|p| p.swept) {
             let (i, j) = pair.kinds;
             masks[i] |= 1 << j;
             masks[j] |= 1 << i;
@@ -688,9 +688,9 @@ impl WorldSpec {
         masks
     }
 
-    /// Whether some pair of kinds is swept (see [`WorldSpec::sweeps`]).
+    /// Whether some pair of kinds is swept (see [`WorldSpec::pair_sweeps`]).
     pub fn has_swept_pairs(&self) -> bool {
-        self.sweeps().iter().any(|p| p.swept)
+        self.pair_sweeps().iter().any(|p| p.swept)
     }
 
     /// Whether the world keeps each body's last path: some pair is swept, or the physics

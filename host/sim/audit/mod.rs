@@ -223,7 +223,7 @@ pub struct Accuracy {
     /// Every audited slot's contacts, whatever the class: each contact between two audited
     /// slots counts from both.
     pub all: Tally,
-    /// Of `all`, the contacts of pairs of kinds the world sweeps ([`WorldSpec::sweeps`]).
+    /// Of `all`, the contacts of pairs of kinds the world sweeps ([`WorldSpec::pair_sweeps`]).
     pub swept: Tally,
     /// Of `all`, the contacts of pairs of kinds tested at step ends only.
     pub unswept: Tally,

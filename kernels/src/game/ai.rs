@@ -599,7 +599,7 @@ pub fn collide_think_integrate(t: Thread, args: &BodyStepArgs) {
 }
 
 /// [`collide_think_integrate`] for worlds with swept pairs (see
-/// [`crate::sim::KindInfo::sweeps_with`]).
+/// [`crate::sim::KindInfo::swept_kinds`]).
 #[inline(always)]
 pub fn collide_think_integrate_swept(t: Thread, args: &BodyStepArgs) {
     body_step::<true>(t, args);
@@ -695,7 +695,7 @@ fn think_slot<const TEAMS: bool, const MOVING: bool>(
         Some(known) => (known.kind.info, known.brain),
         None => (args.kinds.get(kind), asked(args.brains.get(kind))),
     };
-    let radius = asked(info.radius);
+    let radius = asked(info.reach);
     let looker = Looker {
         slot,
         pos,

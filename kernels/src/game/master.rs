@@ -223,7 +223,7 @@ impl Aboard {
             ship_energy: b.energy.get(ship),
             ship_pos: b.pos.get(ship),
             shot: args.kinds.get(rules.shot_kind),
-            ship_radius: args.kinds.get(rules.ship_kind).radius,
+            ship_radius: args.kinds.get(rules.ship_kind).reach,
             shots_free: args.free.count.get(rules.shot_kind),
             shot_slot: args.free.list.get(rules.shots.start),
         }
@@ -432,7 +432,7 @@ fn fly_ship(args: &MasterArgs, input: &Input, step: u32, energy: i32) {
 #[inline(always)]
 fn fire(args: &MasterArgs, input: &Input, aboard: &Aboard) {
     let aim = input.aim_dir();
-    let gap = aboard.ship_radius + aboard.shot.radius;
+    let gap = aboard.ship_radius + aboard.shot.reach;
     let place = Place {
         pos: aboard.ship_pos + aim * (gap * 1.01),
         vel: aim * args.rules.shot_speed,

@@ -267,7 +267,7 @@ pub fn sprite(
 #[inline(always)]
 fn outline(b: &Bodies, info: &KindInfo, look: &Look, shown: &Shown, slot: u32) -> Sprite {
     let view = &shown.view;
-    let reach = (info.radius * view.scale).min(MAX_RADIUS_PX);
+    let reach = (info.reach * view.scale).min(MAX_RADIUS_PX);
     let (silhouette, half) = if info.shape == SHAPE_RECT {
         (
             RECT,

@@ -157,7 +157,7 @@ pub struct Swept {
 /// Like [`contact`] it is antisymmetric: swapping the bodies (negating both offsets) gives
 /// the same time, bit for bit, and the opposite normal, so both threads of a pair agree.
 #[inline(always)]
-pub fn sweep(a: Bound, b: Bound, d0: Vec2, d1: Vec2) -> Option<Swept> {
+pub fn first_overlap(a: Bound, b: Bound, d0: Vec2, d1: Vec2) -> Option<Swept> {
     match (a, b) {
         (Bound::Circle(ra), Bound::Circle(rb)) => disk_entry(d0, d1 - d0, ra + rb),
         (Bound::Circle(r), Bound::Rect(half)) => circle_rect_sweep(r, half, d0, d1),
@@ -317,7 +317,7 @@ pub fn counted(a: Bound, b: Bound, d0: Vec2, d1: Vec2) -> Option<f32> {
     if contact(a, b, d0, Vec2::X).is_some() {
         return Some(0.0);
     }
-    if let Some(s) = sweep(a, b, d0, d1) {
+    if let Some(s) = first_overlap(a, b, d0, d1) {
         return Some(s.time);
     }
     contact(a, b, d1, Vec2::X).map(|_| 1.0)
@@ -343,9 +343,9 @@ pub struct SweepCase {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct SweepVerdict {
-    /// The normal of [`sweep`] of `a` and `b` from `d0` to `d1`.
+    /// The normal of [`first_overlap`] of `a` and `b` from `d0` to `d1`.
     pub ab_normal: Vec2,
-    /// The normal of [`sweep`] of `b` and `a` from `−d0` to `−d1`: the other body's view.
+    /// The normal of [`first_overlap`] of `b` and `a` from `−d0` to `−d1`: the other body's view.
     pub ba_normal: Vec2,
     /// The time of the first sweep.
     pub ab_time: f32,
@@ -364,8 +364,8 @@ impl SweepVerdict {
         let (a, b) = (case.a.bound(), case.b.bound());
         let (d0, d1) = (case.d0, case.d1);
         let swept = |s: Option<Swept>| s.map_or((-1.0, Vec2::ZERO), |s| (s.time, s.normal));
-        let (ab_time, ab_normal) = swept(sweep(a, b, d0, d1));
-        let (ba_time, ba_normal) = swept(sweep(b, a, -d0, -d1));
+        let (ab_time, ab_normal) = swept(first_overlap(a, b, d0, d1));
+        let (ba_time, ba_normal) = swept(first_overlap(b, a, -d0, -d1));
         SweepVerdict {
             started_overlapping: u32::from(contact(a, b, d0, Vec2::X).is_some()),
             counted: counted(a, b, d0, d1).unwrap_or(-1.0),

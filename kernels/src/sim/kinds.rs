@@ -76,10 +76,11 @@ impl From<Bound> for PlainBound {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct KindInfo {
-    /// Half extents of a rectangle; `(radius, radius)` for a circle.
+    /// Half extents of a rectangle; `(reach, reach)` for a circle.
     pub half: Vec2,
-    /// Radius of a circle; for a rectangle, the radius of the circle around it.
-    pub radius: f32,
+    /// How far the body reaches from its position: a circle's radius; for a rectangle, the
+    /// radius of the circle around it (the broad phase's and the sweep's bound).
+    pub reach: f32,
     /// [`SHAPE_CIRCLE`] or [`SHAPE_RECT`].
     pub shape: u32,
     /// Bit `k` set: bodies of this kind collide with bodies of kind `k` (symmetric).
@@ -99,14 +100,14 @@ pub struct KindInfo {
     /// machine's "checking energy" and "dead" states see it happen.
     pub controlled: u32,
     /// The farthest apart, along either axis, that a body of this kind and one of a kind it
-    /// collides with can be and still touch: its [`KindInfo::radius`] plus the largest of
+    /// collides with can be and still touch: its [`KindInfo::reach`] plus the largest of
     /// theirs (0 if it collides with nothing), plus, for pairs that are swept, the farthest
     /// both can travel in a (sub)step. The narrow phase's query reaches no farther.
     pub contact_reach: f32,
     /// Bit `k` set: contacts with bodies of kind `k` are swept over each step's motion, so
     /// that neither can pass through the other between two steps (symmetric; only in worlds
     /// that trace paths, see [`crate::sim::Bodies::prev`]).
-    pub sweeps_with: u32,
+    pub swept_kinds: u32,
     /// The farthest a swept test follows a body of this kind in a (sub)step: a little more
     /// than its top speed times the (sub)step (0 where the speed is unknown). A swept pair
     /// farther apart at the motion's end than their circles and both travels cannot have
@@ -118,7 +119,7 @@ impl KindInfo {
     /// The narrow-phase bound of this kind's bodies.
     #[inline(always)]
     pub fn bound(&self) -> Bound {
-        Bound::of_shape(self.shape, self.half, self.radius)
+        Bound::of_shape(self.shape, self.half, self.reach)
     }
 
     /// Whether this kind's bodies die as soon as their energy runs out (no controller decides).
@@ -135,8 +136,8 @@ impl KindInfo {
 
     /// Whether contacts with bodies of kind `other` are swept.
     #[inline(always)]
-    pub fn sweeps(&self, other: u32) -> bool {
-        other < u32::BITS && self.sweeps_with & (1 << other) != 0
+    pub fn swept_with(&self, other: u32) -> bool {
+        other < u32::BITS && self.swept_kinds & (1 << other) != 0
     }
 
     /// Whether bodies of this kind collide with bodies of kind `other`.

@@ -11,7 +11,7 @@ use glam::Vec2;
 
 use super::bodies::{Bodies, Contacts, Touched};
 use super::broad::{CellIndex, Near, Sample};
-use super::contact::{Swept, contact, sweep, tie_break};
+use super::contact::{Swept, contact, first_overlap, tie_break};
 use super::kinds::{Bound, KindInfo};
 use super::space::Space;
 use super::teams::Teams;
@@ -137,7 +137,7 @@ pub fn collide_circles(t: Thread, args: &CollideArgs) {
     collide_bounds::<false, false>(t, args);
 }
 
-/// [`collide`] for worlds with swept pairs (see [`KindInfo::sweeps_with`]): a world without
+/// [`collide`] for worlds with swept pairs (see [`KindInfo::swept_kinds`]): a world without
 /// any runs the kernels above, which have no swept code at all.
 #[inline(always)]
 pub fn collide_swept(t: Thread, args: &CollideArgs) {
@@ -157,19 +157,19 @@ fn bound<const RECTS: bool>(info: &KindInfo) -> Bound {
     if RECTS {
         info.bound()
     } else {
-        Bound::Circle(info.radius)
+        Bound::Circle(info.reach)
     }
 }
 
 /// The swept contact of bounds `a` and `b` whose offset went from `d0` to `d` over the
-/// motion, if they were apart at `d0` (see [`sweep`]). Inlined: as a call (which the few
+/// motion, if they were apart at `d0` (see [`first_overlap`]). Inlined: as a call (which the few
 /// pairs close enough to have met would make) it cost `paper` 4% more on an H200 and the
 /// narrow phase at a million enemies twice its time.
 #[inline(always)]
 fn began((a, b): (Bound, Bound), d0: Vec2, d: Vec2, tie: Vec2) -> Option<Swept> {
     match contact(a, b, d0, tie) {
         Some(_) => None,
-        None => sweep(a, b, d0, d),
+        None => first_overlap(a, b, d0, d),
     }
 }
 
@@ -177,18 +177,18 @@ fn began((a, b): (Bound, Bound), d0: Vec2, d: Vec2, tie: Vec2) -> Option<Swept> 
 /// swept contact's time and partner are handed on only where `SWEPT` (elsewhere they are
 /// constants, and the lanes exchange no more than before swept contacts existed).
 #[derive(Clone, Copy, Default)]
-struct Touch<const SWEPT: bool> {
+struct Share<const SWEPT: bool> {
     push: Vec2,
     kick: Vec2,
     damage: i32,
-    /// For a swept contact ([`super::contact::sweep`]), when it began as a fraction of the
+    /// For a swept contact ([`super::contact::first_overlap`]), when it began as a fraction of the
     /// motion (below 1); 1 for a contact at the motion's end.
     time: f32,
     /// The other body's slot.
     other: u32,
 }
 
-impl<const SWEPT: bool> Touch<SWEPT> {
+impl<const SWEPT: bool> Share<SWEPT> {
     /// Whether this contact began during the motion rather than at its end.
     #[inline(always)]
     fn swept(&self) -> bool {
@@ -211,7 +211,7 @@ struct Earliest {
     kick: Vec2,
 }
 
-impl<const SWEPT: bool> Handed for Touch<SWEPT> {
+impl<const SWEPT: bool> Handed for Share<SWEPT> {
     #[cfg(target_arch = "nvptx64")]
     #[inline(always)]
     fn shuffle_from(self, source: u32, members: u32) -> Self {
@@ -222,7 +222,7 @@ impl<const SWEPT: bool> Handed for Touch<SWEPT> {
             ),
             false => (self.time, self.other),
         };
-        Touch {
+        Share {
             push: self.push.shuffle_from(source, members),
             kick: self.kick.shuffle_from(source, members),
             damage: self.damage.shuffle_from(source, members),
@@ -321,8 +321,9 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool, const SWEPT: bool>(
                 // cannot have met: most of a query's bodies, whose paths' starts are then
                 // never read (nor this body's, if none is near).
                 let ended = contact(a, b, d, tie);
-                let near = (info.radius + other_info.radius) + (info.travel + other_info.travel);
-                let swept = traced && info.sweeps(other_kind) && d.length_squared() < near * near;
+                let near = (info.reach + other_info.reach) + (info.travel + other_info.travel);
+                let swept =
+                    traced && info.swept_with(other_kind) && d.length_squared() < near * near;
                 let began = match swept {
                     true => {
                         let other_prev = args.grid.prev_at::<MOVING>(entry, other, &bodies.prev);
@@ -346,7 +347,7 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool, const SWEPT: bool>(
                     (vel, args.grid.vel_at::<MOVING>(entry, other, &bodies.vel)),
                     info.restitution.max(other_info.restitution),
                 );
-                Some(Touch::<SWEPT> {
+                Some(Share::<SWEPT> {
                     push: r.push,
                     kick: r.kick,
                     damage: other_info.damage,
