@@ -104,25 +104,34 @@ impl Target {
     /// `row`'s rate in this target's unit.
     fn rate(self, row: &GameRow) -> Rate {
         match self {
-            Target::StepsPerSecond(_) => Rate {
-                median: row.steps_per_s,
-                low: row.steps_per_s_range.0,
-                high: row.steps_per_s_range.1,
-            },
+            Target::StepsPerSecond(_) => steps_rate(row),
             Target::FramesPerSecond { .. } => row.frames_per_s.unwrap_or_default(),
         }
     }
 
     /// `rate` in words: `median unit (slowest–fastest)`.
     fn shown(self, rate: Rate) -> String {
-        format!(
-            "{} {} ({}–{})",
-            figure(rate.median),
-            self.unit(),
-            figure(rate.low),
-            figure(rate.high)
-        )
+        rate_words(rate, self.unit())
     }
+}
+
+/// `row`'s steps per second over the rounds.
+fn steps_rate(row: &GameRow) -> Rate {
+    Rate {
+        median: row.steps_per_s,
+        low: row.steps_per_s_range.0,
+        high: row.steps_per_s_range.1,
+    }
+}
+
+/// `rate` in `unit` in words: `median unit (slowest–fastest)`.
+fn rate_words(rate: Rate, unit: &str) -> String {
+    format!(
+        "{} {unit} ({}–{})",
+        figure(rate.median),
+        figure(rate.low),
+        figure(rate.high)
+    )
 }
 
 /// The slowest round a choice may have and still hold `target` with `margin`.
@@ -380,7 +389,7 @@ impl TuneReport {
                  draws it; steps alone {}\n",
                 size.0,
                 size.1,
-                Target::StepsPerSecond(0.0).shown(Target::StepsPerSecond(0.0).rate(row))
+                rate_words(steps_rate(row), "steps/s")
             );
         }
         out += &format!(

@@ -410,7 +410,7 @@ fn group_rows(
                 },
                 || {},
             )?;
-            rates.into_iter().map(Some).collect()
+            rates
         }
         None => Vec::new(),
     }
@@ -422,7 +422,7 @@ fn group_rows(
         let row = match warm {
             Ok((mut game, alive)) => {
                 let rate = rates.next().unwrap_or_default();
-                let frames_per_s = frame_rates.next().flatten();
+                let frames_per_s = frame_rates.next();
                 measured(device, &mut game, (scene, seed), sizes, measure.audited)?.map(
                     |(stages, step_us, accuracy)| GameRow {
                         choice: choice.clone(),

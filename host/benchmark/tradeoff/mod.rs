@@ -168,8 +168,8 @@ pub(crate) fn estimate(
     let snapshot = start.elapsed().as_secs_f64();
     let timed = f64::from(sizes.speed.rounds + 1) * sizes.speed.seconds;
     let warmup = made + f64::from(sizes.game_warmup) * step;
-    let played = warmup + f64::from(sizes.profiled_steps) * step + timed;
-    let played = played + f64::from(u8::from(frames)) * timed;
+    let frames_timed = if frames { timed } else { 0.0 };
+    let played = warmup + f64::from(sizes.profiled_steps) * step + timed + frames_timed;
     let audited = warmup + f64::from(sizes.audit_steps) * (step + snapshot);
     let rows = |n: usize| n as f64;
     Ok(rows(crowd) * timed + rows(games) * (played + audited) + rows(features) * played)
