@@ -8,8 +8,9 @@ mod common;
 
 use common::{histogram, histogram_op};
 use gpuwars::backend::{Binder, Launch, Schedule};
+use gpuwars::kernels::access::Read;
 use gpuwars::kernels::primitives::touch::TouchArgs;
-use gpuwars::kernels::registry;
+use gpuwars::kernels::{DevSlice, registry};
 use gpuwars::primitives::PrefixSum;
 use gpuwars::{Buffer, Device, Error, Op};
 
@@ -78,16 +79,22 @@ fn a_ring_is_its_devices(device: &Device) {
 }
 
 /// One read-modify-write of each of `data`'s elements, beside the ops after it; `data`
-/// viewed as written, or (`lie`) as read only, against `Op::launch`'s contract.
+/// viewed as written, or (`lie`) bound read only and its address then taken for a written
+/// view, against `Op::launch`'s contract: the only way to a kernel that writes what its op
+/// declares read only, since the kernel's types allow no write through a read-only view.
 fn touch_beside(data: &Buffer<u32>, lie: bool) -> Op {
     // SAFETY: the view goes into this op only.
     let mut b = unsafe { Binder::new() };
-    let args = TouchArgs {
-        data: match lie {
-            true => b.read(data),
-            false => b.view(data),
-        },
+    let view = match lie {
+        true => {
+            let read: DevSlice<u32, Read> = b.view(data);
+            // SAFETY: the binder's view of `data`, which the op holds; written against the
+            // declaration on purpose (see above), on the CPU only.
+            unsafe { DevSlice::from_raw_parts(read.addr(), read.len()) }
+        }
+        false => b.view(data),
     };
+    let args = TouchArgs { data: view };
     let launch = Launch {
         kernel: registry::TOUCH,
         grid: (data.len() as u32).div_ceil(64),
@@ -128,28 +135,6 @@ fn a_branch_that_writes_what_the_chain_reads_is_refused(device: &Device) {
         histogram_op(&keys, &counts, 256, 2, 128),
     ];
     device.plan(apart, false).unwrap();
-}
-
-/// A name an op declares it writes that none of its views has is a slip, refused.
-#[test]
-fn a_declared_name_no_view_has_is_refused() {
-    let device = common::cpu();
-    let data = device.upload(&[0u32; 32]).unwrap();
-    // SAFETY: the view goes into this op only.
-    let mut b = unsafe { Binder::new() };
-    let args = b.writing(&["Bodies.pos"], |b| TouchArgs {
-        data: b.view(&data),
-    });
-    let launch = Launch {
-        kernel: registry::TOUCH,
-        grid: 1,
-        block: 32,
-        args,
-    };
-    // SAFETY: a buffer of the binder, a thread an element (the declaration is refused).
-    let op = unsafe { Op::launch(launch, b, 0) };
-    let err = device.plan(vec![op], false).err().expect("a slip");
-    assert!(err.to_string().contains("`Bodies.pos`"), "{err}");
 }
 
 /// A race the declarations hide: the touch writes the keys it says it only reads, beside a

@@ -180,7 +180,7 @@ fn judged(device: &Device, cases: &[Case]) -> Vec<SweepVerdict> {
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
     let args = SweepCasesArgs {
-        cases: b.read(&input),
+        cases: b.view(&input),
         verdicts: b.view(&output),
     };
     let launch = Launch {

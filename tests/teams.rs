@@ -4,6 +4,7 @@
 
 use gpuwars::kernels::DevSlice;
 use gpuwars::kernels::Thread;
+use gpuwars::kernels::access::Read;
 use gpuwars::kernels::sim::SlotRange;
 use gpuwars::kernels::sim::teams::Teams;
 use proptest::prelude::*;
@@ -53,7 +54,8 @@ proptest! {
         let warps: Vec<u32> = teams.warp_table(&table).collect();
         prop_assert_eq!(warps.len() as u64, threads / 32);
         // SAFETY: the table outlives every use of the view, and nothing writes it meanwhile.
-        let view = unsafe { DevSlice::from_raw_parts(warps.as_ptr() as u64, warps.len() as u32) };
+        let view: DevSlice<u32, Read> =
+            unsafe { DevSlice::from_raw_parts(warps.as_ptr() as u64, warps.len() as u32) };
         let block_dim = 128;
         let mut seen = vec![0u32; end_slot as usize];
         // One block more than the threads, as a launch rounds up.

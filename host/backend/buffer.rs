@@ -5,6 +5,7 @@ use std::marker::PhantomData;
 use std::sync::{Arc, Mutex};
 
 use gpuwars_kernels::DevSlice;
+use gpuwars_kernels::access::Access;
 use gpuwars_kernels::data::{Build, Convert, Store};
 
 use super::{Device, DeviceId, Element, Error, Imp, check_len, cpu, cuda};
@@ -134,7 +135,7 @@ impl<T: Element> Buffer<T> {
     /// # Safety
     /// The view must be used only by launches that run while the memory is allocated, and in
     /// the device's order (see [`Binder`](super::plan::Binder), the one caller).
-    pub(super) unsafe fn view_prefix(&self, len: u32) -> DevSlice<T> {
+    pub(super) unsafe fn view_prefix<A: Access>(&self, len: u32) -> DevSlice<T, A> {
         let len = len.min(self.len() as u32);
         // SAFETY: `len` elements of this buffer from its start; the caller keeps its use in
         // the buffer's life.
@@ -148,7 +149,7 @@ impl<T: Element> Buffer<T> {
 pub struct Buffers;
 
 impl Store for Buffers {
-    type Array<T: Element> = Buffer<T>;
+    type Array<T: Element, A: Access> = Buffer<T>;
 }
 
 /// A group's arrays read back to the host: `Group<Vecs>`.
@@ -156,7 +157,7 @@ impl Store for Buffers {
 pub struct Vecs;
 
 impl Store for Vecs {
-    type Array<T: Element> = Vec<T>;
+    type Array<T: Element, A: Access> = Vec<T>;
 }
 
 /// Allocates a group's arrays, zeroed, on a device: `Group::<Buffers>::build(&mut device.zeroed(), ..)`.
@@ -164,7 +165,11 @@ pub struct Zeroed<'d>(pub(super) &'d Device);
 
 impl Build<Buffers> for Zeroed<'_> {
     type Error = Error;
-    fn array<T: Element>(&mut self, name: &'static str, len: usize) -> Result<Buffer<T>, Error> {
+    fn array<T: Element, A: Access>(
+        &mut self,
+        name: &'static str,
+        len: usize,
+    ) -> Result<Buffer<T>, Error> {
         Ok(self.0.alloc_zeroed(len)?.named(name))
     }
 }
@@ -174,7 +179,11 @@ pub struct Reader<'d>(pub(super) &'d Device);
 
 impl Convert<Buffers, Vecs> for Reader<'_> {
     type Error = Error;
-    fn array<T: Element>(&mut self, _: &'static str, array: &Buffer<T>) -> Result<Vec<T>, Error> {
+    fn array<T: Element, In: Access, Out: Access>(
+        &mut self,
+        _: &'static str,
+        array: &Buffer<T>,
+    ) -> Result<Vec<T>, Error> {
         self.0.download(array)
     }
 }

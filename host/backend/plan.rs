@@ -5,7 +5,7 @@
 //! An op owns a share ([`Hold`]) of every buffer its arguments view, taken by the [`Binder`]
 //! that made the views, so a plan keeps its buffers allocated for as long as it exists,
 //! whatever happened to the handles it was made from. The binder also notes the device of
-//! every buffer it views and how the kernel uses it ([`Access`]): a plan refuses an op of
+//! every buffer it views and how the kernel uses it (the access of the view's type): a plan refuses an op of
 //! another device, and an op run beside the others ([`Op::beside`]) that touches what the
 //! ops it runs beside write, or writes what they touch. What keeps the memory a launch uses
 //! from being freed *while it runs* is the device's order: every launch, copy, clear and
@@ -19,6 +19,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use cudarc::driver::CudaGraph;
+use gpuwars_kernels::access::{Access, Use};
 use gpuwars_kernels::data::{Convert, View};
 use gpuwars_kernels::{DevSlice, KernelArgs};
 
@@ -26,14 +27,17 @@ use super::cuda::Fence;
 use super::{Buffer, Buffers, Device, DeviceId, Element, Error, Hold, Imp, Launch};
 
 /// Makes the views of buffers that go into one op's arguments, and takes a [`Hold`] of
-/// each, which the op keeps: views and holds go together.
+/// each, which the op keeps: views and holds go together. Each view is of the access its
+/// type asks for ([`DevSlice<T, A>`](DevSlice), the argument struct's field it goes into
+/// chooses `A`), and the binder notes that access for the plan's checks: what an op
+/// declares is what its kernel's types let it do (see `gpuwars_kernels::access`).
 ///
 /// Making one is the unsafe step, since safe code could read through its views; this does
 /// not compile:
 /// ```compile_fail,E0133
 /// let dev = gpuwars::Device::cpu(Some(1), "probe").unwrap();
 /// let buffer = dev.upload(&[7u32; 1024]).unwrap();
-/// let view = gpuwars::backend::Binder::new().view(&buffer);
+/// let view: gpuwars_kernels::DevSlice<u32> = gpuwars::backend::Binder::new().view(&buffer);
 /// println!("{}", view.get(0));
 /// ```
 pub struct Binder {
@@ -42,53 +46,31 @@ pub struct Binder {
     /// The device of the first buffer viewed, and of a second one if any was another's.
     device: Option<DeviceId>,
     foreign: Option<DeviceId>,
-    /// How the views made now are used (see [`Binder::reading`]).
-    mode: Mode,
-    /// The names [`Binder::writing`] and [`Binder::ignoring`] were given that no view
-    /// made meanwhile had: a slip the plan refuses.
-    unmatched: Vec<&'static str>,
 }
 
-/// How a binder's views are used.
-#[derive(Clone, Default)]
-struct Mode {
-    /// Every view read only but those of `written`.
-    reading: bool,
-    /// The buffers written, by name, where views are read only.
-    written: Vec<&'static str>,
-    /// The buffers not used at all, by name.
-    ignored: Vec<&'static str>,
-}
-
-/// How an op's kernel uses a buffer it views.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Access {
-    /// Not at all (an array of a group it views whole).
-    None,
-    /// It only reads it.
-    Read,
-    /// It writes it (and may read it).
-    Write,
-}
-
-/// One buffer an op views, and how.
+/// One buffer an op views, and how its kernel may use it (never [`Use::Unused`]: an unused
+/// view is of no buffer).
 #[derive(Clone, Debug)]
 struct Touch {
     /// The buffer's allocation (see `Buffer::key`).
     key: usize,
-    access: Access,
+    access: Use,
     /// The buffer's name (see `Buffer::named`).
     name: &'static str,
 }
 
 impl fmt::Display for Touch {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let verb = match self.access {
-            Access::None => "views",
-            Access::Read => "reads",
-            Access::Write => "writes",
-        };
-        write!(f, "{verb} `{}`", self.name)
+        write!(f, "{} `{}`", verb(self.access), self.name)
+    }
+}
+
+/// What an op does with a buffer it may use as `access`, in a word.
+fn verb(access: Use) -> &'static str {
+    match access {
+        Use::Unused => "leaves alone",
+        Use::Read => "reads",
+        Use::Write => "writes",
     }
 }
 
@@ -106,98 +88,37 @@ impl Binder {
             touches: Vec::new(),
             device: None,
             foreign: None,
-            mode: Mode::default(),
-            unmatched: Vec::new(),
         }
     }
 
-    /// The whole of `buffer`, which the kernel writes (and may read); read only inside
-    /// [`Binder::reading`] or [`Binder::writing`] (unless named there), not used inside
-    /// [`Binder::ignoring`] where named there.
-    pub fn view<T: Element>(&mut self, buffer: &Buffer<T>) -> DevSlice<T> {
+    /// The whole of `buffer`, of access `A`: read and written ([`Write`]), read only
+    /// ([`Read`]), or not at all ([`Unused`]: an empty view of no buffer, which the op
+    /// neither holds nor declares).
+    ///
+    /// [`Write`]: gpuwars_kernels::access::Write
+    /// [`Read`]: gpuwars_kernels::access::Read
+    /// [`Unused`]: gpuwars_kernels::access::Unused
+    pub fn view<T: Element, A: Access>(&mut self, buffer: &Buffer<T>) -> DevSlice<T, A> {
         self.view_prefix(buffer, u32::MAX)
     }
 
     /// The first `len` elements of `buffer` (clamped to its length), as [`Binder::view`].
-    pub fn view_prefix<T: Element>(&mut self, buffer: &Buffer<T>, len: u32) -> DevSlice<T> {
-        self.bind(buffer, len)
-    }
-
-    /// The whole of `buffer`, which the kernel only reads (the op's maker promises it: see
-    /// [`Op::launch`]).
-    pub fn read<T: Element>(&mut self, buffer: &Buffer<T>) -> DevSlice<T> {
-        self.reading(|b| b.view(buffer))
-    }
-
-    /// What `views` returns, every view it makes with this binder read only (a group the
-    /// kernel only reads: `b.reading(|b| group.convert(b))`).
-    pub fn reading<R>(&mut self, views: impl FnOnce(&mut Binder) -> R) -> R {
-        self.writing(&[], views)
-    }
-
-    /// What `views` returns, every view it makes with this binder read only but those of
-    /// the buffers named in `written` (by [`Buffer::named`]: `Group.field` for a group's
-    /// arrays), which the kernel writes. Each name must be one of a buffer viewed there.
-    pub fn writing<R>(
+    pub fn view_prefix<T: Element, A: Access>(
         &mut self,
-        written: &[&'static str],
-        views: impl FnOnce(&mut Binder) -> R,
-    ) -> R {
-        let mode = Mode {
-            reading: true,
-            written: written.to_vec(),
-            ignored: self.mode.ignored.clone(),
-        };
-        self.within(mode, written, views)
-    }
-
-    /// What `views` returns, the kernel using none of the views it makes with this binder
-    /// of the buffers named in `ignored` (a group's arrays that the kernel leaves alone).
-    /// Each name must be one of a buffer viewed there.
-    pub fn ignoring<R>(
-        &mut self,
-        ignored: &[&'static str],
-        views: impl FnOnce(&mut Binder) -> R,
-    ) -> R {
-        let mut mode = self.mode.clone();
-        mode.ignored.extend_from_slice(ignored);
-        self.within(mode, ignored, views)
-    }
-
-    /// `views` made in `mode`; notes the `names` no view had.
-    fn within<R>(
-        &mut self,
-        mode: Mode,
-        names: &[&'static str],
-        views: impl FnOnce(&mut Binder) -> R,
-    ) -> R {
-        let before = self.touches.len();
-        let was = std::mem::replace(&mut self.mode, mode);
-        let made = views(self);
-        self.mode = was;
-        let viewed = &self.touches[before..];
-        let missing = names
-            .iter()
-            .filter(|n| !viewed.iter().any(|t| t.name == **n));
-        self.unmatched.extend(missing);
-        made
-    }
-
-    fn bind<T: Element>(&mut self, buffer: &Buffer<T>, len: u32) -> DevSlice<T> {
+        buffer: &Buffer<T>,
+        len: u32,
+    ) -> DevSlice<T, A> {
         let device = *self.device.get_or_insert(buffer.device());
         if buffer.device() != device {
             self.foreign = Some(buffer.device());
         }
-        let name = buffer.name();
-        let access = match &self.mode {
-            m if m.ignored.contains(&name) => Access::None,
-            m if m.reading && !m.written.contains(&name) => Access::Read,
-            _ => Access::Write,
-        };
+        if A::USE == Use::Unused {
+            return DevSlice::EMPTY;
+        }
         self.touches.push(Touch {
             key: buffer.key(),
-            access,
-            name,
+            access: A::USE,
+            name: buffer.name(),
         });
         self.holds.push(buffer.hold());
         // SAFETY: the view goes only into this binder's ops (`new`'s contract), which hold
@@ -208,25 +129,22 @@ impl Binder {
 
 impl Convert<Buffers, View> for Binder {
     type Error = std::convert::Infallible;
-    fn array<T: Element>(
+    fn array<T: Element, In: Access, Out: Access>(
         &mut self,
         _: &'static str,
         array: &Buffer<T>,
-    ) -> Result<DevSlice<T>, Self::Error> {
+    ) -> Result<DevSlice<T, Out>, Self::Error> {
         Ok(self.view(array))
     }
 }
 
-/// Where an op's buffers are, and whether its binder's declarations held: checked when a
-/// plan is made.
+/// Where an op's buffers are: checked when a plan is made.
 #[derive(Clone, Debug)]
 struct Home {
     /// The device of its first view (none if it views nothing).
     device: Option<DeviceId>,
     /// Another device, if a view was of another's buffer.
     foreign: Option<DeviceId>,
-    /// Names declared written or ignored that no view had.
-    unmatched: Arc<[&'static str]>,
 }
 
 /// What an [`Op`] does.
@@ -265,7 +183,6 @@ fn bound(binder: Binder) -> (Arc<[Hold]>, Arc<[Touch]>, Home) {
     let home = Home {
         device: binder.device,
         foreign: binder.foreign,
-        unmatched: binder.unmatched.into(),
     };
     (binder.holds.into(), binder.touches.into(), home)
 }
@@ -279,7 +196,6 @@ impl Op {
     /// device: a plan of another device refuses the op), or views memory of the device that
     /// will run the op that no buffer owns (an OpenGL buffer mapped for CUDA) and that stays
     /// valid, untouched by the host and by the ops beside it, for every run of the op;
-    /// the kernel writes none of the views `binder` made read only ([`Binder::read`]);
     /// their sizes, and which of them may be the same buffer, are
     /// those the kernel's documentation asks for (its promise that no two threads write
     /// one element holds only then; its bounds checks turn a wrong size into
@@ -305,7 +221,7 @@ impl Op {
     /// Zeroes every element of `view`.
     ///
     /// # Safety
-    /// `view` was made by `binder`, not read only.
+    /// `view` was made by `binder`.
     pub unsafe fn clear<T: Element>(view: DevSlice<T>, binder: Binder) -> Op {
         let (holds, touches, home) = bound(binder);
         Op {
@@ -329,7 +245,7 @@ impl Op {
     /// branch), so that it costs the step nothing while they run longer; on the CPU in
     /// order, or on a thread of its own under [`super::Schedule::Shuffled`]. Making the
     /// plan checks that it reads nothing that those ops write, and writes nothing that they
-    /// read or write (by its binder's views and theirs, see [`Access`]).
+    /// read or write (by the access of its binder's views and theirs: their kernels' types).
     pub fn beside(self) -> Op {
         Op {
             beside: true,
@@ -365,12 +281,6 @@ impl Op {
 
     /// `Ok` if every buffer the op views is of device `on`.
     fn check_home(&self, on: DeviceId) -> Result<(), Error> {
-        if let Some(name) = self.home.unmatched.first() {
-            return Err(Error::Invalid(format!(
-                "op `{}` declares how it uses `{name}`, which it does not view",
-                self.name
-            )));
-        }
         let what = format!("op `{}`, made with a buffer", self.name);
         match self.home {
             Home {
@@ -392,8 +302,7 @@ impl Op {
     fn check_beside(&self, other: &Op) -> Result<(), Error> {
         for mine in self.touches.iter() {
             for theirs in other.touches.iter().filter(|t| t.key == mine.key) {
-                let used = mine.access != Access::None && theirs.access != Access::None;
-                if used && (mine.access == Access::Write || theirs.access == Access::Write) {
+                if mine.access == Use::Write || theirs.access == Use::Write {
                     return Err(Error::Invalid(format!(
                         "op `{}` runs beside op `{}` (after it in the plan, before the \
                          branches join) and {mine}, which `{}` {}: one of them must wait \
@@ -401,10 +310,7 @@ impl Op {
                         self.name,
                         other.name,
                         other.name,
-                        match theirs.access {
-                            Access::Write => "writes",
-                            _ => "reads",
-                        }
+                        verb(theirs.access)
                     )));
                 }
             }

@@ -7,7 +7,9 @@ use std::path::Path;
 
 use gpuwars_kernels::render::camera::{self, CameraArgs, CameraState, Lens};
 use gpuwars_kernels::render::particles::{ParticleSplatArgs, ParticleVertexArgs};
-use gpuwars_kernels::render::radar::{self, RadarArgs, RadarBox, RadarCounts, RadarImageArgs};
+use gpuwars_kernels::render::radar::{
+    self, RadarArgs, RadarBox, RadarCounts, RadarCountsAccess, RadarImageArgs,
+};
 use gpuwars_kernels::render::{
     self, BodyVertex, FirstSplatArgs, LARGE_LANES, Look, NO_SHIP, ResolveArgs, Shown, SplatArgs,
     VertexArgs,
@@ -29,7 +31,7 @@ gpuwars_kernels::device_data! {
     /// The kernel renderer's device buffers that outlive a frame's size: the looks, the
     /// camera between frames, the frame's [`Shown`], the radar's counts and image, and the
     /// bodies too large for one thread.
-    pub struct CanvasData(kinds, slots) {
+    pub struct CanvasData(kinds, slots): CanvasDataAccess {
         /// Each kind's look.
         looks: [Look; kinds],
         /// The camera between frames, and after the frame being drawn (see
@@ -46,13 +48,13 @@ gpuwars_kernels::device_data! {
         large_count: [u32; 1],
     } nested {
         /// The radar's per-pixel counts.
-        radar: RadarCounts(RADAR_CELLS),
+        radar: RadarCounts(RADAR_CELLS): RadarCountsAccess,
     }
 }
 
 gpuwars_kernels::device_data! {
     /// A frame's pixels, made again when its size changes.
-    pub struct FramePixels(pixels) {
+    pub struct FramePixels(pixels): FramePixelsAccess {
         /// Each pixel's depth key of the splats.
         keys: [u32; pixels],
         /// The frame's colours.

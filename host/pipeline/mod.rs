@@ -30,7 +30,6 @@
 //! step's plans, whose ops hold the buffers they view. Each stage's ops are made in its own
 //! file under `stages/`.
 
-mod access;
 pub mod draw;
 mod handmade;
 mod profile;

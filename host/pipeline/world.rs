@@ -6,11 +6,12 @@
 //! kind's for every kind) and never replaced, which is what each stage's `SAFETY` note
 //! relies on.
 
+use gpuwars_kernels::access::Access;
 use gpuwars_kernels::data::{Sizes, Unmade};
 use gpuwars_kernels::game::GameData;
 use gpuwars_kernels::game::control::{Mailbox, Order, Status};
 use gpuwars_kernels::game::effects::{Burst, Particles};
-use gpuwars_kernels::game::master::{BirthArgs, MasterArgs};
+use gpuwars_kernels::game::master::{BirthArgs, MasterArgs, TallyArgs};
 use gpuwars_kernels::registry;
 use gpuwars_kernels::sim::broad::CellIndex;
 use gpuwars_kernels::sim::free_list;
@@ -139,7 +140,7 @@ impl TeamWarps {
     }
 
     /// The view of `table`, made by `b`; empty where there is none.
-    pub fn view(b: &mut Binder, table: &Option<Buffer<u32>>) -> DevSlice<u32> {
+    pub fn view<A: Access>(b: &mut Binder, table: &Option<Buffer<u32>>) -> DevSlice<u32, A> {
         table
             .as_ref()
             .map_or(DevSlice::EMPTY, |table| b.view(table))
@@ -373,7 +374,7 @@ impl World {
         }
     }
 
-    /// The master's and the tally's arguments, made by `b`, in games.
+    /// The master's arguments, made by `b`, in games.
     pub fn master_args(&self, b: &mut Binder) -> Option<MasterArgs> {
         let game = self.game.as_ref()?;
         let data = &game.data;
@@ -394,6 +395,26 @@ impl World {
             deaths: b.view(&data.deaths),
             waves: b.view(&data.waves),
             space: self.space,
+            rules: game.config.rules,
+            reserved: 0,
+        })
+    }
+
+    /// The tally's arguments, made by `b`, in games.
+    pub fn tally_args(&self, b: &mut Binder) -> Option<TallyArgs> {
+        let game = self.game.as_ref()?;
+        let data = &game.data;
+        Some(TallyArgs {
+            bodies: self.state.bodies(b),
+            kinds: b.view(&self.state.tables.info),
+            ranges: b.view(&self.state.tables.ranges),
+            contacts: self.scratch.contacts(b),
+            status: b.view(&data.status),
+            mailbox: self.mailbox(b)?,
+            spawned: b.view(&data.spawned),
+            births: b.view(&data.births),
+            free_before: b.view(&data.free_before),
+            deaths: b.view(&data.deaths),
             rules: game.config.rules,
             reserved: 0,
         })

@@ -7,14 +7,15 @@ use std::convert::Infallible;
 
 use glam::Vec2;
 use gpuwars_kernels::DevSlice;
-use gpuwars_kernels::data::{Build, Sizes, Unmade};
+use gpuwars_kernels::access::{Access, Write};
+use gpuwars_kernels::data::{Build, Sizes, Unmade, View};
 use gpuwars_kernels::registry;
 use gpuwars_kernels::rng::Mt607Params;
 use gpuwars_kernels::rng::streams::SeedArgs;
 use gpuwars_kernels::sim::broad::{CellIndex, Grid};
-use gpuwars_kernels::sim::free_list::{FreeMarks, FreeSlots};
+use gpuwars_kernels::sim::free_list::{FreeMarks, FreeSlots, FreeSlotsAccess};
 use gpuwars_kernels::sim::renumber::Moved;
-use gpuwars_kernels::sim::{Bodies, Contacts, KindTables, Space};
+use gpuwars_kernels::sim::{Bodies, BodiesAccess, Contacts, ContactsAccess, KindTables, Space};
 
 use super::layout::{self, Layout};
 use super::rng;
@@ -96,10 +97,10 @@ pub fn bytes_needed(
     if renumbers {
         made(Moved::<Unmade>::build(s, slots, traced));
     }
-    made(s.array::<u32>("seeds", slots));
-    made(s.array::<Mt607Params>("table", rng::TABLE.len()));
-    made(s.array::<u32>("grid scan", PrefixSum::scratch_len(buckets)));
-    made(s.array::<u32>("free scan", PrefixSum::scratch_len(tiles)));
+    made(s.array::<u32, Write>("seeds", slots));
+    made(s.array::<Mt607Params, Write>("table", rng::TABLE.len()));
+    made(s.array::<u32, Write>("grid scan", PrefixSum::scratch_len(buckets)));
+    made(s.array::<u32, Write>("free scan", PrefixSum::scratch_len(tiles)));
     sizes.bytes
 }
 
@@ -153,13 +154,13 @@ impl WorldState {
         Ok(state)
     }
 
-    /// The bodies as kernels take them, made by `b`.
-    pub fn bodies(&self, b: &mut Binder) -> Bodies {
+    /// The bodies as kernels take them, of the access `M` declares, made by `b`.
+    pub fn bodies<M: BodiesAccess>(&self, b: &mut Binder) -> Bodies<View, M> {
         made(self.bodies.convert(b))
     }
 
-    /// The free lists as kernels take them, made by `b`.
-    pub fn free(&self, b: &mut Binder) -> FreeSlots {
+    /// The free lists as kernels take them, of the access `M` declares, made by `b`.
+    pub fn free<M: FreeSlotsAccess>(&self, b: &mut Binder) -> FreeSlots<View, M> {
         made(self.free.convert(b))
     }
 
@@ -243,8 +244,8 @@ impl Scratch {
         })
     }
 
-    /// The contacts as kernels take them, made by `b`.
-    pub fn contacts(&self, b: &mut Binder) -> Contacts {
+    /// The contacts as kernels take them, of the access `M` declares, made by `b`.
+    pub fn contacts<M: ContactsAccess>(&self, b: &mut Binder) -> Contacts<View, M> {
         made(self.contacts.convert(b))
     }
 
@@ -267,7 +268,7 @@ impl Scratch {
 
     /// The grid entries' velocities if `moving` (the world keeps them), else none, made
     /// by `b`.
-    pub fn entry_velocities(&self, b: &mut Binder, moving: bool) -> DevSlice<Vec2> {
+    pub fn entry_velocities<A: Access>(&self, b: &mut Binder, moving: bool) -> DevSlice<Vec2, A> {
         match moving {
             true => b.view(&self.grid.vel),
             false => DevSlice::EMPTY,

@@ -16,6 +16,8 @@
 use core::marker::PhantomData;
 use core::sync::atomic::{AtomicU32, Ordering};
 
+use crate::access::{Access, Readable, Unused, Within, Write};
+
 /// Coordinates of the calling thread inside a one-dimensional launch.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Thread {
@@ -216,28 +218,32 @@ pub struct KernelInfo {
     pub reads_before_waiting: bool,
 }
 
-/// A bounds-checked view of `len` elements of device memory (host memory under the emulator).
+/// A bounds-checked view of `len` elements of device memory (host memory under the emulator),
+/// which a kernel uses as its access `A` allows ([`Write`], the default, [`Read`](crate::access::Read) or
+/// [`Unused`]: see [`mod@crate::access`]).
 ///
-/// `#[repr(C)]`, 16 bytes: the address and the length travel inside kernel argument structs.
+/// `#[repr(C)]`, 16 bytes whatever the access: the address and the length travel inside
+/// kernel argument structs.
 #[repr(C)]
-pub struct DevSlice<T> {
+pub struct DevSlice<T, A = Write> {
     addr: u64,
     len: u32,
     _reserved: u32,
-    _element: PhantomData<T>,
+    _element: PhantomData<(T, A)>,
 }
 
-impl<T> Clone for DevSlice<T> {
+impl<T, A> Clone for DevSlice<T, A> {
     fn clone(&self) -> Self {
         *self
     }
 }
-impl<T> Copy for DevSlice<T> {}
+impl<T, A> Copy for DevSlice<T, A> {}
 
 // SAFETY: `repr(C)`: a u64, two u32 and a zero-sized marker, 16 bytes with no padding
 // (checked below); every field is plain data.
-unsafe impl<T: 'static> bytemuck::NoUninit for DevSlice<T> {}
+unsafe impl<T: 'static, A: Access> bytemuck::NoUninit for DevSlice<T, A> {}
 const _: () = assert!(size_of::<DevSlice<u8>>() == 16);
+const _: () = assert!(size_of::<DevSlice<u8, Unused>>() == 16);
 
 /// Runs [`DevSlice::fold_runs`] reads at a time: four runs of four words are 16 loads in
 /// flight a thread.
@@ -245,20 +251,21 @@ pub const RUNS_IN_FLIGHT: usize = 4;
 
 // SAFETY: a `DevSlice` is an address and a length; the data races it could allow are excluded
 // by each kernel's contract (disjoint writes, atomics for shared counters), stated at launch.
-unsafe impl<T: Send> Send for DevSlice<T> {}
+unsafe impl<T: Send, A: Access> Send for DevSlice<T, A> {}
 // SAFETY: as above.
-unsafe impl<T: Sync> Sync for DevSlice<T> {}
+unsafe impl<T: Sync, A: Access> Sync for DevSlice<T, A> {}
 
-impl<T> core::fmt::Debug for DevSlice<T> {
+impl<T, A: Access> core::fmt::Debug for DevSlice<T, A> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("DevSlice")
             .field("addr", &self.addr)
             .field("len", &self.len)
+            .field("use", &A::USE)
             .finish()
     }
 }
 
-impl<T: Copy> DevSlice<T> {
+impl<T: Copy, A: Access> DevSlice<T, A> {
     /// A view of `len` elements starting at device address `addr`.
     ///
     /// # Safety
@@ -288,6 +295,19 @@ impl<T: Copy> DevSlice<T> {
         self.addr
     }
 
+    /// The same elements, of an access that allows no more than this one's.
+    #[inline(always)]
+    pub fn restrict<B: Within<A>>(self) -> DevSlice<T, B> {
+        DevSlice {
+            addr: self.addr,
+            len: self.len,
+            _reserved: 0,
+            _element: PhantomData,
+        }
+    }
+}
+
+impl<T: Copy, A: Readable> DevSlice<T, A> {
     /// Number of elements in view.
     #[inline(always)]
     pub fn len(&self) -> u32 {
@@ -331,18 +351,6 @@ impl<T: Copy> DevSlice<T> {
     {
         // SAFETY: in bounds (checked), and valid per `from_raw_parts`.
         unsafe { memory::load(self.ptr(index)) }
-    }
-
-    /// Writes element `index`; traps (GPU) or panics (CPU) when it is out of bounds.
-    #[inline(always)]
-    pub fn set(&self, index: u32, value: T)
-    where
-        T: bytemuck::Pod,
-    {
-        // SAFETY: in bounds (checked), and valid per `from_raw_parts`; the kernel's contract
-        // gives each element at most one writing thread per launch (and a breach of it is a
-        // race of relaxed atomics on the CPU, see `memory`).
-        unsafe { memory::store(self.ptr(index), value) }
     }
 
     /// Pointer to `N` elements from `start`, after one bounds check for all of them.
@@ -390,12 +398,12 @@ impl<T: Copy> DevSlice<T> {
     /// element is read and folded again, and the result dropped, so `f` must be a function
     /// of its arguments alone. `stride` must not be zero.
     #[inline(always)]
-    pub fn fold_every<A: Copy>(
+    pub fn fold_every<Acc: Copy>(
         &self,
         (first, end, stride): (u32, u32, u32),
-        init: A,
-        f: impl Fn(A, T) -> A,
-    ) -> A
+        init: Acc,
+        f: impl Fn(Acc, T) -> Acc,
+    ) -> Acc
     where
         T: bytemuck::Pod,
     {
@@ -458,12 +466,12 @@ impl<T: Copy> DevSlice<T> {
     /// and folded again, and the result dropped, so `f` must be a function of its arguments
     /// alone.
     #[inline(always)]
-    pub fn fold_runs<const N: usize, A: Copy>(
+    pub fn fold_runs<const N: usize, Acc: Copy>(
         &self,
         (first, end, stride): (u32, u32, u32),
-        init: A,
-        f: impl Fn(A, [T; N]) -> A,
-    ) -> A
+        init: Acc,
+        f: impl Fn(Acc, [T; N]) -> Acc,
+    ) -> Acc
     where
         T: bytemuck::Pod,
     {
@@ -495,6 +503,20 @@ impl<T: Copy> DevSlice<T> {
             i += RUNS_IN_FLIGHT as u64 * stride;
         }
         acc
+    }
+}
+
+impl<T: Copy> DevSlice<T, Write> {
+    /// Writes element `index`; traps (GPU) or panics (CPU) when it is out of bounds.
+    #[inline(always)]
+    pub fn set(&self, index: u32, value: T)
+    where
+        T: bytemuck::Pod,
+    {
+        // SAFETY: in bounds (checked), and valid per `from_raw_parts`; the kernel's contract
+        // gives each element at most one writing thread per launch (and a breach of it is a
+        // race of relaxed atomics on the CPU, see `memory`).
+        unsafe { memory::store(self.ptr(index), value) }
     }
 }
 

@@ -16,6 +16,7 @@
 )]
 #![warn(missing_docs)]
 
+pub mod access;
 pub mod data;
 pub mod elementary;
 pub mod exec;

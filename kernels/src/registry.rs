@@ -134,7 +134,7 @@ kernels! {
     /// Explosions: kills burst into particles, the others move and fade.
     BURST_AND_FADE = burst_and_fade(effects::EffectsArgs) => effects::burst_and_fade;
     /// The master after the physics: score, counts, FPS meter, game over (one warp).
-    TALLY = tally(master::MasterArgs) => master::tally;
+    TALLY = tally(master::TallyArgs) => master::tally;
     /// Brings the enemies the master thread ordered to life at random places.
     BIRTHS = births(master::BirthArgs) => master::births;
     /// Brings the enemies the master thread ordered to life at random places, and counts

@@ -4,6 +4,7 @@
 //! every small case.
 
 use gpuwars_kernels::DevSlice;
+use gpuwars_kernels::access::Read;
 
 /// An order-sensitive fold: any element missed, repeated or out of place changes it.
 fn mix(acc: u64, value: u32) -> u64 {
@@ -16,7 +17,7 @@ fn folds_every_strided_element_in_order_once() {
     for len in 0u32..14 {
         let data: Vec<u32> = (0..len).map(|i| i * 7 + 3).collect();
         // SAFETY: `data` outlives every use of the view, and nothing writes it meanwhile.
-        let view = unsafe { DevSlice::from_raw_parts(data.as_ptr() as u64, len) };
+        let view = unsafe { DevSlice::<u32, Read>::from_raw_parts(data.as_ptr() as u64, len) };
         for end in 0..=len {
             for first in 0..end + 2 {
                 for stride in 1..6 {
@@ -43,7 +44,7 @@ fn folds_every_strided_run_in_order_once() {
     for len in (0u32..=160).step_by(N as usize) {
         let data: Vec<u32> = (0..len).map(|i| i * 7 + 3).collect();
         // SAFETY: `data` outlives every use of the view, and nothing writes it meanwhile.
-        let view = unsafe { DevSlice::from_raw_parts(data.as_ptr() as u64, len) };
+        let view = unsafe { DevSlice::<u32, Read>::from_raw_parts(data.as_ptr() as u64, len) };
         for end in (0..=len).step_by(N as usize) {
             for first in (0..end + 2 * N).step_by(N as usize) {
                 for stride in (N..=3 * N).step_by(N as usize) {
@@ -68,7 +69,7 @@ fn folds_every_strided_run_in_order_once() {
 fn refuses_runs_that_are_not_multiples_of_their_length() {
     let data: Vec<u32> = vec![1, 2, 0xdead_beef, 0xcafe_f00d];
     // SAFETY: `data` outlives every use of the view, and nothing writes it meanwhile.
-    let view = unsafe { DevSlice::from_raw_parts(data.as_ptr() as u64, 2) };
+    let view = unsafe { DevSlice::<u32, Read>::from_raw_parts(data.as_ptr() as u64, 2) };
     for walk in [(0, 2, 4), (0, 4, 4), (2, 4, 4), (0, 4, 2)] {
         let read = std::panic::catch_unwind(|| {
             view.fold_runs::<4, _>(walk, 17u64, |acc, run: [u32; 4]| {

@@ -8,6 +8,7 @@
 
 use glam::Vec2;
 use gpuwars_kernels::DevSlice;
+use gpuwars_kernels::access::Access;
 use gpuwars_kernels::sim::Space;
 use gpuwars_kernels::sim::broad::{CellIndex, Near, Sample, kinds_mask};
 use gpuwars_kernels::warp::{Handed, Team};
@@ -50,7 +51,7 @@ impl Taken {
 }
 
 /// A view of `data` for the test's lifetime.
-fn view<T: Copy>(data: &[T]) -> DevSlice<T> {
+fn view<T: Copy, A: Access>(data: &[T]) -> DevSlice<T, A> {
     // SAFETY: every vector viewed outlives its views (they live in the same test), and
     // nothing writes them while they are read.
     unsafe { DevSlice::from_raw_parts(data.as_ptr() as u64, data.len() as u32) }

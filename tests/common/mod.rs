@@ -120,7 +120,7 @@ pub fn histogram_op(
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
     let args = HistogramArgs {
-        keys: b.read(keys),
+        keys: b.view(keys),
         counts: b.view(counts),
         n,
         reserved: 0,

@@ -401,7 +401,7 @@ fn group_rows(
     let mut frame_rates = match measure.frames {
         Some(timing) => {
             let mut framed: Vec<(&mut Game, f64)> = games.into_iter().map(|g| (g, 0.0)).collect();
-            let rates = interleaved(
+            interleaved(
                 &mut framed,
                 sizes.speed,
                 |(game, banked)| {
@@ -409,8 +409,7 @@ fn group_rows(
                     Ok(1)
                 },
                 || {},
-            )?;
-            rates
+            )?
         }
         None => Vec::new(),
     }

@@ -6,7 +6,6 @@ use gpuwars_kernels::registry;
 
 use crate::Op;
 use crate::backend::Binder;
-use crate::pipeline::access;
 use crate::pipeline::world::World;
 use crate::primitives::threads;
 use crate::sim::state::made;
@@ -21,15 +20,13 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     };
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
-    let args = b.writing(access::EFFECTS, |b| {
-        b.ignoring(access::FROZEN_UNREAD, |b| EffectsArgs {
-            bodies: world.state.bodies(b),
-            brains: b.view(&game.data.brains),
-            deaths: b.view(&game.data.slot_deaths),
-            particles: made(particles.convert(b)),
-            burst: *burst,
-        })
-    });
+    let args = EffectsArgs {
+        bodies: world.state.bodies(&mut b),
+        brains: b.view(&game.data.brains),
+        deaths: b.view(&game.data.slot_deaths),
+        particles: made(particles.convert(&mut b)),
+        burst: *burst,
+    };
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
     let op = unsafe {
         threads(

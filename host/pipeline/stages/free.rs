@@ -8,7 +8,6 @@ use gpuwars_kernels::sim::free_list::{Changes, FreeMarks, GatherArgs, MarkArgs, 
 
 use crate::Op;
 use crate::backend::Binder;
-use crate::pipeline::access;
 use crate::pipeline::world::World;
 use crate::primitives::{LIGHT_BLOCK, threads, threads_in};
 
@@ -35,14 +34,14 @@ pub(in crate::pipeline) fn ops(world: &World, tracked: bool) -> Vec<Op> {
     if world.config.free_in_one_launch {
         // SAFETY: the views go into the op made with the binder.
         let mut b = unsafe { Binder::new() };
-        let args = declared(&mut b, access::MARK_AND_GATHER_FREE, |b| MarkGatherArgs {
-            bodies: state.bodies(b),
+        let args = MarkGatherArgs {
+            bodies: state.bodies(&mut b),
             ranges: b.view(&state.tables.ranges),
             flags: b.view(&marks.flags),
             list: b.view(&state.free.list),
             count: b.view(&state.free.count),
-            changes: changes(b),
-        });
+            changes: changes(&mut b),
+        };
         // SAFETY: the world's buffers, sized as the kernel asks (see `World`); the config
         // holds it only where every range is small enough.
         let op = unsafe {
@@ -62,13 +61,13 @@ pub(in crate::pipeline) fn ops(world: &World, tracked: bool) -> Vec<Op> {
     if !marked {
         // SAFETY: the views go into the op made with the binder.
         let mut b = unsafe { Binder::new() };
-        let mark = declared(&mut b, access::MARK_FREE, |b| MarkArgs {
-            bodies: state.bodies(b),
+        let mark = MarkArgs {
+            bodies: state.bodies(&mut b),
             ranges: b.view(&state.tables.ranges),
             flags: b.view(&marks.flags),
             tiles: b.view(&marks.tiles),
-            changes: changes(b),
-        });
+            changes: changes(&mut b),
+        };
         // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
         ops.push(unsafe {
             threads_in(
@@ -98,15 +97,15 @@ pub(in crate::pipeline) fn ops(world: &World, tracked: bool) -> Vec<Op> {
     );
     // SAFETY: the views go into the op made with the binder.
     let mut b = unsafe { Binder::new() };
-    let gather = b.writing(access::GATHER_FREE, |b| GatherArgs {
+    let gather = GatherArgs {
         kind: b.view(&state.bodies.kind),
         ranges: b.view(&state.tables.ranges),
         flags: b.view(&marks.flags),
         offsets: b.view(&marks.offsets),
         list: b.view(&state.free.list),
         count: b.view(&state.free.count),
-        changes: changes(b),
-    });
+        changes: changes(&mut b),
+    };
     // SAFETY: as above.
     ops.push(unsafe {
         threads_in(
@@ -119,14 +118,4 @@ pub(in crate::pipeline) fn ops(world: &World, tracked: bool) -> Vec<Op> {
         )
     });
     ops
-}
-
-/// The views `views` makes with `b`, writing only the buffers named in `written`, and
-/// leaving the bodies' frozen flag alone (the tally beside the free lists writes it).
-fn declared<R>(
-    b: &mut Binder,
-    written: &[&'static str],
-    views: impl FnOnce(&mut Binder) -> R,
-) -> R {
-    b.writing(written, |b| b.ignoring(access::FROZEN_UNREAD, views))
 }

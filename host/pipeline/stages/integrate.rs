@@ -6,7 +6,6 @@ use gpuwars_kernels::sim::integrate::IntegrateArgs;
 
 use crate::Op;
 use crate::backend::Binder;
-use crate::pipeline::access;
 use crate::pipeline::world::World;
 use crate::primitives::threads;
 
@@ -23,20 +22,15 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32, marking: bool) -> Ve
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
     let marks = marking && substep == 0 && world.config.marks_in_integrate;
-    let lists: &[&[&str]] = match marks {
-        true => &[access::INTEGRATE, access::MARKS],
-        false => &[access::INTEGRATE],
-    };
-    let written = access::with_deaths(world.game.is_some(), lists);
-    let args = b.writing(&written, |b| IntegrateArgs {
-        bodies: world.state.bodies(b),
+    let args = IntegrateArgs {
+        bodies: world.state.bodies(&mut b),
         kinds: b.view(&world.state.tables.info),
-        contacts: world.scratch.contacts(b),
+        contacts: world.scratch.contacts(&mut b),
         space: world.space,
         field: spec.field,
         dt: step_dt(world),
         integrator: physics.integrator.code(),
-        deaths: world.deaths(b),
+        deaths: world.deaths(&mut b),
         substep,
         from_the_end: u32::from(substep == 0 && world.config.integrate_from_the_end),
         marks: match marks {
@@ -51,7 +45,7 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32, marking: bool) -> Ve
             }
             false => Marks::NONE,
         },
-    });
+    };
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
     let op = unsafe {
         threads(

@@ -1,8 +1,7 @@
 //! `master`: the master before the physics: the step's input (the player's, or the one the
 //! autopilot left), ship, shots, score, spawns ordered; one launch of one warp.
 
-use gpuwars_kernels::game::master::MasterArgs;
-use gpuwars_kernels::{Kernel, registry, warp};
+use gpuwars_kernels::{Kernel, KernelArgs, registry, warp};
 
 use crate::Op;
 use crate::backend::Binder;
@@ -15,26 +14,18 @@ const BYTES: u64 = 128 * warp::WARP as u64;
 
 /// The master on one warp, in games.
 pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
-    on_one_warp(world, registry::MASTER, None)
+    on_one_warp(registry::MASTER, |b| world.master_args(b))
 }
 
-/// `kernel` (the master before or after the physics) on one warp with the master's
-/// arguments, in games; where `declared`, writing only the buffers it names first and
-/// leaving alone those it names second (see `Binder::writing`), else writing all.
-pub(super) fn on_one_warp(
-    world: &World,
-    kernel: Kernel<MasterArgs>,
-    declared: Option<(&[&'static str], &[&'static str])>,
+/// `kernel` (the master before or after the physics) on one warp with the arguments `args`
+/// makes, in games.
+pub(super) fn on_one_warp<A: KernelArgs>(
+    kernel: Kernel<A>,
+    args: impl FnOnce(&mut Binder) -> Option<A>,
 ) -> Vec<Op> {
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
-    let args = match declared {
-        Some((written, ignored)) => {
-            b.writing(written, |b| b.ignoring(ignored, |b| world.master_args(b)))
-        }
-        None => world.master_args(&mut b),
-    };
-    let Some(args) = args else {
+    let Some(args) = args(&mut b) else {
         return Vec::new();
     };
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).

@@ -4,7 +4,6 @@ use gpuwars_kernels::sim::narrow::{CollideArgs, Relaxation};
 
 use crate::Op;
 use crate::backend::Binder;
-use crate::pipeline::access;
 use crate::pipeline::world::{TeamWarps, World};
 use crate::primitives::{UNEVEN_BLOCK, threads_in};
 
@@ -20,18 +19,18 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
     }
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
-    let args = b.writing(access::NARROW, |b| CollideArgs {
-        bodies: world.state.bodies(b),
+    let args = CollideArgs {
+        bodies: world.state.bodies(&mut b),
         kinds: b.view(&world.state.tables.info),
-        warps: TeamWarps::view(b, &world.warps.narrow),
+        warps: TeamWarps::view(&mut b, &world.warps.narrow),
         teams: world.config.narrow_teams,
         space: world.space,
-        grid: world.cells(b),
-        contacts: world.scratch.contacts(b),
+        grid: world.cells(&mut b),
+        contacts: world.scratch.contacts(&mut b),
         relax: relaxation(world),
         substep,
         budget: world.spec.physics.contact_budget,
-    });
+    };
     let threads_needed = u32::try_from(args.teams.threads(&world.layout.ranges))
         .expect("at most 32 threads a slot of at most 2^24 slots");
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).

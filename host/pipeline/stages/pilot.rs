@@ -6,7 +6,6 @@ use gpuwars_kernels::{DevSlice, registry, warp};
 
 use crate::Op;
 use crate::backend::Binder;
-use crate::pipeline::access;
 use crate::pipeline::world::World;
 use crate::primitives::threads;
 
@@ -20,8 +19,8 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     };
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
-    let args = b.writing(access::PILOT, |b| {
-        let grid = world.cells(b);
+    let args = {
+        let grid = world.cells(&mut b);
         AutopilotArgs {
             // Read only where the grid keeps no velocities of its own.
             vel: match grid.vel.is_empty() {
@@ -36,7 +35,7 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
             rules: game.config.rules,
             reserved: 0,
         }
-    });
+    };
     // SAFETY: the world's buffers, sized as the kernel asks (see `World`).
     let op = unsafe {
         threads(

@@ -8,7 +8,6 @@ use super::integrate::{self, step_dt};
 use super::narrow::{self, relaxation};
 use crate::Op;
 use crate::backend::Binder;
-use crate::pipeline::access;
 use crate::pipeline::world::{TeamWarps, World};
 use crate::primitives::threads;
 
@@ -22,33 +21,31 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
     let slots = u64::from(teams.end_slot - teams.first_slot);
     // SAFETY: the views go into this op only.
     let mut b = unsafe { Binder::new() };
-    // In one launch the narrow phase, the machines and the integrator write theirs.
-    let written = match world.config.one_launch {
-        true => access::with_deaths(true, &[access::NARROW, access::THINK, access::INTEGRATE]),
-        false => access::with_deaths(true, &[access::THINK]),
-    };
-    let args = b.writing(&written, |b| ThinkArgs {
-        bodies: world.state.bodies(b),
+    let args = ThinkArgs {
+        bodies: world.state.bodies(&mut b),
         kinds: b.view(&world.state.tables.info),
         space: world.space,
-        grid: world.cells(b),
-        contacts: world.scratch.contacts(b),
+        grid: world.cells(&mut b),
+        contacts: world.scratch.contacts(&mut b),
         brains: b.view(&game.data.brains),
-        warps: TeamWarps::view(b, &world.warps.think),
+        warps: TeamWarps::view(&mut b, &world.warps.think),
         teams,
         status: b.view(&game.data.status),
         ship: game.config.rules.ship.start,
         shot_kind: game.config.rules.shot_kind,
         from_the_end: u32::from(world.config.think_from_the_end),
         reserved: 0,
-        deaths: world.deaths(b),
-    });
+        deaths: world.deaths(&mut b),
+    };
     let threads_needed = u32::try_from(teams.threads(&world.layout.ranges))
         .expect("at most 32 threads a slot of at most 2^24 slots");
     // SAFETY (each op below): the world's buffers, sized as the kernels ask (see `World`).
     let op = if world.config.one_launch {
+        // In one launch the narrow phase, the machines and the integrator write theirs.
         let args = BodyStepArgs {
             think: args,
+            bodies: world.state.bodies(&mut b),
+            contacts: world.scratch.contacts(&mut b),
             relax: relaxation(world),
             field: world.spec.field,
             dt: step_dt(world),

@@ -22,17 +22,20 @@ use glam::Vec2;
 use super::control::Status;
 use super::fsm::{Machine, Percept, State, next_state};
 use super::rules::Brain;
+use crate::access::{Read, Write};
+use crate::data::{Restrict, View};
 use crate::elementary;
 use crate::exec::{follow_previous_launch, unseen};
 use crate::math::{self, trunc_i32};
+use crate::rng::Drawing;
 use crate::sim::broad::{CellIndex, Near, Sample, kind_bit};
 use crate::sim::free_list::Marks;
 use crate::sim::integrate::{Field, IntegrateArgs, integrate_slot};
 use crate::sim::narrow::{CollideArgs, Relaxation, collide_slot};
 use crate::sim::teams::Teams;
-use crate::sim::{Bodies, Contacts, Deaths, KindInfo, SlotKind, Space};
+use crate::sim::{Bodies, BodiesAccess, Contacts, Deaths, KindInfo, SlotKind, Space};
 use crate::warp::{Handed, Team};
-use crate::{DevSlice, Thread, asked, kernel_args};
+use crate::{DevSlice, Thread, access, asked, kernel_args};
 
 /// Seconds a steering force takes to bring the velocity to the wanted one.
 pub const STEER_TIME: f32 = 0.25;
@@ -47,30 +50,50 @@ pub const WANDER_TURN: f32 = 0.2;
 /// Bodies of a group keep this many radii apart.
 pub const PERSONAL_SPACE_RADII: f32 = 3.0;
 
+access! {
+    /// What the machines do with the bodies: set their states, forces and energies, let
+    /// them die, and draw from their generators.
+    pub struct Thinking: BodiesAccess {
+        pos: Read, vel: Read, force: Write, dir: Read, kind: Read, energy: Write, mass: Read,
+        alive: Write, state: Write, age: Read, prev: Read, frozen: Read, rng: Drawing,
+    }
+}
+
+access! {
+    /// What a body's whole step in one launch does with the bodies: what the narrow phase
+    /// ([`Colliding`](crate::sim::narrow::Colliding)), the machines ([`Thinking`]) and the
+    /// integrator ([`Moving`](crate::sim::integrate::Moving)) do.
+    pub struct Stepping: BodiesAccess {
+        pos: Write, vel: Write, force: Write, dir: Write, kind: Read, energy: Write,
+        mass: Read, alive: Write, state: Write, age: Write, prev: Write, frozen: Read,
+        rng: Drawing,
+    }
+}
+
 kernel_args! {
     /// Arguments of [`think`].
     pub struct ThinkArgs {
         /// The bodies (force, state, energy and liveness of the enemies are written).
-        pub bodies: Bodies,
+        pub bodies: Bodies<View, Thinking>,
         /// Kind table.
-        pub kinds: DevSlice<KindInfo>,
+        pub kinds: DevSlice<KindInfo, Read>,
         /// The world and its grid.
         pub space: Space,
         /// This step's grid.
         pub grid: CellIndex,
         /// This step's narrow-phase results (the hits).
-        pub contacts: Contacts,
+        pub contacts: Contacts<View, Read>,
         /// Each kind's brain (machine 0 for kinds without one).
-        pub brains: DevSlice<Brain>,
+        pub brains: DevSlice<Brain, Read>,
         /// Each warp's first slot and team width ([`Teams::warp_table`]; empty where every
         /// body gets one thread).
-        pub warps: DevSlice<u32>,
+        pub warps: DevSlice<u32, Read>,
         /// How many threads each kind's bodies get, from the first kind with a machine to
         /// the last.
         pub teams: Teams,
         /// The game's state: where the ship is as this step's grid was built (its
         /// [`Status::ship`], one element).
-        pub status: DevSlice<Status>,
+        pub status: DevSlice<Status, Read>,
         /// The ship's slot.
         pub ship: u32,
         /// The kind of the ship's shots.
@@ -570,6 +593,12 @@ kernel_args! {
         /// keeps its machine's width, the others take their narrow phase's), and their grid
         /// keeps its entries' velocities ([`CellIndex::vel`]).
         pub think: ThinkArgs,
+        /// The bodies, as the whole step uses them (the narrow phase's and the integrator's
+        /// views of them are these, narrowed).
+        pub bodies: Bodies<View, Stepping>,
+        /// The contacts, which the narrow phase writes and the machines and the integrator
+        /// read.
+        pub contacts: Contacts,
         /// How the narrow phase combines a body's pushes.
         pub relax: Relaxation,
         /// The force field.
@@ -618,13 +647,13 @@ fn body_step<const SWEPT: bool>(t: Thread, args: &BodyStepArgs) {
         return;
     };
     let collide = CollideArgs {
-        bodies: think.bodies,
+        bodies: args.bodies.restrict(),
         kinds: think.kinds,
         warps: think.warps,
         teams: think.teams,
         space: think.space,
         grid: think.grid,
-        contacts: think.contacts,
+        contacts: args.contacts,
         relax: args.relax,
         substep: 0,
         budget: args.contact_budget,
@@ -633,9 +662,9 @@ fn body_step<const SWEPT: bool>(t: Thread, args: &BodyStepArgs) {
     think_slot::<true, true>(think, slot, team, Some(known));
     if team.leads() && slot < think.bodies.slots() {
         let integrate = IntegrateArgs {
-            bodies: think.bodies,
+            bodies: args.bodies.restrict(),
             kinds: think.kinds,
-            contacts: think.contacts,
+            contacts: args.contacts.restrict(),
             space: think.space,
             field: args.field,
             dt: args.dt,

@@ -15,6 +15,7 @@ use glam::Vec2;
 
 use super::control::Input;
 use super::rules::Rules;
+use crate::access::Read;
 use crate::math;
 use crate::sim::broad::{CellIndex, NO_BUCKET, Near, kind_bit};
 use crate::sim::{KindInfo, Space};
@@ -26,11 +27,11 @@ kernel_args! {
         /// The bodies' velocities, read where the grid keeps none of its entries' (see
         /// [`CellIndex::vel`]); nothing before the autopilot has changed them since the grid
         /// was built then.
-        pub vel: DevSlice<Vec2>,
+        pub vel: DevSlice<Vec2, Read>,
         /// Each slot's bucket in the grid (see `Grid::keys`): the ship's tells its entry.
-        pub keys: DevSlice<u32>,
+        pub keys: DevSlice<u32, Read>,
         /// Kind table (which kinds are enemies).
-        pub kinds: DevSlice<KindInfo>,
+        pub kinds: DevSlice<KindInfo, Read>,
         /// The world.
         pub space: Space,
         /// The step's grid (its first, in worlds with substeps).

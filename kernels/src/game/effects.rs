@@ -16,8 +16,10 @@ use core::f32::consts::TAU;
 use glam::Vec2;
 
 use super::rules::Brain;
-use crate::sim::Bodies;
-use crate::{DevSlice, Thread, device_data, kernel_args};
+use crate::access::{Read, Unused};
+use crate::data::View;
+use crate::sim::{Bodies, BodiesAccess};
+use crate::{DevSlice, Thread, access, device_data, kernel_args};
 
 /// Most particles one kill makes.
 pub const MAX_PER_KILL: u32 = 64;
@@ -26,7 +28,7 @@ pub const MAX_PARTICLES: u32 = 1 << 24;
 
 device_data! {
     /// The particles, structure of arrays, one element each.
-    pub struct Particles(count) {
+    pub struct Particles(count): ParticlesAccess {
         /// World position.
         pos: [Vec2; count],
         /// Velocity, in units per second.
@@ -85,15 +87,24 @@ impl Burst {
     }
 }
 
+access! {
+    /// What the explosions read of the bodies: where a kill was, how fast, and of what kind.
+    pub struct Bursting: BodiesAccess {
+        pos: Read, vel: Read, force: Unused, dir: Unused, kind: Read, energy: Unused,
+        mass: Unused, alive: Unused, state: Unused, age: Unused, prev: Unused, frozen: Unused,
+        rng: Unused,
+    }
+}
+
 kernel_args! {
     /// Arguments of [`burst_and_fade`].
     pub struct EffectsArgs {
         /// The bodies (read only).
-        pub bodies: Bodies,
+        pub bodies: Bodies<View, Bursting>,
         /// Each kind's brain: only kinds with a machine burst.
-        pub brains: DevSlice<Brain>,
+        pub brains: DevSlice<Brain, Read>,
         /// Each slot's deaths so far (see [`Deaths::per_slot`](crate::sim::Deaths)).
-        pub deaths: DevSlice<u32>,
+        pub deaths: DevSlice<u32, Read>,
         /// The particles: born, moved and aged.
         pub particles: Particles,
         /// How kills burst.

@@ -21,12 +21,14 @@ use glam::Vec2;
 
 use super::control::{DESTROYED, Events, Input, Mailbox, PLAYING, Status, TOO_SLOW};
 use super::rules::{Rules, Wave};
+use crate::access::{Read, Unused, Write};
+use crate::data::View;
 use crate::exec::follow_previous_launch;
 use crate::sim::broad::{CountArgs, count_slot};
 use crate::sim::free_list::{FREE, FreeSlots, free_rank};
 use crate::sim::scatter::{Place, birth, random_place};
-use crate::sim::{Bodies, Contacts, KindInfo, SlotRange, Space};
-use crate::{DevSlice, Thread, asked, kernel_args, warp};
+use crate::sim::{Bodies, BodiesAccess, Contacts, KindInfo, SlotRange, Space};
+use crate::{DevSlice, Thread, access, asked, kernel_args, warp};
 
 kernel_args! {
     /// Arguments of [`master`].
@@ -284,7 +286,7 @@ fn spawns(args: &MasterArgs, (kind, free): (u32, u32), step: u32) -> Spawns {
 /// 4. the status is posted to the host through the mailbox, every step (after game over,
 ///    the last one again).
 #[inline(always)]
-pub fn tally(t: Thread, args: &MasterArgs) {
+pub fn tally(t: Thread, args: &TallyArgs) {
     let lane = t.lane();
     // Only lane 0 writes.
     if t.global() >= warp::WARP || warp::is_copy_of_lane0(lane) {
@@ -376,6 +378,50 @@ pub fn tally(t: Thread, args: &MasterArgs) {
     args.mailbox.post(st);
     if st.is_over() {
         b.frozen.set(0, 1);
+    }
+}
+
+access! {
+    /// What the tally does with the bodies: reads the ship's place, energy and liveness,
+    /// and freezes the world when the game ends.
+    pub struct Tallying: BodiesAccess {
+        pos: Read, vel: Unused, force: Unused, dir: Unused, kind: Unused, energy: Read,
+        mass: Unused, alive: Read, state: Unused, age: Unused, prev: Unused, frozen: Write,
+        rng: Unused,
+    }
+}
+
+kernel_args! {
+    /// Arguments of [`tally`]: of the master's buffers, those it counts from and those it
+    /// posts to. It runs beside the free lists' rebuild, so it counts from what
+    /// [`master`] left (the free slots before the births, the births, the physics'
+    /// deaths), not from the lists.
+    pub struct TallyArgs {
+        /// The bodies: the ship's, and the world's frozen flag.
+        pub bodies: Bodies<View, Tallying>,
+        /// Kind table.
+        pub kinds: DevSlice<KindInfo, Read>,
+        /// Slot range of each kind.
+        pub ranges: DevSlice<SlotRange, Read>,
+        /// This step's contacts: the ship's hits, the shots' damage.
+        pub contacts: Contacts<View, Read>,
+        /// The game's state: read, advanced, written back (one element).
+        pub status: DevSlice<Status>,
+        /// Where the step's status is posted for the host.
+        pub mailbox: Mailbox,
+        /// Enemies spawned so far, per kind.
+        pub spawned: DevSlice<u32, Read>,
+        /// Enemies born this step, per kind (see [`MasterArgs::births`]).
+        pub births: DevSlice<u32, Read>,
+        /// Each kind's free slots before this step's births (see
+        /// [`MasterArgs::free_before`]).
+        pub free_before: DevSlice<u32, Read>,
+        /// Each kind's deaths in this step's physics.
+        pub deaths: DevSlice<u32, Read>,
+        /// The scene's rules.
+        pub rules: Rules,
+        /// Keeps the struct free of implicit padding (checked by its `NoUninit` derive).
+        pub reserved: u32,
     }
 }
 

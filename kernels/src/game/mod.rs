@@ -32,7 +32,7 @@ use rules::{Brain, Wave};
 crate::device_data! {
     /// The game's own buffers: the scene's tables, what crosses between host and device, and
     /// the spawn counters.
-    pub struct GameData(kinds, waves, burst_slots) {
+    pub struct GameData(kinds, waves, burst_slots): GameDataAccess {
         /// Each kind's brain (machine 0 for kinds that have none).
         brains: [Brain; kinds],
         /// The spawn schedule.

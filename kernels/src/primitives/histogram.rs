@@ -1,12 +1,13 @@
 //! Histogram by atomics: how many keys fall in each bin (e.g. bodies per grid cell).
 
+use crate::access::Read;
 use crate::{DevSlice, Thread, kernel_args};
 
 kernel_args! {
     /// Arguments of [`count_keys`].
     pub struct HistogramArgs {
         /// The keys, `n` of them used.
-        pub keys: DevSlice<u32>,
+        pub keys: DevSlice<u32, Read>,
         /// One counter per bin, zeroed by the host before the launch. Keys not below
         /// `counts.len()` are not counted.
         pub counts: DevSlice<u32>,

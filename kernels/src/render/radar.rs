@@ -116,7 +116,7 @@ pub fn cell(pos: Vec2, field: Vec2, inner: (u32, u32)) -> (i32, i32) {
 
 crate::device_data! {
     /// The radar's per-pixel buffers, one element per pixel of its inside (row-major).
-    pub struct RadarCounts(cells) {
+    pub struct RadarCounts(cells): RadarCountsAccess {
         /// Sampled bodies per pixel.
         counts: [u32; cells],
         /// The key ([`key`], shade 0) of the highest-layer kind counted there.

@@ -14,4 +14,4 @@ pub mod streams;
 
 pub use mt607::{Mt607, Mt607Params};
 pub use mt19937::Mt19937;
-pub use streams::{RngStreams, SlotRng};
+pub use streams::{Drawing, RngStreams, RngStreamsAccess, SlotRng};

@@ -7,11 +7,13 @@
 //! whole state.
 
 use super::mt607::{self, Mt607Params};
-use crate::{DevSlice, Thread, asked, device_data, kernel_args};
+use crate::access::{Read, Readable, Write};
+use crate::data::{Restrict, View};
+use crate::{DevSlice, Thread, access, asked, device_data, kernel_args};
 
 device_data! {
     /// The generators of every slot: parameters, state words and positions.
-    pub struct RngStreams(slots) {
+    pub struct RngStreams(slots): RngStreamsAccess {
         /// dcmt parameters, one set per slot.
         params: [Mt607Params; slots],
         /// State words, word-major: `mt607::N · slots` elements.
@@ -21,11 +23,19 @@ device_data! {
     }
 }
 
-impl RngStreams {
+access! {
+    /// What a kernel that draws numbers does with the generators: moves their words and
+    /// positions on, reading their parameters.
+    pub struct Drawing: RngStreamsAccess {
+        params: Read, words: Write, index: Write,
+    }
+}
+
+impl<M: RngStreamsAccess<params: Readable, words = Write, index = Write>> RngStreams<View, M> {
     /// The generator of `slot`. Its position is written back when the handle is dropped, so
     /// at most one handle per slot may be open at a time (one thread owns a slot).
     #[inline(always)]
-    pub fn open(&self, slot: u32) -> SlotRng<'_> {
+    pub fn open(&self, slot: u32) -> SlotRng {
         self.open_at(slot, self.position(slot))
     }
 
@@ -40,9 +50,9 @@ impl RngStreams {
     /// [`RngStreams::open`], given the generator's `position` (read with
     /// [`RngStreams::position`], and not moved since).
     #[inline(always)]
-    pub fn open_at(&self, slot: u32, position: u32) -> SlotRng<'_> {
+    pub fn open_at(&self, slot: u32, position: u32) -> SlotRng {
         SlotRng {
-            streams: self,
+            streams: self.restrict(),
             slot,
             params: self.params.get(slot),
             index: position,
@@ -51,14 +61,14 @@ impl RngStreams {
 }
 
 /// A slot's generator, open for drawing.
-pub struct SlotRng<'a> {
-    streams: &'a RngStreams,
+pub struct SlotRng {
+    streams: RngStreams<View, Drawing>,
     slot: u32,
     params: Mt607Params,
     index: u32,
 }
 
-impl SlotRng<'_> {
+impl SlotRng {
     #[inline(always)]
     fn word(&self, k: u32) -> u32 {
         k * self.streams.index.len() + self.slot
@@ -136,7 +146,7 @@ impl SlotRng<'_> {
     }
 }
 
-impl Drop for SlotRng<'_> {
+impl Drop for SlotRng {
     #[inline(always)]
     fn drop(&mut self) {
         self.streams.index.set(self.slot, self.index);

@@ -2,13 +2,15 @@
 
 use glam::Vec2;
 
-use crate::rng::RngStreams;
+use crate::access::Readable;
+use crate::data::View;
+use crate::rng::{RngStreams, RngStreamsAccess};
 use crate::{DevSlice, device_data};
 
 device_data! {
     /// Every per-body array, one element per slot. Slots of dead bodies keep their kind, mass
     /// and generator; only [`Bodies::alive`] says whether the rest means anything.
-    pub struct Bodies(slots, traced) {
+    pub struct Bodies(slots, traced): BodiesAccess {
         /// Position.
         pos: [Vec2; slots],
         /// Velocity.
@@ -41,32 +43,44 @@ device_data! {
         frozen: [u32; 1],
     } nested {
         /// The slot's random number generator.
-        rng: RngStreams(slots),
+        rng: RngStreams(slots): RngStreamsAccess,
     }
 }
 
-impl Bodies {
+impl<M: BodiesAccess> Bodies<View, M> {
     /// Number of slots.
     #[inline(always)]
-    pub fn slots(&self) -> u32 {
+    pub fn slots(&self) -> u32
+    where
+        M::alive: Readable,
+    {
         self.alive.len()
     }
 
     /// Whether the world is frozen (see [`Bodies::frozen`]).
     #[inline(always)]
-    pub fn is_frozen(&self) -> bool {
+    pub fn is_frozen(&self) -> bool
+    where
+        M::frozen: Readable,
+    {
         self.frozen.get(0) != 0
     }
 
     /// Whether the world keeps each body's last path (see [`Bodies::prev`]).
     #[inline(always)]
-    pub fn traces(&self) -> bool {
+    pub fn traces(&self) -> bool
+    where
+        M::prev: Readable,
+    {
         !self.prev.is_empty()
     }
 
     /// Whether `slot` holds a live body.
     #[inline(always)]
-    pub fn is_alive(&self, slot: u32) -> bool {
+    pub fn is_alive(&self, slot: u32) -> bool
+    where
+        M::alive: Readable,
+    {
         self.alive.get(slot) != 0
     }
 }
@@ -109,7 +123,7 @@ impl Deaths {
 device_data! {
     /// What the narrow phase tells the integrator about each slot, and in audit runs every
     /// contact it counted.
-    pub struct Contacts(slots, logged, logging) {
+    pub struct Contacts(slots, logged, logging): ContactsAccess {
         /// Displacement that separates the body from those it overlaps.
         push: [Vec2; slots],
         /// Velocity change from the collision impulses.

@@ -26,13 +26,14 @@ use glam::Vec2;
 
 use super::bodies::Bodies;
 use super::space::{Space, Span};
+use crate::access::{Read, Readable};
 use crate::exec::follow_previous_launch;
 use crate::warp::{Handed, Team};
 use crate::{DevSlice, Thread, asked, device_data, kernel_args};
 
 device_data! {
     /// The grid's arrays: what the broad phase builds each step and [`CellIndex`] queries.
-    pub struct Grid(slots, buckets, moving, traced, kind_rows) {
+    pub struct Grid(slots, buckets, moving, traced, kind_rows): GridAccess {
         /// Each slot's bucket, or [`NO_BUCKET`].
         keys: [u32; slots],
         /// Each slot's arrival rank in its bucket; the merge passes' runs afterwards.
@@ -422,25 +423,25 @@ pub fn merge_runs(t: Thread, args: &MergeArgs) {
 #[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
 pub struct CellIndex {
     /// Slots by bucket, then by slot.
-    pub slots: DevSlice<u32>,
+    pub slots: DevSlice<u32, Read>,
     /// The position of each entry's body when the grid was built: inside its bucket's
     /// cell.
-    pub pos: DevSlice<Vec2>,
+    pub pos: DevSlice<Vec2, Read>,
     /// The velocity of each entry's body when the grid was built, in worlds whose bodies
     /// move in the launch that queries the grid (whose own velocities then change under the
     /// queries); empty elsewhere, where the bodies' own are read (see [`CellIndex::vel_at`]).
-    pub vel: DevSlice<Vec2>,
+    pub vel: DevSlice<Vec2, Read>,
     /// Where each entry's body was when its last (sub)step moved it ([`Bodies::prev`]), in
     /// worlds that trace paths and whose bodies move in the launch that queries the grid;
     /// empty elsewhere, where the bodies' own are read (see [`CellIndex::prev_at`]).
-    pub prev: DevSlice<Vec2>,
+    pub prev: DevSlice<Vec2, Read>,
     /// First entry of each bucket in `slots`, and one more element: the number of entries.
     /// Bucket `b` is `slots[start[b] .. start[b + 1]]`.
-    pub start: DevSlice<u32>,
+    pub start: DevSlice<u32, Read>,
     /// Each kind's first and last row holding one of its bodies (elements `2k` and
     /// `2k + 1`), as the grid's ordering wrote them: meaningful only for a kind with
     /// entries.
-    pub rows: DevSlice<u32>,
+    pub rows: DevSlice<u32, Read>,
     /// Number of kinds.
     pub kinds: u32,
     /// Number of cells (buckets per kind).
@@ -509,7 +510,12 @@ impl CellIndex {
     /// with `MOVING` (bodies move in the launch that queries), the grid's copy, else the
     /// body's own, `vel[slot]`, which has not changed since.
     #[inline(always)]
-    pub fn vel_at<const MOVING: bool>(&self, entry: u32, slot: u32, vel: &DevSlice<Vec2>) -> Vec2 {
+    pub fn vel_at<const MOVING: bool>(
+        &self,
+        entry: u32,
+        slot: u32,
+        vel: &DevSlice<Vec2, impl Readable>,
+    ) -> Vec2 {
         if MOVING {
             self.vel.get(entry)
         } else {
@@ -525,7 +531,7 @@ impl CellIndex {
         &self,
         entry: u32,
         slot: u32,
-        prev: &DevSlice<Vec2>,
+        prev: &DevSlice<Vec2, impl Readable>,
     ) -> Vec2 {
         if MOVING {
             self.prev.get(entry)
@@ -909,7 +915,7 @@ struct Run {
     /// The first entry's index in the grid.
     start: u32,
     /// The run's positions.
-    pos: DevSlice<Vec2>,
+    pos: DevSlice<Vec2, Read>,
 }
 
 impl Run {

@@ -9,6 +9,7 @@
 use glam::Vec2;
 
 use super::kinds::{Bound, PlainBound};
+use crate::access::Read;
 use crate::math::{length, sqrt};
 use crate::{DevSlice, Thread, kernel_args};
 
@@ -381,7 +382,7 @@ kernel_args! {
     /// Arguments of [`sweep_cases`].
     pub struct SweepCasesArgs {
         /// The motions judged.
-        pub cases: DevSlice<SweepCase>,
+        pub cases: DevSlice<SweepCase, Read>,
         /// Output: one verdict a case.
         pub verdicts: DevSlice<SweepVerdict>,
     }

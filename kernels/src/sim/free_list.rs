@@ -29,16 +29,18 @@
 //! writes): the step's rebuild is then the scan's last launch
 //! ([`crate::primitives::scan::scan_tiles_after_sums`]) and [`gather_free`] alone.
 
-use super::bodies::Bodies;
+use super::bodies::{Bodies, BodiesAccess};
 use super::kinds::SlotRange;
+use crate::access::{Read, Unused};
+use crate::data::View;
 use crate::exec::follow_previous_launch;
 use crate::primitives::scan::{self, TILE};
 use crate::warp::{self, WARP};
-use crate::{DevSlice, Thread, asked, device_data, kernel_args};
+use crate::{DevSlice, Thread, access, asked, device_data, kernel_args};
 
 device_data! {
     /// Each kind's free slots, as the free-list rebuild leaves them.
-    pub struct FreeSlots(slots, kinds) {
+    pub struct FreeSlots(slots, kinds): FreeSlotsAccess {
         /// Kind `k`'s free slots in order, from its range's start.
         list: [u32; slots],
         /// Free slots per kind.
@@ -48,7 +50,7 @@ device_data! {
 
 device_data! {
     /// The rebuild's own arrays, remade every step for the kinds that changed.
-    pub struct FreeMarks(slots, tiles, groups) {
+    pub struct FreeMarks(slots, tiles, groups): FreeMarksAccess {
         /// [`FREE`] for a free usable slot, with its rank in its kind's list above
         /// [`RANK_SHIFT`]; else 0 (written by [`mark_free`], the ranks by [`gather_free`]).
         flags: [u32; slots],
@@ -71,9 +73,9 @@ kernel_args! {
     pub struct Changes {
         /// Each kind's deaths this step (see [`crate::sim::Deaths`]); empty: every kind
         /// changed.
-        pub deaths: DevSlice<u32>,
+        pub deaths: DevSlice<u32, Read>,
         /// Each kind's births the master ordered this step.
-        pub births: DevSlice<u32>,
+        pub births: DevSlice<u32, Read>,
         /// Kinds that change in any step (bit `k`: kind `k`): those the master brings to
         /// life itself, the ship's and its shots'.
         pub always: u32,
@@ -118,7 +120,7 @@ kernel_args! {
     /// empty slices where it marks none.
     pub struct Marks {
         /// Slot range of each kind.
-        pub ranges: DevSlice<SlotRange>,
+        pub ranges: DevSlice<SlotRange, Read>,
         /// The flags (see [`FreeMarks::flags`]).
         pub flags: DevSlice<u32>,
         /// The free slots of each tile of 32 slots.
@@ -189,13 +191,22 @@ fn flag(free: bool, rank: u32) -> u32 {
     }
 }
 
+access! {
+    /// What the free lists read of the bodies: each slot's kind and liveness.
+    pub struct Marking: BodiesAccess {
+        pos: Unused, vel: Unused, force: Unused, dir: Unused, kind: Read, energy: Unused,
+        mass: Unused, alive: Read, state: Unused, age: Unused, prev: Unused, frozen: Unused,
+        rng: Unused,
+    }
+}
+
 kernel_args! {
     /// Arguments of [`mark_free`].
     pub struct MarkArgs {
         /// The bodies (kinds and liveness are read).
-        pub bodies: Bodies,
+        pub bodies: Bodies<View, Marking>,
         /// Slot range of each kind.
-        pub ranges: DevSlice<SlotRange>,
+        pub ranges: DevSlice<SlotRange, Read>,
         /// Output: the flags (see [`FreeMarks::flags`]), one per slot.
         pub flags: DevSlice<u32>,
         /// Output: the free slots of each tile of 32 slots.
@@ -241,13 +252,13 @@ kernel_args! {
     /// Arguments of [`gather_free`].
     pub struct GatherArgs {
         /// Kind of each slot.
-        pub kind: DevSlice<u32>,
+        pub kind: DevSlice<u32, Read>,
         /// Slot range of each kind.
-        pub ranges: DevSlice<SlotRange>,
-        /// The flags of [`mark_free`].
+        pub ranges: DevSlice<SlotRange, Read>,
+        /// The flags of [`mark_free`]: each free slot's rank in its list is added.
         pub flags: DevSlice<u32>,
         /// The exclusive prefix sums of the tiles' counts of free slots, and their total.
-        pub offsets: DevSlice<u32>,
+        pub offsets: DevSlice<u32, Read>,
         /// Output: the free slots of kind `k` at `list[start_k ..][.. count_k]`; one per slot.
         pub list: DevSlice<u32>,
         /// Output: the number of free slots of each kind. A kind without slots has no writer: its
@@ -330,9 +341,9 @@ kernel_args! {
     /// Arguments of [`mark_and_gather_free`].
     pub struct MarkGatherArgs {
         /// The bodies (kinds and liveness are read).
-        pub bodies: Bodies,
+        pub bodies: Bodies<View, Marking>,
         /// Slot range of each kind, none larger than [`ONE_LAUNCH_RANGE`] slots.
-        pub ranges: DevSlice<SlotRange>,
+        pub ranges: DevSlice<SlotRange, Read>,
         /// Output: the flags (see [`FreeMarks::flags`]), one per slot.
         pub flags: DevSlice<u32>,
         /// Output: as [`GatherArgs::list`].

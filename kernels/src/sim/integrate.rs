@@ -8,13 +8,15 @@
 
 use glam::Vec2;
 
-use super::bodies::{Bodies, Contacts, Deaths};
+use super::bodies::{Bodies, BodiesAccess, Contacts, Deaths};
 use super::free_list::Marks;
 use super::kinds::KindInfo;
 use super::narrow::inverse_mass;
 use super::space::Space;
+use crate::access::{Read, Write};
+use crate::data::View;
 use crate::math::{self, sqrt};
-use crate::{DevSlice, Thread, kernel_args};
+use crate::{DevSlice, Thread, access, kernel_args};
 
 /// The paper's order, velocity then position: semi-implicit (symplectic) Euler.
 pub const SEMI_IMPLICIT_EULER: u32 = 0;
@@ -58,15 +60,24 @@ impl Field {
     }
 }
 
+access! {
+    /// What the integrator does with the bodies: moves them, ages them, and lets those
+    /// whose time or place is up die.
+    pub struct Moving: BodiesAccess {
+        pos: Write, vel: Write, force: Read, dir: Write, kind: Read, energy: Read, mass: Read,
+        alive: Write, state: Read, age: Write, prev: Write, frozen: Read, rng: Read,
+    }
+}
+
 kernel_args! {
     /// Arguments of [`integrate`].
     pub struct IntegrateArgs {
         /// The bodies, advanced in place.
-        pub bodies: Bodies,
+        pub bodies: Bodies<View, Moving>,
         /// Kind table (speed limits).
-        pub kinds: DevSlice<KindInfo>,
+        pub kinds: DevSlice<KindInfo, Read>,
         /// The narrow phase's response for each slot.
-        pub contacts: Contacts,
+        pub contacts: Contacts<View, Read>,
         /// The world (size, boundary rule).
         pub space: Space,
         /// The force field.

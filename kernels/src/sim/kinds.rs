@@ -2,7 +2,9 @@
 
 use glam::Vec2;
 
-use super::bodies::Bodies;
+use super::bodies::{Bodies, BodiesAccess};
+use crate::access::Readable;
+use crate::data::View;
 use crate::{DevSlice, asked};
 
 /// [`KindInfo::shape`] of a kind bounded by a circle.
@@ -181,7 +183,7 @@ impl SlotRange {
 
 crate::device_data! {
     /// The kind tables every stage reads: one element per kind.
-    pub struct KindTables(kinds) {
+    pub struct KindTables(kinds): KindTablesAccess {
         /// What the bodies of each kind share.
         info: [KindInfo; kinds],
         /// Each kind's slots.
@@ -203,7 +205,11 @@ pub struct SlotKind {
 impl SlotKind {
     /// Slot `slot`'s kind (of `bodies`) and its entry of `kinds`.
     #[inline(always)]
-    pub fn read(bodies: &Bodies, kinds: &DevSlice<KindInfo>, slot: u32) -> Self {
+    pub fn read<M: BodiesAccess<kind: Readable>>(
+        bodies: &Bodies<View, M>,
+        kinds: &DevSlice<KindInfo, impl Readable>,
+        slot: u32,
+    ) -> Self {
         let kind = bodies.kind.get(slot);
         SlotKind {
             kind,

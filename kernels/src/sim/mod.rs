@@ -35,6 +35,6 @@ pub mod scatter;
 pub mod space;
 pub mod teams;
 
-pub use bodies::{Bodies, Contacts, Deaths, Touched};
-pub use kinds::{KindInfo, KindTables, SlotKind, SlotRange};
+pub use bodies::{Bodies, BodiesAccess, Contacts, ContactsAccess, Deaths, Touched};
+pub use kinds::{KindInfo, KindTables, KindTablesAccess, SlotKind, SlotRange};
 pub use space::Space;

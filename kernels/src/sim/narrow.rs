@@ -9,25 +9,35 @@
 
 use glam::Vec2;
 
-use super::bodies::{Bodies, Contacts, Touched};
+use super::bodies::{Bodies, BodiesAccess, Contacts, Touched};
 use super::broad::{CellIndex, Near, Sample};
 use super::contact::{Swept, contact, first_overlap, tie_break};
 use super::kinds::{Bound, KindInfo};
 use super::space::Space;
 use super::teams::Teams;
+use crate::access::{Read, Write};
+use crate::data::View;
 use crate::warp::{Handed, Team};
-use crate::{DevSlice, Thread, asked, kernel_args};
+use crate::{DevSlice, Thread, access, asked, kernel_args};
+
+access! {
+    /// What the narrow phase does with the bodies: their energy is lost in contacts.
+    pub struct Colliding: BodiesAccess {
+        pos: Read, vel: Read, force: Read, dir: Read, kind: Read, energy: Write, mass: Read,
+        alive: Read, state: Read, age: Read, prev: Read, frozen: Read, rng: Read,
+    }
+}
 
 kernel_args! {
     /// Arguments of [`collide`].
     pub struct CollideArgs {
         /// The bodies; energy is updated in place, the rest is read.
-        pub bodies: Bodies,
+        pub bodies: Bodies<View, Colliding>,
         /// Kind table.
-        pub kinds: DevSlice<KindInfo>,
+        pub kinds: DevSlice<KindInfo, Read>,
         /// Each warp's first slot and team width ([`Teams::warp_table`]; empty where every
         /// body gets one thread).
-        pub warps: DevSlice<u32>,
+        pub warps: DevSlice<u32, Read>,
         /// How many threads each kind's bodies get (every kind's).
         pub teams: Teams,
         /// The world and its grid.

@@ -27,7 +27,7 @@ use crate::{DevSlice, Thread, device_data, kernel_args};
 
 device_data! {
     /// The bodies' state on its way to their new slots, one element per (new) slot.
-    pub struct Moved(slots, traced) {
+    pub struct Moved(slots, traced): MovedAccess {
         /// Position.
         pos: [Vec2; slots],
         /// Velocity.

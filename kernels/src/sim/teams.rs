@@ -9,6 +9,7 @@
 //! ([`crate::sim::broad::CellIndex::merge_near_in`]). Each kind keeps its own range of
 //! threads, so a warp still runs one kind's code (the paper's grouped warps).
 
+use crate::access::Readable;
 use crate::warp::{Team, WARP};
 use crate::{DevSlice, Thread};
 
@@ -134,7 +135,7 @@ impl Teams {
     /// `warps` is [`Teams::warp_table`]'s (unread where every body gets one thread): one
     /// load a warp, where walking the kinds' ranges took hundreds of instructions.
     #[inline(always)]
-    pub fn member(&self, t: Thread, warps: &DevSlice<u32>) -> Option<(u32, Team)> {
+    pub fn member(&self, t: Thread, warps: &DevSlice<u32, impl Readable>) -> Option<(u32, Team)> {
         let global = t.global();
         if self.single() {
             let slot = self.first_slot.checked_add(global)?;
