@@ -177,7 +177,133 @@ fn a_hidden_race_changes_the_shuffled_schedules_results() {
     );
 }
 
+/// Plans that threads issue together on one device are ordered whole, their branches
+/// included: one thread runs a plan whose first op touches every key beside the op after
+/// it (a branch, joined at the plan's end), a second makes a histogram of the keys after
+/// each of its own runs, and a third captures and runs a plan with a branch of its own
+/// over other buffers. Every histogram must find all the keys at one value: a run of the
+/// histogram between the toucher's fork and its join would find some keys touched and
+/// others not.
+fn plans_of_threads_are_ordered_whole(device: &Device) {
+    let (n, rounds): (u32, u32) = if cfg!(miri) { (256, 3) } else { (1 << 16, 24) };
+    let keys = device
+        .upload(&vec![0u32; n as usize])
+        .unwrap()
+        .named("keys");
+    let aside = device.upload(&vec![0u32; n as usize]).unwrap();
+    let mut counts = device.alloc_zeroed::<u32>(64).unwrap();
+    let (other, more) = (
+        device.upload(&vec![0u32; n as usize]).unwrap(),
+        device.upload(&vec![0u32; n as usize]).unwrap(),
+    );
+    std::thread::scope(|s| {
+        s.spawn(|| {
+            let toucher = device
+                .plan(vec![touch_beside(&keys, false), touch(&aside)], false)
+                .unwrap();
+            for _ in 0..rounds {
+                device.run(&toucher).unwrap();
+            }
+        });
+        s.spawn(|| {
+            for _ in 0..rounds {
+                let captured = device
+                    .plan(vec![touch_beside(&other, false), touch(&more)], true)
+                    .unwrap();
+                device.run(&captured).unwrap();
+            }
+        });
+        let counter = device
+            .plan(vec![histogram_op(&keys, &counts, n, n / 128, 128)], false)
+            .unwrap();
+        for _ in 0..rounds {
+            device.zero(&mut counts).unwrap();
+            device.run(&counter).unwrap();
+            let found = device.download(&counts).unwrap();
+            let values: Vec<usize> = (0..found.len()).filter(|&k| found[k] > 0).collect();
+            assert!(
+                values.len() == 1 && found[values[0]] == n,
+                "the keys at several values at once: {found:?}"
+            );
+        }
+    });
+    device.synchronize().unwrap();
+    assert_eq!(device.download(&keys).unwrap(), vec![rounds; n as usize]);
+    assert_eq!(device.download(&other).unwrap(), vec![rounds; n as usize]);
+}
+
+/// [`plans_of_threads_are_ordered_whole`] on the CPU emulation's shuffled schedule, where
+/// each branch runs on a thread of its own.
+#[test]
+fn plans_of_threads_are_ordered_whole_on_shuffled_branches() {
+    for seed in 0..if cfg!(miri) { 1 } else { 4 } {
+        let device = Device::cpu_scheduled(Some(2), Schedule::Shuffled { seed }, "tests").unwrap();
+        plans_of_threads_are_ordered_whole(&device);
+    }
+}
+
+/// One read-modify-write of each of `data`'s elements, in the chain.
+fn touch(data: &Buffer<u32>) -> Op {
+    // SAFETY: the view goes into this op only.
+    let mut b = unsafe { Binder::new() };
+    let args = TouchArgs { data: b.view(data) };
+    let launch = Launch {
+        kernel: registry::TOUCH,
+        grid: (data.len() as u32).div_ceil(64),
+        block: 64,
+        args,
+    };
+    // SAFETY: a buffer of the binder, a thread an element.
+    unsafe { Op::launch(launch, b, 0) }
+}
+
+/// A ring owns the host's side of its buffers: while one thread sends and receives through
+/// it, another's writes into them are refused (its writes into other shared memory, and
+/// its reads of the ring's, are taken, in the device's order); a second ring over either
+/// is refused; once the ring is gone, they are the host's again.
+fn a_rings_buffers_are_written_through_it_only(device: &Device) {
+    let steps: u32 = if cfg!(miri) { 8 } else { 200 };
+    let mut inputs = device.alloc_shared::<u32>(4).unwrap().named("inputs");
+    let outputs = device.alloc_shared::<u32>(4).unwrap();
+    let mut other = device.alloc_shared::<u32>(4).unwrap();
+    let mut ring = device.ring(&inputs, &outputs).unwrap();
+    let err = device.ring(&other, &inputs).err().expect("a second ring");
+    assert!(
+        err.to_string().contains("`inputs` is another ring's"),
+        "{err}"
+    );
+    // The refused ring left `other` the host's.
+    device.write(&mut other, &[1]).unwrap();
+    std::thread::scope(|s| {
+        s.spawn(|| {
+            for step in 0..steps {
+                ring.reserve(device).unwrap();
+                ring.send(device, step).unwrap();
+                ring.receive(device).unwrap();
+            }
+            while ring.oldest(device).unwrap().is_some() {}
+        });
+        for step in 0..steps {
+            let err = device
+                .write(&mut inputs, &[step])
+                .expect_err("a ring's buffer");
+            assert!(err.to_string().contains("belongs to a ring"), "{err}");
+            device.write(&mut other, &[step]).unwrap();
+            assert_eq!(device.download(&outputs).unwrap(), [0; 4]);
+        }
+    });
+    // Each slot holds the last step sent through it.
+    let last: Vec<u32> = (0..4)
+        .map(|k| (0..steps).filter(|s| s % 4 == k).max().unwrap_or(0))
+        .collect();
+    assert_eq!(device.download(&inputs).unwrap(), last);
+    drop(ring);
+    device.write(&mut inputs, &[7]).unwrap();
+}
+
 on_both_backends!(
+    plans_of_threads_are_ordered_whole,
+    a_rings_buffers_are_written_through_it_only,
     a_prefix_sum_of_one_device_is_refused_on_another,
     an_op_of_two_devices_is_refused,
     a_ring_is_its_devices,

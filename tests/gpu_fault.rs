@@ -52,12 +52,12 @@ fn fault_by_ring(device: &Device) -> Error {
     let inputs = device.alloc_shared::<u32>(2).unwrap();
     let outputs = device.alloc_shared::<u32>(2).unwrap();
     let mut ring = device.ring(&inputs, &outputs).unwrap();
-    ring.reserve().unwrap();
+    ring.reserve(device).unwrap();
     ring.send(device, KEYS[0]).unwrap();
     device
         .launch(out_of_bounds(&keys, &counts))
         .and_then(|()| ring.receive(device))
-        .and_then(|()| ring.oldest().map(drop))
+        .and_then(|()| ring.oldest(device).map(drop))
         .unwrap_err()
 }
 

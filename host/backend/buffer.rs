@@ -2,6 +2,7 @@
 //! write, download, clear, copy), each knowing the device that made it.
 
 use std::marker::PhantomData;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use gpuwars_kernels::DevSlice;
@@ -31,6 +32,9 @@ pub struct Buffer<T: Element> {
     pub(super) device: DeviceId,
     /// Its array's name in its group, or its element type, for errors.
     name: &'static str,
+    /// Whether a [`Ring`](super::Ring) owns the host's side of the memory: while one does,
+    /// the host writes it through the ring only (see [`Buffer::check_writable`]).
+    pub(super) ringed: Arc<AtomicBool>,
 }
 
 /// A share in a buffer's memory that keeps it allocated and gives no access to it: what an
@@ -106,6 +110,18 @@ impl<T: Element> Buffer<T> {
     /// What errors call it.
     pub fn name(&self) -> &'static str {
         self.name
+    }
+
+    /// `Ok` unless a ring owns the buffer's host side, which only the ring then writes.
+    fn check_writable(&self) -> Result<(), Error> {
+        match self.ringed.load(Ordering::Acquire) {
+            false => Ok(()),
+            true => Err(Error::Invalid(format!(
+                "buffer `{}` belongs to a ring: the host writes it only through the ring \
+                 while the ring exists",
+                self.name
+            ))),
+        }
     }
 
     /// Which allocation this is, for telling two buffers apart (an op's holds keep it
@@ -201,6 +217,7 @@ impl Device {
             imp: Arc::new(imp),
             device: self.id,
             name: std::any::type_name::<T>(),
+            ringed: Arc::default(),
         })
     }
 
@@ -224,6 +241,7 @@ impl Device {
             imp: Arc::new(imp),
             device: self.id,
             name: std::any::type_name::<T>(),
+            ringed: Arc::default(),
         })
     }
 
@@ -239,6 +257,7 @@ impl Device {
             imp: Arc::new(imp),
             device: self.id,
             name: std::any::type_name::<T>(),
+            ringed: Arc::default(),
         })
     }
 
@@ -252,6 +271,7 @@ impl Device {
             )));
         }
         buffer.device.check(self.id, "a buffer")?;
+        buffer.check_writable()?;
         match (&self.imp, &*buffer.imp) {
             (Imp::Cpu(emu), BufferImp::Cpu(b)) => {
                 let _order = emu.in_order();
@@ -263,9 +283,12 @@ impl Device {
             }
             (Imp::Cuda(gpu), BufferImp::Cuda { bytes, .. }) => gpu.write(&mut locked(bytes), data),
             (Imp::Cuda(gpu), BufferImp::Mapped { memory, .. }) => {
-                gpu.synchronize()?;
-                // SAFETY: no kernel runs (waited for above), `&mut buffer` excludes the other
-                // host borrows, and the buffer holds at least `data.len()` elements.
+                let sides = gpu.in_order();
+                gpu.synchronize(&sides)?;
+                // SAFETY: no kernel runs (waited for above, and none is queued while the
+                // device's order is held), no other host access runs (each takes the order:
+                // here, `download`, `zero`, a ring's), and the buffer holds at least
+                // `data.len()` elements.
                 unsafe {
                     let dst = memory.ptr.cast::<T>();
                     std::ptr::copy_nonoverlapping(data.as_ptr(), dst, data.len());
@@ -287,8 +310,9 @@ impl Device {
             }
             (Imp::Cuda(gpu), BufferImp::Cuda { bytes, .. }) => gpu.download(&locked(bytes)),
             (Imp::Cuda(gpu), BufferImp::Mapped { memory, len, .. }) => {
-                gpu.synchronize()?;
-                // SAFETY: no kernel runs (waited for above); `len` elements of plain bytes.
+                let sides = gpu.in_order();
+                gpu.synchronize(&sides)?;
+                // SAFETY: as in `write`; `len` elements of plain bytes.
                 Ok(unsafe { std::slice::from_raw_parts(memory.ptr.cast::<T>(), *len) }.to_vec())
             }
             _ => unreachable!("a buffer of this device is of its backend"),
@@ -298,6 +322,7 @@ impl Device {
     /// Sets every element of `buffer` to zero.
     pub fn zero<T: Element>(&self, buffer: &mut Buffer<T>) -> Result<(), Error> {
         buffer.device.check(self.id, "a buffer")?;
+        buffer.check_writable()?;
         match (&self.imp, &*buffer.imp) {
             (Imp::Cpu(emu), BufferImp::Cpu(b)) => {
                 let _order = emu.in_order();
@@ -307,7 +332,8 @@ impl Device {
             }
             (Imp::Cuda(gpu), BufferImp::Cuda { bytes, .. }) => gpu.zero(&mut locked(bytes)),
             (Imp::Cuda(gpu), BufferImp::Mapped { memory, len, .. }) => {
-                gpu.synchronize()?;
+                let sides = gpu.in_order();
+                gpu.synchronize(&sides)?;
                 // SAFETY: as in `write`.
                 unsafe { std::ptr::write_bytes(memory.ptr.cast::<T>(), 0, *len) };
                 Ok(())
@@ -327,6 +353,7 @@ impl Device {
         }
         src.device.check(self.id, "a buffer")?;
         dst.device.check(self.id, "a buffer")?;
+        dst.check_writable()?;
         match (&self.imp, &*src.imp, &*dst.imp) {
             (Imp::Cpu(emu), BufferImp::Cpu(s), BufferImp::Cpu(d)) => {
                 let _order = emu.in_order();

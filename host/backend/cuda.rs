@@ -15,7 +15,7 @@
 use std::borrow::Cow;
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::ThreadId;
 
 use cudarc::driver::{
@@ -57,12 +57,14 @@ pub(super) struct Gpu {
     in_flight: Arc<InFlight>,
     /// The capture in progress, if any: the thread recording and its private stream.
     capture: Mutex<Option<(ThreadId, Arc<CudaStream>)>>,
-    /// The streams of the ops a plan runs beside its others, one a branch (see
-    /// [`Gpu::beside`]).
-    sides: Vec<Arc<CudaStream>>,
-    /// The thread issuing an op beside the others, if any, and its branch: its launches go
-    /// to that branch's stream.
-    beside: Mutex<Option<(ThreadId, usize)>>,
+    /// The device's order: held by whoever queues work on the device (a plan from its first
+    /// op to its branches' join, a capture, a copy, a fence, a wait), so that no thread's
+    /// work lands between another's fork and join; it owns the side streams, so only its
+    /// holder forks onto them.
+    order: Mutex<Sides>,
+    /// The thread issuing an op beside the others, if any, and its branch's stream: its
+    /// launches go there.
+    beside: Mutex<Option<(ThreadId, Arc<CudaStream>)>>,
     functions: HashMap<&'static str, CudaFunction>,
     properties: GpuProperties,
     /// Whether launches carry programmatic stream serialization (start before the launch
@@ -281,13 +283,14 @@ impl Gpu {
                 ctx.new_stream()
                     .map_err(in_flight.failed("creating a stream"))
             })
-            .collect::<Result<_, _>>()?;
+            .collect::<Result<_, _>>()
+            .map(Sides)?;
         Ok(Gpu {
             ctx,
             stream,
             in_flight,
             capture: Mutex::new(None),
-            sides,
+            order: Mutex::new(sides),
             beside: Mutex::new(None),
             functions,
             properties,
@@ -336,12 +339,14 @@ impl Gpu {
     // kernels' own structs) can live in device memory without cudarc's marker traits.
 
     pub(super) fn alloc_zeroed(&self, bytes: usize) -> Result<CudaSlice<u8>, Error> {
+        let _order = self.in_order();
         self.stream
             .alloc_zeros(bytes)
             .map_err(self.failed("allocating device memory"))
     }
 
     pub(super) fn upload<T: Element>(&self, data: &[T]) -> Result<CudaSlice<u8>, Error> {
+        let _order = self.in_order();
         self.stream
             .clone_htod(bytemuck::cast_slice::<T, u8>(data))
             .map_err(self.failed("copying to the device"))
@@ -354,6 +359,7 @@ impl Gpu {
     ) -> Result<(), Error> {
         let bytes = bytemuck::cast_slice::<T, u8>(data);
         let mut prefix = dst.slice_mut(..bytes.len());
+        let _order = self.in_order();
         self.stream
             .memcpy_htod(bytes, &mut prefix)
             .map_err(self.failed("copying to the device"))
@@ -361,6 +367,7 @@ impl Gpu {
 
     pub(super) fn download<T: Element>(&self, src: &CudaSlice<u8>) -> Result<Vec<T>, Error> {
         let mut out = vec![T::zeroed(); src.len() / size_of::<T>()];
+        let _order = self.in_order();
         let ticket = self.in_flight.ticket();
         // A copy into pageable memory returns when it is done, so the launches queued before
         // it are done too.
@@ -372,6 +379,7 @@ impl Gpu {
     }
 
     pub(super) fn zero(&self, dst: &mut CudaSlice<u8>) -> Result<(), Error> {
+        let _order = self.in_order();
         self.stream
             .memset_zeros(dst)
             .map_err(self.failed("clearing device memory"))
@@ -379,6 +387,7 @@ impl Gpu {
 
     pub(super) fn copy(&self, src: &CudaSlice<u8>, dst: &mut CudaSlice<u8>) -> Result<(), Error> {
         let mut prefix = dst.slice_mut(..src.len());
+        let _order = self.in_order();
         self.stream
             .memcpy_dtod(src, &mut prefix)
             .map_err(self.failed("copying on the device"))
@@ -404,8 +413,10 @@ impl Gpu {
             shared_mem_bytes: 0,
         };
         let param = Param(args);
-        let stream = self.launch_stream();
-        let aside = self.sides.iter().any(|side| Arc::ptr_eq(&stream, side));
+        let (stream, aside) = match self.on_side() {
+            Some(side) => (side, true),
+            None => (self.launch_stream(), false),
+        };
         // A launch beside the others follows an event, not a kernel: nothing to start early.
         let launched = if self.dependent_launch() && !aside {
             // SAFETY: as below; the sm_90 module's entries wait for their predecessor.
@@ -436,34 +447,50 @@ impl Gpu {
             .is_some_and(|(thread, _)| *thread == std::thread::current().id())
     }
 
-    /// Issues what `issue` launches beside the work that follows it, as branch `branch`:
-    /// on a stream of its own that first waits for the work queued so far (on the device's
-    /// stream, or in the capture this thread records), until [`Gpu::rejoin`]. Branches
-    /// past the [`BRANCHES`] streams share them, each after the one before on its stream.
+    /// The device's order (see [`Gpu::order`]), for as long as the guard lives: the side
+    /// streams come with it.
+    pub(super) fn in_order(&self) -> MutexGuard<'_, Sides> {
+        self.order.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Issues what `issue` launches beside the work that follows it, as branch `branch` of
+    /// the holder of `sides` (the device's order): on a stream of its own that first waits
+    /// for the work queued so far (on the device's stream, or in the capture this thread
+    /// records), until [`Gpu::rejoin`]. Branches past the [`BRANCHES`] streams share them,
+    /// each after the one before on its stream.
     pub(super) fn beside(
         &self,
+        sides: &Sides,
         branch: usize,
         issue: impl FnOnce() -> Result<(), Error>,
     ) -> Result<(), Error> {
-        let branch = branch % BRANCHES;
-        self.sides[branch]
-            .join(&self.launch_stream())
+        let side = &sides.0[branch % BRANCHES];
+        side.join(&self.launch_stream())
             .map_err(self.failed("forking a stream"))?;
         let here = std::thread::current().id();
-        *self.beside.lock().unwrap_or_else(|e| e.into_inner()) = Some((here, branch));
+        *self.beside.lock().unwrap_or_else(|e| e.into_inner()) = Some((here, side.clone()));
         let issued = issue();
         *self.beside.lock().unwrap_or_else(|e| e.into_inner()) = None;
         issued
     }
 
     /// Makes the work queued from now on wait for everything issued [`Gpu::beside`] in
-    /// the first `branches` branches.
-    pub(super) fn rejoin(&self, branches: usize) -> Result<(), Error> {
+    /// the first `branches` branches of the holder of `sides`.
+    pub(super) fn rejoin(&self, sides: &Sides, branches: usize) -> Result<(), Error> {
         let main = self.launch_stream();
-        for side in self.sides.iter().take(branches) {
+        for side in sides.0.iter().take(branches) {
             main.join(side).map_err(self.failed("joining a stream"))?;
         }
         Ok(())
+    }
+
+    /// The stream of the branch this thread issues, if it issues one.
+    fn on_side(&self) -> Option<Arc<CudaStream>> {
+        let here = std::thread::current().id();
+        match &*self.beside.lock().unwrap_or_else(|e| e.into_inner()) {
+            Some((thread, side)) if *thread == here => Some(side.clone()),
+            _ => None,
+        }
     }
 
     /// Queues a clear of `bytes` bytes at device address `addr`.
@@ -473,20 +500,15 @@ impl Gpu {
     pub(super) unsafe fn clear(&self, addr: u64, bytes: usize) -> Result<(), Error> {
         self.bind()?;
         // SAFETY: forwarded from the caller.
-        unsafe { result::memset_d8_async(addr, 0, bytes, self.launch_stream().cu_stream()) }
+        let stream = self.on_side().unwrap_or_else(|| self.launch_stream());
+        unsafe { result::memset_d8_async(addr, 0, bytes, stream.cu_stream()) }
             .map_err(self.failed("clearing device memory"))
     }
 
-    /// The stream this thread's launches and clears go to: its branch's stream while it
-    /// issues beside the others, else the device's stream, or the private stream of a capture
-    /// this thread is recording.
+    /// The stream this thread's launches and clears go to, but for a branch's (see
+    /// [`Gpu::on_side`]): the device's stream, or the private stream of a capture this
+    /// thread is recording.
     fn launch_stream(&self) -> Arc<CudaStream> {
-        let here = std::thread::current().id();
-        if let Some((thread, branch)) = *self.beside.lock().unwrap_or_else(|e| e.into_inner())
-            && thread == here
-        {
-            return self.sides[branch].clone();
-        }
         let capture = self.capture.lock().unwrap_or_else(|e| e.into_inner());
         match &*capture {
             Some((thread, stream)) if *thread == std::thread::current().id() => stream.clone(),
@@ -566,6 +588,7 @@ impl Gpu {
 
     /// Records `fence` after the work queued so far.
     pub(super) fn record(&self, fence: &mut Fence) -> Result<(), Error> {
+        let _order = self.in_order();
         let ticket = self.in_flight.ticket();
         fence
             .event
@@ -613,11 +636,16 @@ impl Gpu {
         Ok((free as u64, total as u64))
     }
 
-    pub(super) fn synchronize(&self) -> Result<(), Error> {
+    /// Waits for every stream of the device (the holder of `sides` has joined its
+    /// branches back, so the device's stream follows them; a branch left by an error may
+    /// not be joined): the launches queued so far are done.
+    pub(super) fn synchronize(&self, sides: &Sides) -> Result<(), Error> {
         let ticket = self.in_flight.ticket();
-        self.stream
-            .synchronize()
-            .map_err(self.failed("waiting for the GPU"))?;
+        for stream in std::iter::once(&self.stream).chain(&sides.0) {
+            stream
+                .synchronize()
+                .map_err(self.failed("waiting for the GPU"))?;
+        }
         self.in_flight.finished(ticket);
         Ok(())
     }
@@ -668,8 +696,9 @@ pub(super) struct Mapped {
 
 // SAFETY: plain memory owned by this handle.
 unsafe impl Send for Mapped {}
-// SAFETY: as above; the host reaches it through the owner's `&mut`, after a wait for the
-// device, or through a ring's slot after its fence.
+// SAFETY: as above; the host reaches it only while holding the device's order (`Gpu::order`):
+// `Device::write`, `download` and `zero` after a wait for every stream, a ring's `send` and
+// `oldest` on a slot whose fence has passed (see `Ring`).
 unsafe impl Sync for Mapped {}
 
 impl Drop for Mapped {
@@ -694,6 +723,10 @@ pub(super) fn address<T>(slice: &CudaSlice<T>) -> u64 {
 /// Streams for the branches of a plan (see [`Gpu::beside`]): the autopilot's, the
 /// explosions' and the tally's.
 const BRANCHES: usize = 3;
+
+/// The side streams of a device, which only the holder of its order forks onto (see
+/// [`Gpu::in_order`]).
+pub(super) struct Sides(Vec<Arc<CudaStream>>);
 
 /// Launches `function` on `stream` with programmatic stream serialization: its blocks may
 /// start once every block of the launch before it has signalled its dependents or ended

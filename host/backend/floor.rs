@@ -175,12 +175,12 @@ fn time_in_ring(device: &Device, chain: &[Op], (warm, reps): (u32, u32)) -> Resu
     );
     let mut ring = device.ring(&inputs, &outputs)?;
     let seconds = seconds_a_run(device, (warm, reps), || {
-        ring.reserve()?;
+        ring.reserve(device)?;
         ring.send(device, 1)?;
         device.run(&plan)?;
         ring.receive(device)
     })?;
-    while ring.oldest()?.is_some() {}
+    while ring.oldest(device)?.is_some() {}
     Ok(seconds)
 }
 

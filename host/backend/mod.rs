@@ -452,7 +452,7 @@ impl Device {
     pub fn synchronize(&self) -> Result<(), Error> {
         match &self.imp {
             Imp::Cpu(_) => Ok(()),
-            Imp::Cuda(gpu) => gpu.synchronize(),
+            Imp::Cuda(gpu) => gpu.synchronize(&gpu.in_order()),
         }
     }
 }

@@ -23,7 +23,7 @@ use gpuwars_kernels::access::{Access, Use};
 use gpuwars_kernels::data::{Convert, View};
 use gpuwars_kernels::{DevSlice, KernelArgs};
 
-use super::cuda::Fence;
+use super::cuda::{Fence, Gpu, Sides};
 use super::{Buffer, Buffers, Device, DeviceId, Element, Error, Hold, Imp, Launch};
 
 /// Makes the views of buffers that go into one op's arguments, and takes a [`Hold`] of
@@ -400,7 +400,8 @@ impl Device {
         check_plan(&ops, self.id)?;
         let graph = match &self.imp {
             Imp::Cuda(gpu) if graph && !ops.is_empty() => {
-                Some(gpu.capture(|| self.issue_all(&ops))?)
+                let sides = gpu.in_order();
+                Some(gpu.capture(|| issue_all(self, gpu, &sides, &ops))?)
             }
             _ => None,
         };
@@ -411,38 +412,16 @@ impl Device {
         })
     }
 
-    /// Issues `ops` in order, each marked [`Op::beside`] on a side stream of its own (a
-    /// branch), joined back before each op marked [`Op::after_branches`] and after the last.
-    fn issue_all(&self, ops: &[Op]) -> Result<(), Error> {
-        let mut branches = 0;
-        for op in ops {
-            if let Imp::Cuda(gpu) = &self.imp
-                && op.joins
-                && branches > 0
-            {
-                gpu.rejoin(branches)?;
-            }
-            match &self.imp {
-                Imp::Cuda(gpu) if op.beside => {
-                    gpu.beside(branches, || (op.issue)(self))?;
-                    branches += 1;
-                }
-                _ => (op.issue)(self)?,
-            }
-        }
-        match &self.imp {
-            Imp::Cuda(gpu) if branches > 0 => gpu.rejoin(branches),
-            _ => Ok(()),
-        }
-    }
-
     /// Queues one run of `plan`.
     pub fn run(&self, plan: &Plan) -> Result<(), Error> {
         plan.device.check(self.id, "a plan")?;
         self.count(plan.launched());
         match (&self.imp, &plan.graph) {
-            (Imp::Cuda(gpu), Some(graph)) => gpu.replay(graph, plan.launched()),
-            (Imp::Cuda(_), None) => self.issue_all(&plan.ops),
+            (Imp::Cuda(gpu), Some(graph)) => {
+                let _order = gpu.in_order();
+                gpu.replay(graph, plan.launched())
+            }
+            (Imp::Cuda(gpu), None) => issue_all(self, gpu, &gpu.in_order(), &plan.ops),
             // From inside the pool, each launch starts its blocks at once.
             (Imp::Cpu(emu), _) => {
                 let _order = emu.in_order();
@@ -492,6 +471,36 @@ impl Device {
             }
         };
         Ok(Mark { imp })
+    }
+}
+
+/// Issues `ops` on `device`'s GPU, whose order the caller holds (`sides`), in order, each
+/// marked [`Op::beside`] on a side stream of its own (a branch), joined back before each op
+/// marked [`Op::after_branches`] and after the last: on every path, an error's too, so that
+/// nothing queued after the plan runs beside a branch of it.
+fn issue_all(device: &Device, gpu: &Gpu, sides: &Sides, ops: &[Op]) -> Result<(), Error> {
+    let mut branches = 0;
+    let mut issued = Ok(());
+    for op in ops {
+        if op.joins && branches > 0 {
+            issued = gpu.rejoin(sides, branches);
+        }
+        if issued.is_ok() {
+            issued = match op.beside {
+                true => {
+                    branches += 1;
+                    gpu.beside(sides, branches - 1, || (op.issue)(device))
+                }
+                false => (op.issue)(device),
+            };
+        }
+        if issued.is_err() {
+            break;
+        }
+    }
+    match branches {
+        0 => issued,
+        _ => issued.and(gpu.rejoin(sides, branches)),
     }
 }
 

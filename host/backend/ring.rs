@@ -8,6 +8,7 @@
 
 use std::collections::VecDeque;
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use super::cuda::Fence;
 use super::{Buffer, BufferImp, Device, DeviceId, Element, Error, Imp};
@@ -17,6 +18,9 @@ pub struct Ring<I: Element, O: Element> {
     /// Shares in the two buffers' memory (held, so it outlives the ring).
     inputs: Arc<BufferImp<I>>,
     outputs: Arc<BufferImp<O>>,
+    /// The buffers' marks that a ring owns their host side (see `Buffer::ringed`), set
+    /// while the ring exists.
+    owned: [Arc<AtomicBool>; 2],
     depth: usize,
     /// One fence per slot on the GPU, recorded after its step; none under the emulation,
     /// which runs each step before it returns.
@@ -35,7 +39,9 @@ impl Device {
     /// A ring over `inputs` and `outputs`, buffers of [`Device::alloc_shared`] of one length
     /// (at least 1): the steps in flight. The kernels of each step read its input at, and
     /// write its output to, the slot of their own count of the steps, which starts at zero
-    /// as the ring's does. Depth 1 waits for every step.
+    /// as the ring's does. Depth 1 waits for every step. While the ring exists it owns the
+    /// buffers' host side: [`Device::write`], [`Device::zero`] and [`Device::copy`] into
+    /// them are refused, and so is a second ring over either.
     pub fn ring<I: Element, O: Element>(
         &self,
         inputs: &Buffer<I>,
@@ -61,9 +67,21 @@ impl Device {
                 ));
             }
         };
+        let owned = [inputs.ringed.clone(), outputs.ringed.clone()];
+        if Arc::ptr_eq(&owned[0], &owned[1]) {
+            return Err(Error::Invalid(
+                "a ring over one buffer as its inputs and its outputs".into(),
+            ));
+        }
+        claim(&owned[0], inputs.name())?;
+        if let Err(e) = claim(&owned[1], outputs.name()) {
+            owned[0].store(false, Ordering::Release);
+            return Err(e);
+        }
         Ok(Ring {
             inputs: inputs.imp.clone(),
             outputs: outputs.imp.clone(),
+            owned,
             depth,
             fences,
             in_flight: VecDeque::with_capacity(depth),
@@ -71,6 +89,22 @@ impl Device {
             device: self.id,
             outputs_read: vec![O::zeroed(); depth],
         })
+    }
+}
+
+/// Marks a buffer (`name`) as a ring's (see `Buffer::ringed`), unless another ring has it.
+fn claim(ringed: &AtomicBool, name: &str) -> Result<(), Error> {
+    ringed
+        .compare_exchange(false, true, Ordering::AcqRel, Ordering::Acquire)
+        .map(drop)
+        .map_err(|_| Error::Invalid(format!("buffer `{name}` is another ring's already")))
+}
+
+impl<I: Element, O: Element> Drop for Ring<I, O> {
+    fn drop(&mut self) {
+        for owned in &self.owned {
+            owned.store(false, Ordering::Release);
+        }
     }
 }
 
@@ -103,11 +137,11 @@ impl<I: Element, O: Element> Ring<I, O> {
 
     /// Makes room for one more step: with `depth` steps in flight, waits for the oldest and
     /// returns its output.
-    pub fn reserve(&mut self) -> Result<Option<O>, Error> {
+    pub fn reserve(&mut self, device: &Device) -> Result<Option<O>, Error> {
         if self.in_flight.len() < self.depth() {
             return Ok(None);
         }
-        self.oldest()
+        self.oldest(device)
     }
 
     /// Writes `input` into the slot of the step about to be queued (call [`Ring::reserve`]
@@ -121,13 +155,18 @@ impl<I: Element, O: Element> Ring<I, O> {
                 // SAFETY: an element of a live host buffer, in the device's order.
                 unsafe { at.write_unaligned(input) };
             }
-            // SAFETY: the slot is not in flight: `check` refuses a step past the depth, so the
-            // step that last read the slot has passed its fence (`reserve` waited for it), and
-            // the kernels find the slot by their count of steps, which is the ring's (the game
-            // that owns both steps its world only through the ring, and checks the counts
-            // agree); the step that reads it next is launched after this write (a launch sees
-            // the host's writes made before it).
-            Imp::Cuda(_) => unsafe { at.write_volatile(input) },
+            Imp::Cuda(gpu) => {
+                let _order = gpu.in_order();
+                // SAFETY: the host side is the ring's alone (the device's writes refuse its
+                // buffers while it exists), and other host accesses of mapped memory take the
+                // device's order (held). No kernel reads the slot meanwhile: `check` refuses
+                // a step past the depth, so the step that last read it has passed its fence
+                // (`reserve` waited for it); a kernel finds its slot by its count of steps,
+                // which a game checks equals the ring's every step (`Game::next_status`);
+                // and the step that reads it next is queued after this write (a launch sees
+                // the host's writes made before it).
+                unsafe { at.write_volatile(input) }
+            }
         }
         Ok(())
     }
@@ -151,14 +190,17 @@ impl<I: Element, O: Element> Ring<I, O> {
     }
 
     /// Waits for the oldest step in flight and returns its output (`None` when none is).
-    pub fn oldest(&mut self) -> Result<Option<O>, Error> {
+    pub fn oldest(&mut self, device: &Device) -> Result<Option<O>, Error> {
+        self.device.check(device.id, "a ring")?;
         let Some(slot) = self.in_flight.pop_front() else {
             return Ok(None);
         };
-        if let Some(fence) = self.fences.get(slot) {
+        if let (Some(fence), Imp::Cuda(gpu)) = (self.fences.get(slot), &device.imp) {
             fence.wait()?;
-            // SAFETY: the step that writes the slot is done (its fence has passed), and the
-            // next one to write it is not queued before the slot is sent again.
+            let _order = gpu.in_order();
+            // SAFETY: the step that writes the slot is done (its fence has passed), the next
+            // one to write it is not queued before the slot is sent again, and other host
+            // accesses of mapped memory take the device's order (held).
             self.outputs_read[slot] = unsafe { host_ptr(&self.outputs, slot).read_volatile() };
         }
         Ok(Some(self.outputs_read[slot]))

@@ -292,7 +292,7 @@ impl<'d> Game<'d> {
                 self.pipeline.steps()
             )));
         }
-        if let Some(status) = self.ring.reserve()? {
+        if let Some(status) = self.ring.reserve(self.pipeline.device())? {
             self.arrived.push_back(status);
         }
         let device = self.pipeline.device();
@@ -309,7 +309,7 @@ impl<'d> Game<'d> {
     pub fn next_status(&mut self) -> Result<Option<Status>, Error> {
         let status = match self.arrived.pop_front() {
             Some(status) => Some(status),
-            None => self.ring.oldest()?,
+            None => self.ring.oldest(self.pipeline.device())?,
         };
         if let Some(status) = status {
             self.last = status;
