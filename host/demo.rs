@@ -358,7 +358,7 @@ fn play(
             Some(profile) => game.submit_profiled(pilot(i), profile)?,
             None => game.submit(pilot(i))?,
         }
-        while let Some(status) = game.ready_status() {
+        while let Some(status) = game.ready_status()? {
             record.take(status);
         }
         if let Some(frames) = &options.frames

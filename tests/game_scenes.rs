@@ -154,7 +154,7 @@ fn play_until_over(device: &Device, lag: usize) -> (u32, u64) {
     };
     for _ in 0..3000 {
         game.submit(Some(Input::default())).unwrap();
-        while let Some(status) = game.ready_status() {
+        while let Some(status) = game.ready_status().unwrap() {
             note(&mut end, status);
         }
         if end.is_some() {

@@ -170,7 +170,7 @@ pub fn run(device: &Device, options: &PaperOptions) -> anyhow::Result<PaperSumma
             game.submit(None)?;
             drawer.frame(&mut game, options.size, &options.camera, false)?;
         }
-        while let Some(status) = game.ready_status() {
+        while let Some(status) = game.ready_status()? {
             last = status;
         }
         let closed = counter.rows().len();

@@ -311,19 +311,29 @@ impl<'d> Game<'d> {
             Some(status) => Some(status),
             None => self.ring.oldest(self.pipeline.device())?,
         };
-        if let Some(status) = status {
-            self.last = status;
-        }
-        Ok(status)
+        status.map(|status| self.hand_out(status)).transpose()
     }
 
     /// The status of a step that [`Game::submit`] already made room for, without waiting.
-    pub fn ready_status(&mut self) -> Option<Status> {
+    pub fn ready_status(&mut self) -> Result<Option<Status>, Error> {
         let status = self.arrived.pop_front();
-        if let Some(status) = status {
-            self.last = status;
+        status.map(|status| self.hand_out(status)).transpose()
+    }
+
+    /// `status`, the next step's, as handed out, once the device's count of the steps is
+    /// checked against the host's: each status of a game under way counts one step more
+    /// than the one before (the tally's count, which the kernels find their ring slots by),
+    /// and once the game is over the status stays.
+    fn hand_out(&mut self, status: Status) -> Result<Status, Error> {
+        let expected = self.last.step.saturating_add(1);
+        if !self.last.is_over() && status.step != expected {
+            return Err(Error::Invalid(format!(
+                "the device tallied step {} where the ring's count makes it {expected}",
+                status.step
+            )));
         }
-        status
+        self.last = status;
+        Ok(status)
     }
 
     /// Plays one step with `input`, or with the autopilot's when `None`, and returns its

@@ -59,7 +59,7 @@ impl App<'_> {
             self.round.submitted += 1;
             self.rates.1 += 1;
         }
-        while let Some(status) = self.round.game.ready_status() {
+        while let Some(status) = self.round.game.ready_status()? {
             self.take(status);
         }
         if self.at_end() || (self.watch.is_some() && self.round.record.over) {
