@@ -413,10 +413,7 @@ impl Gpu {
             shared_mem_bytes: 0,
         };
         let param = Param(args);
-        let (stream, aside) = match self.on_side() {
-            Some(side) => (side, true),
-            None => (self.launch_stream(), false),
-        };
+        let (stream, aside) = self.issue_stream();
         // A launch beside the others follows an event, not a kernel: nothing to start early.
         let launched = if self.dependent_launch() && !aside {
             // SAFETY: as below; the sm_90 module's entries wait for their predecessor.
@@ -484,12 +481,14 @@ impl Gpu {
         Ok(())
     }
 
-    /// The stream of the branch this thread issues, if it issues one.
-    fn on_side(&self) -> Option<Arc<CudaStream>> {
+    /// The stream this thread's launches and clears go to, and whether it is a branch's:
+    /// the stream of the branch this thread issues, if it issues one, else
+    /// [`Gpu::launch_stream`].
+    fn issue_stream(&self) -> (Arc<CudaStream>, bool) {
         let here = std::thread::current().id();
         match &*self.beside.lock().unwrap_or_else(|e| e.into_inner()) {
-            Some((thread, side)) if *thread == here => Some(side.clone()),
-            _ => None,
+            Some((thread, side)) if *thread == here => (side.clone(), true),
+            _ => (self.launch_stream(), false),
         }
     }
 
@@ -499,15 +498,14 @@ impl Gpu {
     /// The bytes belong to a live allocation that nothing else uses meanwhile.
     pub(super) unsafe fn clear(&self, addr: u64, bytes: usize) -> Result<(), Error> {
         self.bind()?;
+        let (stream, _) = self.issue_stream();
         // SAFETY: forwarded from the caller.
-        let stream = self.on_side().unwrap_or_else(|| self.launch_stream());
         unsafe { result::memset_d8_async(addr, 0, bytes, stream.cu_stream()) }
             .map_err(self.failed("clearing device memory"))
     }
 
-    /// The stream this thread's launches and clears go to, but for a branch's (see
-    /// [`Gpu::on_side`]): the device's stream, or the private stream of a capture this
-    /// thread is recording.
+    /// The stream a branch forks from and joins: the device's stream, or the private stream
+    /// of a capture this thread is recording.
     fn launch_stream(&self) -> Arc<CudaStream> {
         let capture = self.capture.lock().unwrap_or_else(|e| e.into_inner());
         match &*capture {

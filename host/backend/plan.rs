@@ -480,24 +480,18 @@ impl Device {
 /// nothing queued after the plan runs beside a branch of it.
 fn issue_all(device: &Device, gpu: &Gpu, sides: &Sides, ops: &[Op]) -> Result<(), Error> {
     let mut branches = 0;
-    let mut issued = Ok(());
-    for op in ops {
+    let issued = ops.iter().try_for_each(|op| {
         if op.joins && branches > 0 {
-            issued = gpu.rejoin(sides, branches);
+            gpu.rejoin(sides, branches)?;
         }
-        if issued.is_ok() {
-            issued = match op.beside {
-                true => {
-                    branches += 1;
-                    gpu.beside(sides, branches - 1, || (op.issue)(device))
-                }
-                false => (op.issue)(device),
-            };
+        match op.beside {
+            true => {
+                branches += 1;
+                gpu.beside(sides, branches - 1, || (op.issue)(device))
+            }
+            false => (op.issue)(device),
         }
-        if issued.is_err() {
-            break;
-        }
-    }
+    });
     match branches {
         0 => issued,
         _ => issued.and(gpu.rejoin(sides, branches)),

@@ -162,7 +162,8 @@ impl<I: Element, O: Element> Ring<I, O> {
                 // device's order (held). No kernel reads the slot meanwhile: `check` refuses
                 // a step past the depth, so the step that last read it has passed its fence
                 // (`reserve` waited for it); a kernel finds its slot by its count of steps,
-                // which a game checks equals the ring's every step (`Game::next_status`);
+                // which a game checks against the ring's every step (`Game::queue`, and each
+                // status as it is handed out);
                 // and the step that reads it next is queued after this write (a launch sees
                 // the host's writes made before it).
                 unsafe { at.write_volatile(input) }
