@@ -25,28 +25,45 @@ struct Module {
     file: &'static str,
     /// The GPU architecture it targets (`-C target-cpu`).
     arch: &'static str,
+    /// Its nested build's own target directory, under `$OUT_DIR` (`ptx-target-DIR`).
+    dir: &'static str,
     /// Further `rustc` arguments: the PTX version and the cfg of what only it has.
     flags: &'static [&'static str],
+    /// Whether its entries of [`REGISTER_CAPS`] are capped (the modules of every kernel).
+    capped: bool,
 }
 
-/// The baseline module, JIT-compiled by the driver for any Volta-or-newer card; and the
-/// Hopper module, whose kernels wait for the launch before them so that the host can launch
-/// them early (programmatic dependent launch needs sm_90 and PTX 7.8).
-const MODULES: [Module; 2] = [
+/// The baseline module, JIT-compiled by the driver for any Volta-or-newer card; the Hopper
+/// module, whose kernels wait for the launch before them so that the host can launch them
+/// early (programmatic dependent launch needs sm_90 and PTX 7.8); and the persistent step's
+/// module, whose one entry holds every stage kernel's body (the driver takes about a minute
+/// to compile it, so it is loaded only when a persistent step is made).
+const MODULES: [Module; 3] = [
     Module {
         file: "gpuwars_kernels.ptx",
         arch: "sm_70",
+        dir: "sm_70",
         flags: &[],
+        capped: true,
+    },
+    Module {
+        file: "gpuwars_program.ptx",
+        arch: "sm_70",
+        dir: "program",
+        flags: &["--cfg", "gpuwars_program"],
+        capped: false,
     },
     Module {
         file: "gpuwars_kernels_sm90.ptx",
         arch: "sm_90",
+        dir: "sm_90",
         flags: &[
             "-C",
             "target-feature=+ptx78",
             "--cfg",
             "gpuwars_dependent_launch",
         ],
+        capped: true,
     },
 ];
 
@@ -62,7 +79,7 @@ fn main() {
     println!("cargo::rustc-env=GPUWARS_PTX_ARCH={}", MODULES[0].arch);
     println!(
         "cargo::rustc-env=GPUWARS_PTX_DEPENDENT_ARCH={}",
-        MODULES[1].arch
+        MODULES[2].arch
     );
     embed_commit(&root);
     embed_rng_table(&root.join("data").join("mt607_params.txt"), &out_dir);
@@ -70,7 +87,12 @@ fn main() {
     let rustc = env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
     check_rust_src(&rustc);
     for module in &MODULES {
-        let ptx = cap_registers(build_ptx(&root, &out_dir, module));
+        let ptx = build_ptx(&root, &out_dir, module);
+        let ptx = if module.capped {
+            cap_registers(ptx)
+        } else {
+            ptx
+        };
         let dest = out_dir.join(module.file);
         fs::write(&dest, ptx)
             .unwrap_or_else(|e| fail(&format!("cannot write {}: {e}", dest.display())));
@@ -81,7 +103,7 @@ fn main() {
 fn build_ptx(root: &Path, out_dir: &Path, module: &Module) -> String {
     // Its own target dir: the outer build holds the lock on ours; one per module, so that
     // each keeps its incremental state.
-    let target_dir = out_dir.join(format!("ptx-target-{}", module.arch));
+    let target_dir = out_dir.join(format!("ptx-target-{}", module.dir));
     let deps = target_dir.join(TARGET).join("ptx").join("deps");
     let cargo = env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut nested = Command::new(cargo);

@@ -19,8 +19,8 @@ use crate::game::replay::MAX_STEPS;
 pub const PLAY_WINDOW: (u32, u32) = (1280, 720);
 use crate::game::{highscore, scene};
 use crate::graphics::Renderer;
-use crate::pipeline::Lanes;
 use crate::pipeline::draw::MAX_SIDE;
+use crate::pipeline::{Lanes, Persistent};
 use crate::play::Flyer;
 
 /// GpuWars: a top-down shooter whose whole game loop runs as GPU kernels.
@@ -366,6 +366,11 @@ pub struct RunArgs {
     /// results are the same.
     #[arg(long, default_value = "auto", value_parser = parse_lanes)]
     pub lanes: Lanes,
+    /// Run each step as one persistent launch (its stages with a barrier across the GPU
+    /// between them): `auto` (the plan of launches, faster wherever measured), `on` or
+    /// `off`. Speed only: the results are the same.
+    #[arg(long, value_enum, default_value_t = Persistent::Auto)]
+    pub persistent: Persistent,
     /// Time every stage of every step and print the table (steps then wait for each stage).
     #[arg(long)]
     pub profile: bool,
@@ -379,6 +384,7 @@ impl RunArgs {
                 lag: usize::from(self.lag),
                 graphs: !self.no_graphs,
                 lanes: self.lanes,
+                persistent: self.persistent,
             },
             profile: self.profile,
             ..RunOptions::default()

@@ -41,8 +41,10 @@ pub struct Report {
     pub setup_s: f64,
     /// Steps per wall-clock second, status read-back included.
     pub sim_steps_per_s: f64,
-    /// Kernel launches per step.
+    /// Kernel launches per step (as stages, where the step is one persistent launch).
     pub launches_per_step: usize,
+    /// Why the step ran as one persistent launch, if it did (`--persistent`).
+    pub persistent: Option<String>,
     /// Whether each step replayed a CUDA graph.
     pub graphs: bool,
     /// Steps in flight before a status was read back.
@@ -139,10 +141,10 @@ impl Report {
             format!(
                 "{} per step ({}, status read back {} step(s) late)",
                 self.launches_per_step,
-                if self.graphs {
-                    "CUDA graph"
-                } else {
-                    "one by one"
+                match (&self.persistent, self.graphs) {
+                    (Some(why), _) => format!("as stages of one persistent launch: {why}"),
+                    (None, true) => "CUDA graph".into(),
+                    (None, false) => "one by one".into(),
                 },
                 self.lag
             ),
@@ -415,6 +417,10 @@ fn play(
         sim_steps_per_s: played as f64 / seconds.max(f64::MIN_POSITIVE),
         launches_per_step: pipeline.launches_per_step(),
         graphs: pipeline.uses_graphs() && !options.profile,
+        persistent: match pipeline.persistent() {
+            (true, why) if !options.profile => Some(why.to_string()),
+            _ => None,
+        },
         lag: options.game.lag,
         state_hash: format!("{hash:#018x}"),
         score: status.score,

@@ -1,5 +1,6 @@
 //! The kernels' PTX modules, built by `build.rs` and embedded in the binary: the baseline
-//! for every card, and the Hopper one with programmatic dependent launch.
+//! for every card, the Hopper one with programmatic dependent launch, and the persistent
+//! step's.
 
 /// The PTX text handed to the CUDA driver.
 pub const PTX: &str = include_str!(concat!(env!("OUT_DIR"), "/gpuwars_kernels.ptx"));
@@ -13,6 +14,11 @@ pub const ARCH: &str = env!("GPUWARS_PTX_ARCH");
 /// The same kernels for [`DEPENDENT_ARCH`] and newer, each entry first waiting for the launch
 /// before it (`griddepcontrol`), so that they may be launched before it ends.
 pub const DEPENDENT_PTX: &str = include_str!(concat!(env!("OUT_DIR"), "/gpuwars_kernels_sm90.ptx"));
+
+/// The persistent step's module: the cooperative kernels alone (for [`ARCH`]), apart
+/// because the driver takes about a minute to compile their one entry, which holds every
+/// stage kernel's body: only a persistent step loads it.
+pub const PROGRAM_PTX: &str = include_str!(concat!(env!("OUT_DIR"), "/gpuwars_program.ptx"));
 
 /// The GPU architecture [`DEPENDENT_PTX`] targets.
 pub const DEPENDENT_ARCH: &str = env!("GPUWARS_PTX_DEPENDENT_ARCH");

@@ -1,5 +1,6 @@
 //! The embedded PTX modules: one `.entry` per kernel of the registry, nothing left to link;
-//! in the Hopper module, every entry waits for the launch before it before touching memory.
+//! in the Hopper module, every entry waits for the launch before it before touching memory;
+//! the persistent step's entry alone in a module of its own.
 
 use gpuwars::kernels::registry;
 use gpuwars::ptx;
@@ -105,4 +106,22 @@ fn kernel_names_are_unique() {
     names.sort_unstable();
     names.dedup();
     assert_eq!(names.len(), registry::ALL.len());
+}
+
+/// The persistent step's module: the cooperative kernels' entries and nothing else (each
+/// kernel of the registry is in the other modules), self-contained, for the baseline.
+#[test]
+fn the_persistent_steps_module_holds_its_entries_only() {
+    let names: Vec<&str> = registry::COOPERATIVE.iter().map(|k| k.name).collect();
+    assert_eq!(ptx::entry_points(ptx::PROGRAM_PTX), names);
+    assert!(!ptx::PROGRAM_PTX.contains(".extern"));
+    let target = format!(".target {}", ptx::ARCH);
+    assert!(ptx::PROGRAM_PTX.lines().any(|l| l.trim() == target));
+    for (module, arch) in MODULES {
+        let entries = ptx::entry_points(module);
+        assert!(
+            names.iter().all(|n| !entries.contains(n)),
+            "{arch}: {entries:?}"
+        );
+    }
 }

@@ -7,9 +7,10 @@
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr::NonNull;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Mutex, MutexGuard};
 
+use gpuwars_kernels::exec::Cooperative;
 use gpuwars_kernels::{KernelArgs, Thread};
 use rand::rngs::StdRng;
 use rand::seq::SliceRandom;
@@ -139,13 +140,123 @@ impl Emulator {
         }))
         .map_err(|payload| Error::KernelFault {
             kernel: kernel.name.into(),
-            message: payload
-                .downcast_ref::<String>()
-                .map(String::as_str)
-                .or_else(|| payload.downcast_ref::<&str>().copied())
-                .unwrap_or("panic")
-                .to_string(),
+            message: panic_message(payload.as_ref()),
         })
+    }
+}
+
+impl Emulator {
+    /// Runs a cooperative launch of `grid` blocks of `block` threads, each block whole on a
+    /// worker of its own (at most [`Emulator::threads`] blocks, all at once), and returns
+    /// when all are done (the caller holds the order). A block that faults breaks the
+    /// barrier, so the others stop at it rather than wait for ever.
+    pub(super) fn launch_cooperative<A: KernelArgs>(
+        &self,
+        kernel: &Cooperative<A>,
+        grid: u32,
+        block: u32,
+        args: &A,
+    ) -> Result<(), Error> {
+        if grid as usize > self.threads() {
+            return Err(Error::Invalid(format!(
+                "kernel `{}`: a cooperative launch of {grid} blocks on an emulation of {} \
+                 threads (its barrier needs every block running at once: at most one a thread)",
+                kernel.name,
+                self.threads()
+            )));
+        }
+        let barrier = Rendezvous::new(grid as usize);
+        let wait = || barrier.wait();
+        let first_fault = Mutex::new(None);
+        self.pool.broadcast(|context| {
+            let Ok(b) = u32::try_from(context.index()) else {
+                return;
+            };
+            if b >= grid {
+                return;
+            }
+            let ran = catch_unwind(AssertUnwindSafe(|| {
+                (kernel.block)(b, block, grid, args, &wait)
+            }));
+            if let Err(payload) = ran {
+                barrier.break_it();
+                let mut fault = first_fault.lock().unwrap_or_else(|e| e.into_inner());
+                if fault.is_none() && !payload.is::<BrokenBarrier>() {
+                    *fault = Some(panic_message(payload.as_ref()));
+                }
+            }
+        });
+        match first_fault.into_inner().unwrap_or_else(|e| e.into_inner()) {
+            None => Ok(()),
+            Some(message) => Err(Error::KernelFault {
+                kernel: kernel.name.into(),
+                message,
+            }),
+        }
+    }
+}
+
+/// What a fault's panic said.
+fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<String>()
+        .map(String::as_str)
+        .or_else(|| payload.downcast_ref::<&str>().copied())
+        .unwrap_or("panic")
+        .to_string()
+}
+
+/// The panic of a block that found its barrier broken by another block's fault.
+struct BrokenBarrier;
+
+/// The emulator's barrier across a cooperative launch's blocks: each waits until all have
+/// arrived, spinning briefly and then yielding its core (the emulation may share the
+/// machine with other work); broken by a block's fault, it sends every waiter out (with a
+/// [`BrokenBarrier`] panic) instead of keeping them for ever.
+struct Rendezvous {
+    blocks: usize,
+    arrived: AtomicUsize,
+    /// Barriers passed: a waiter leaves when it changes.
+    generation: AtomicU64,
+    broken: AtomicBool,
+}
+
+impl Rendezvous {
+    fn new(blocks: usize) -> Self {
+        Rendezvous {
+            blocks,
+            arrived: AtomicUsize::new(0),
+            generation: AtomicU64::new(0),
+            broken: AtomicBool::new(false),
+        }
+    }
+
+    /// Returns once every block has arrived as often; what each wrote before it is seen by
+    /// every block after it (the last arrival's release, each waiter's acquire).
+    fn wait(&self) {
+        let generation = self.generation.load(Ordering::Acquire);
+        if self.arrived.fetch_add(1, Ordering::AcqRel) + 1 == self.blocks {
+            self.arrived.store(0, Ordering::Relaxed);
+            self.generation.store(generation + 1, Ordering::Release);
+            return;
+        }
+        let mut spins = 0u32;
+        while self.generation.load(Ordering::Acquire) == generation {
+            if self.broken.load(Ordering::Relaxed) {
+                std::panic::panic_any(BrokenBarrier);
+            }
+            if spins < 1_000 {
+                spins += 1;
+                std::hint::spin_loop();
+            } else {
+                std::thread::yield_now();
+            }
+        }
+    }
+
+    /// Sends every block waiting now or later out of the barrier.
+    fn break_it(&self) {
+        self.broken.store(true, Ordering::Relaxed);
     }
 }
 

@@ -23,7 +23,8 @@ use cudarc::driver::{
     DriverError, LaunchConfig, PushKernelArg, result, sys,
 };
 use cudarc::nvrtc::Ptx;
-use gpuwars_kernels::{KernelArgs, registry};
+use gpuwars_kernels::exec::Cooperative;
+use gpuwars_kernels::{KernelArgs, KernelInfo, registry};
 use serde::Serialize;
 
 use super::{Element, Error, Launch};
@@ -66,6 +67,9 @@ pub(super) struct Gpu {
     /// launches go there.
     beside: Mutex<Option<(ThreadId, Arc<CudaStream>)>>,
     functions: HashMap<&'static str, CudaFunction>,
+    /// The cooperative kernels, from their own module, loaded by the first that is asked
+    /// for (the driver takes about a minute to compile it; see `ptx::PROGRAM_PTX`).
+    cooperative: Mutex<Option<HashMap<&'static str, CudaFunction>>>,
     properties: GpuProperties,
     /// Whether launches carry programmatic stream serialization (start before the launch
     /// they follow ends); `None` when the card cannot (before sm_90).
@@ -267,16 +271,8 @@ impl Gpu {
         } else {
             (ptx::PTX, ptx::ARCH)
         };
-        let module = ctx
-            .load_module(Ptx::from_src(source))
+        let functions = load(&ctx, source, registry::ALL)
             .map_err(in_flight.failed("loading the kernels' PTX"))?;
-        let mut functions = HashMap::new();
-        for info in registry::ALL {
-            let function = module
-                .load_function(info.name)
-                .map_err(in_flight.failed("finding a kernel in the PTX"))?;
-            functions.insert(info.name, function);
-        }
         let properties = properties(&ctx, arch).map_err(in_flight.failed("querying device 0"))?;
         let sides = (0..BRANCHES)
             .map(|_| {
@@ -293,6 +289,7 @@ impl Gpu {
             order: Mutex::new(sides),
             beside: Mutex::new(None),
             functions,
+            cooperative: Mutex::new(None),
             properties,
             dependent_launch: dependent.then(|| AtomicBool::new(true)),
         })
@@ -404,9 +401,7 @@ impl Gpu {
             block,
             args,
         } = *launch;
-        let function = self.functions.get(kernel.name).ok_or_else(|| {
-            Error::Invalid(format!("kernel `{}` is not in the PTX module", kernel.name))
-        })?;
+        let function = self.function(kernel.name)?;
         let config = LaunchConfig {
             grid_dim: (grid, 1, 1),
             block_dim: (block, 1, 1),
@@ -417,7 +412,7 @@ impl Gpu {
         // A launch beside the others follows an event, not a kernel: nothing to start early.
         let launched = if self.dependent_launch() && !aside {
             // SAFETY: as below; the sm_90 module's entries wait for their predecessor.
-            unsafe { launch_dependent(function, &stream, config, &param) }
+            unsafe { launch_with(function, &stream, config, &param, dependent()) }
         } else {
             let mut launch = stream.launch_builder(function);
             launch.arg(&param);
@@ -434,6 +429,77 @@ impl Gpu {
             self.in_flight.queue([kernel.name]);
         }
         Ok(())
+    }
+
+    /// The most blocks of `block` threads of `kernel` the device holds at once: the largest
+    /// grid a cooperative launch of it may have.
+    pub(super) fn resident_blocks<A>(
+        &self,
+        kernel: &Cooperative<A>,
+        block: u32,
+    ) -> Result<u32, Error> {
+        let function = self.cooperative_function(kernel.name)?;
+        let per_multiprocessor = function
+            .occupancy_max_active_blocks_per_multiprocessor(block, 0, None)
+            .map_err(self.failed("asking how many blocks a multiprocessor holds"))?;
+        Ok(per_multiprocessor * self.properties.multiprocessors)
+    }
+
+    /// Queues a cooperative launch of `grid` blocks (every block resident at once) on the
+    /// device's stream (or the capture this thread records).
+    ///
+    /// # Safety
+    /// See [`super::Op::launch`].
+    pub(super) unsafe fn launch_cooperative<A: KernelArgs>(
+        &self,
+        kernel: &Cooperative<A>,
+        grid: u32,
+        block: u32,
+        args: A,
+    ) -> Result<(), Error> {
+        let function = self.cooperative_function(kernel.name)?;
+        let config = LaunchConfig {
+            grid_dim: (grid, 1, 1),
+            block_dim: (block, 1, 1),
+            shared_mem_bytes: 0,
+        };
+        let (stream, _) = self.issue_stream();
+        // SAFETY: forwarded from the caller.
+        unsafe { launch_with(&function, &stream, config, &Param(args), cooperative()) }.map_err(
+            |e| {
+                let during = format!(
+                    "launching kernel `{}` (cooperative, {grid} blocks)",
+                    kernel.name
+                );
+                self.in_flight.error(&during, e)
+            },
+        )?;
+        if !self.capturing_here() {
+            self.in_flight.queue([kernel.name]);
+        }
+        Ok(())
+    }
+
+    /// The cooperative kernel `name`, its module loaded first if no cooperative kernel has
+    /// been asked for yet.
+    fn cooperative_function(&self, name: &str) -> Result<CudaFunction, Error> {
+        let mut loaded = self.cooperative.lock().unwrap_or_else(|e| e.into_inner());
+        if loaded.is_none() {
+            let functions = load(&self.ctx, ptx::PROGRAM_PTX, registry::COOPERATIVE)
+                .map_err(self.failed("loading the persistent step's PTX"))?;
+            *loaded = Some(functions);
+        }
+        loaded
+            .as_ref()
+            .and_then(|functions| functions.get(name).cloned())
+            .ok_or_else(|| Error::Invalid(format!("kernel `{name}` is not a cooperative kernel")))
+    }
+
+    /// The module's function `name`.
+    fn function(&self, name: &str) -> Result<&CudaFunction, Error> {
+        self.functions
+            .get(name)
+            .ok_or_else(|| Error::Invalid(format!("kernel `{name}` is not in the PTX module")))
     }
 
     /// Whether the calling thread is recording a capture.
@@ -718,6 +784,19 @@ pub(super) fn address<T>(slice: &CudaSlice<T>) -> u64 {
     addr
 }
 
+/// The functions `kernels` of the PTX module `source`, loaded into `ctx`.
+fn load(
+    ctx: &Arc<CudaContext>,
+    source: &str,
+    kernels: &[KernelInfo],
+) -> Result<HashMap<&'static str, CudaFunction>, DriverError> {
+    let module = ctx.load_module(Ptx::from_src(source))?;
+    kernels
+        .iter()
+        .map(|info| Ok((info.name, module.load_function(info.name)?)))
+        .collect()
+}
+
 /// Streams for the branches of a plan (see [`Gpu::beside`]): the autopilot's, the
 /// explosions' and the tally's.
 const BRANCHES: usize = 3;
@@ -726,29 +805,55 @@ const BRANCHES: usize = 3;
 /// [`Gpu::in_order`]).
 pub(super) struct Sides(Vec<Arc<CudaStream>>);
 
-/// Launches `function` on `stream` with programmatic stream serialization: its blocks may
-/// start once every block of the launch before it has signalled its dependents or ended
-/// (each entry of the sm_90 module signals right after waiting for its own predecessor to
-/// finish, `griddepcontrol.wait`, before touching memory). Captured into a graph, the edge
-/// from the previous kernel node becomes a programmatic one.
+/// Programmatic stream serialization: the launch's blocks may start once every block of the
+/// launch before it has signalled its dependents or ended (each entry of the sm_90 module
+/// signals right after waiting for its own predecessor to finish, `griddepcontrol.wait`,
+/// before touching memory). Captured into a graph, the edge from the previous kernel node
+/// becomes a programmatic one. Only for the sm_90 module's kernels.
+fn dependent() -> sys::CUlaunchAttribute {
+    attribute(
+        sys::CUlaunchAttributeID::CU_LAUNCH_ATTRIBUTE_PROGRAMMATIC_STREAM_SERIALIZATION,
+        sys::CUlaunchAttributeValue {
+            programmaticStreamSerializationAllowed: 1,
+        },
+    )
+}
+
+/// A cooperative launch: every block resident at once, so that they may wait for one
+/// another (the driver refuses a grid larger than the device holds).
+fn cooperative() -> sys::CUlaunchAttribute {
+    attribute(
+        sys::CUlaunchAttributeID::CU_LAUNCH_ATTRIBUTE_COOPERATIVE,
+        sys::CUlaunchAttributeValue { cooperative: 1 },
+    )
+}
+
+/// The launch attribute `id` of `value`.
+fn attribute(
+    id: sys::CUlaunchAttributeID,
+    value: sys::CUlaunchAttributeValue,
+) -> sys::CUlaunchAttribute {
+    sys::CUlaunchAttribute {
+        id,
+        pad: [0; 4],
+        value,
+    }
+}
+
+/// Launches `function` on `stream` with one launch attribute (`cuLaunchKernelEx`, where
+/// cudarc's launch builder takes none).
 ///
 /// # Safety
 /// `param` is the argument struct of `function`, whose views are valid for the launch, and
-/// `function` comes from the sm_90 module.
-unsafe fn launch_dependent<A: KernelArgs>(
+/// the attribute is one `function` can be launched with.
+unsafe fn launch_with<A: KernelArgs>(
     function: &CudaFunction,
     stream: &CudaStream,
     config: LaunchConfig,
     param: &Param<A>,
+    mut attribute: sys::CUlaunchAttribute,
 ) -> Result<(), DriverError> {
     stream.context().bind_to_thread()?;
-    let mut attribute = sys::CUlaunchAttribute {
-        id: sys::CUlaunchAttributeID::CU_LAUNCH_ATTRIBUTE_PROGRAMMATIC_STREAM_SERIALIZATION,
-        pad: [0; 4],
-        value: sys::CUlaunchAttributeValue {
-            programmaticStreamSerializationAllowed: 1,
-        },
-    };
     let launch = sys::CUlaunchConfig {
         gridDimX: config.grid_dim.0,
         gridDimY: config.grid_dim.1,

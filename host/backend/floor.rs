@@ -44,7 +44,18 @@ pub struct Floor {
     /// Seconds a step, the graph as the step launches it (with dependent launch where the
     /// device can) in a ring of 4 steps in flight, as a game queues each step.
     pub ring_s: f64,
+    /// Seconds a step, the chain as one persistent launch a step: its launches as stages of
+    /// one cooperative launch, a barrier across the grid between them (`Device::program`).
+    #[serde(default)]
+    pub persistent_s: Option<f64>,
+    /// Seconds a step, [`BATCH`] steps of the chain in one persistent launch: the barriers'
+    /// own floor, with no launch a step.
+    #[serde(default)]
+    pub batched_s: Option<f64>,
 }
+
+/// Steps a launch of the batched persistent floor runs ([`Floor::batched_s`]).
+pub const BATCH: u32 = 16;
 
 /// The most threads whose one-block floor is measured: a block runs 64 of them a thread a
 /// round at this size, already far slower than a graph of whole-GPU launches (at a million,
@@ -139,12 +150,26 @@ pub fn measure(device: &Device, launches: usize, threads: u32) -> Result<Floor, 
         };
         device.set_dependent_launch(dependent_s.is_some());
         let ring_s = time_in_ring(device, &chain, (warm, reps))?;
-        Ok((block, graph_s, dependent_s, stream_s, one_block_s, ring_s))
+        let persistent_s = time(&[device.program(&chain, 1)?], false)?;
+        let batched_s = time(&[device.program(&chain, BATCH)?], false)? / f64::from(BATCH);
+        Ok(Floor {
+            launches,
+            threads,
+            block,
+            graph_s,
+            dependent_s,
+            stream_s,
+            one_block_s,
+            ring_s,
+            persistent_s: Some(persistent_s),
+            batched_s: Some(batched_s),
+        })
     };
-    let times = times();
+    let floor = times();
     device.set_dependent_launch(was_dependent);
-    let (block, graph_s, dependent_s, stream_s, one_block_s, ring_s) = times?;
-    let timed_runs = timed_runs + 1;
+    let floor = floor?;
+    // The timed plans' runs, the ring's, and the batched program's further steps.
+    let timed_runs = timed_runs + 1 + (BATCH - 1);
 
     let runs = timed_runs * (warm + reps) * rounds;
     if let Some(i) = device.download(&data)?.iter().position(|&v| v != runs) {
@@ -153,16 +178,7 @@ pub fn measure(device: &Device, launches: usize, threads: u32) -> Result<Floor, 
              {runs} launches that ran"
         )));
     }
-    Ok(Floor {
-        launches,
-        threads,
-        block,
-        graph_s,
-        dependent_s,
-        stream_s,
-        one_block_s,
-        ring_s,
-    })
+    Ok(floor)
 }
 
 /// Seconds a step of `chain` as a graph queued through a ring of 4 steps in flight
@@ -219,10 +235,18 @@ impl Floor {
         let one_block = self.one_block_s.map_or(String::new(), |s| {
             format!(", {:.1} as rounds of one block", s * 1e6)
         });
+        let persistent = match (self.persistent_s, self.batched_s) {
+            (Some(one), Some(batched)) => format!(
+                ", {:.1} as one persistent launch a step ({:.1} with {BATCH} steps a launch)",
+                one * 1e6,
+                batched * 1e6
+            ),
+            _ => String::new(),
+        };
         format!(
             "launch floor (measured here): {} dependent launches of one read-modify-write over \
              {} threads in blocks of {} take {:.1} µs a step as a graph{dependent}, {:.1} one by \
-             one{one_block}, {:.1} in a game's ring; the step takes {:.1}",
+             one{one_block}{persistent}, {:.1} in a game's ring; the step takes {:.1}",
             self.launches,
             crate::files::thousands(self.threads),
             self.block,

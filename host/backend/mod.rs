@@ -28,6 +28,7 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 pub use gpuwars_kernels::data::Element;
+use gpuwars_kernels::exec::Cooperative;
 use gpuwars_kernels::{DevSlice, Kernel, KernelArgs};
 use serde::Serialize;
 
@@ -36,7 +37,7 @@ pub use buffer::{Buffer, Buffers, Hold, Reader, Vecs, Zeroed};
 pub use cpu::Schedule;
 pub use cuda::GpuProperties;
 pub use interop::GlBuffer;
-pub use plan::{Binder, Op, Plan};
+pub use plan::{Binder, Op, PROGRAM_BLOCK, Plan};
 pub use ring::Ring;
 
 /// The largest block the GPU accepts; the emulator enforces it too, so that a launch that runs
@@ -344,6 +345,34 @@ impl Device {
             Imp::Cpu(emu) => emu.launch(launch),
             // SAFETY: forwarded from the caller.
             Imp::Cuda(gpu) => unsafe { gpu.launch(launch) },
+        }
+    }
+
+    /// Issues a cooperative launch of `kernel`, `grid` blocks of `block` threads all resident
+    /// at once, on this device's backend, uncounted.
+    ///
+    /// # Safety
+    /// As for [`Op::launch`], and the caller holds the emulator's order.
+    unsafe fn issue_cooperative<A: KernelArgs>(
+        &self,
+        kernel: &Cooperative<A>,
+        grid: u32,
+        block: u32,
+        args: A,
+    ) -> Result<(), Error> {
+        match &self.imp {
+            Imp::Cpu(emu) => emu.launch_cooperative(kernel, grid, block, &args),
+            // SAFETY: forwarded from the caller.
+            Imp::Cuda(gpu) => unsafe { gpu.launch_cooperative(kernel, grid, block, args) },
+        }
+    }
+
+    /// The most blocks of `block` threads of `kernel` this device runs at once: the largest
+    /// grid of a cooperative launch (on the CPU, one block a worker thread).
+    pub fn resident_blocks<A>(&self, kernel: &Cooperative<A>, block: u32) -> Result<u32, Error> {
+        match &self.imp {
+            Imp::Cpu(emu) => Ok(u32::try_from(emu.threads()).unwrap_or(u32::MAX)),
+            Imp::Cuda(gpu) => gpu.resident_blocks(kernel, block),
         }
     }
 

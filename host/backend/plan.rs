@@ -14,6 +14,10 @@
 //! buffer on the stream it was allocated on, after the work queued before), and on the CPU
 //! by the emulator's order lock, held for a whole run.
 
+mod program;
+
+pub use program::PROGRAM_BLOCK;
+
 use std::fmt;
 use std::sync::Arc;
 use std::time::Instant;
@@ -176,6 +180,17 @@ pub struct Op {
     /// How the kernel uses each.
     touches: Arc<[Touch]>,
     home: Home,
+    /// The launch as a persistent step's stage takes it (none for a clear).
+    stage: Option<Arc<StageSource>>,
+}
+
+/// A launch as a persistent program stores it: the kernel, grid, block and the bytes of its
+/// argument struct.
+struct StageSource {
+    kernel: &'static str,
+    grid: u32,
+    block: u32,
+    args: Box<[u8]>,
 }
 
 /// An op's holds, touches and home, taken from the binder that made its views.
@@ -202,6 +217,12 @@ impl Op {
     /// [`Error::KernelFault`]).
     pub unsafe fn launch<A: KernelArgs>(launch: Launch<A>, binder: Binder, bytes: u64) -> Op {
         let (holds, touches, home) = bound(binder);
+        let stage = StageSource {
+            kernel: launch.kernel.name,
+            grid: launch.grid,
+            block: launch.block,
+            args: bytemuck::bytes_of(&launch.args).into(),
+        };
         Op {
             name: launch.kernel.name,
             kind: OpKind::Launch,
@@ -212,6 +233,7 @@ impl Op {
             _holds: holds,
             touches,
             home,
+            stage: Some(Arc::new(stage)),
             // SAFETY: the caller's promise covers every run of the op, and the op holds the
             // buffers its views are of.
             issue: Arc::new(move |device| unsafe { device.issue(&launch) }),
@@ -234,6 +256,7 @@ impl Op {
             _holds: holds,
             touches,
             home,
+            stage: None,
             // SAFETY: as in `launch`.
             issue: Arc::new(move |device| unsafe { device.clear(view) }),
         }

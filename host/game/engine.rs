@@ -15,7 +15,7 @@ use super::spec::{Behaviour, EffectsSpec, GameSpec, Machine, Scene};
 use crate::backend::Ring;
 use crate::camera::Camera;
 use crate::pipeline::{
-    Drawing, Frame, GameConfig, Lanes, Pipeline, Profile, bytes_needed, mind_slots,
+    Drawing, Frame, GameConfig, Lanes, Persistent, Pipeline, Profile, bytes_needed, mind_slots,
 };
 use crate::sim::layout::{Layout, steps};
 use crate::sim::{Snapshot, WorldSpec};
@@ -31,6 +31,9 @@ pub struct Options {
     pub graphs: bool,
     /// Threads a body's neighbour queries get (speed only: the results are the same).
     pub lanes: Lanes,
+    /// Whether the step runs as one persistent launch (speed only: the results are the
+    /// same).
+    pub persistent: Persistent,
 }
 
 impl Default for Options {
@@ -39,6 +42,7 @@ impl Default for Options {
             lag: 4,
             graphs: true,
             lanes: Lanes::Auto,
+            persistent: Persistent::Auto,
         }
     }
 }
@@ -221,7 +225,7 @@ impl<'d> Game<'d> {
             &world,
             seed,
             Some(game),
-            (options.graphs, options.lanes),
+            (options.graphs, options.lanes, options.persistent),
         )?;
         let (commands, statuses) = pipeline.mailbox()?;
         Ok(Game {

@@ -32,6 +32,7 @@
 
 pub mod draw;
 mod handmade;
+mod persistent;
 mod profile;
 mod simulation;
 mod stage;
@@ -40,6 +41,7 @@ mod teams;
 pub(crate) mod world;
 
 pub use draw::{Drawing, Frame};
+pub use persistent::Persistent;
 pub use profile::{Profile, StageTimes};
 pub use simulation::Simulation;
 pub use stage::{Stage, StagePlan};
@@ -97,6 +99,8 @@ pub fn mind_slots(layout: &Layout, machines: &[bool]) -> Option<(u32, u32)> {
 /// that do), and each stage alone (for the profile).
 struct Plans {
     step: Plan,
+    /// Launches of a step that does not renumber, as its plan of launches makes them.
+    launches: usize,
     renumbering: Option<Plan>,
     stages: Vec<StagePlan>,
 }
@@ -104,6 +108,8 @@ struct Plans {
 /// A world on a device and the plans of its step.
 pub struct Pipeline<'d> {
     plans: Plans,
+    /// Whether the step runs as one persistent launch, and why (see [`Persistent`]).
+    persistent: (bool, &'static str),
     world: World,
     /// The kernel renderer's buffers, made by the first frame drawn.
     canvas: Option<draw::Canvas>,
@@ -115,7 +121,8 @@ pub struct Pipeline<'d> {
 impl<'d> Pipeline<'d> {
     /// A world of `spec` with every slot free, its generators seeded from `seed`, and the
     /// game `game` if given; its step replays as a CUDA graph on the GPU when `graphs`, its
-    /// neighbour queries with `lanes` threads a body.
+    /// neighbour queries with `lanes` threads a body, as one persistent launch as
+    /// `persistent` chooses.
     /// Fails with [`Error::OutOfMemory`] before allocating anything if its buffers do not
     /// fit the device.
     pub fn configured(
@@ -123,9 +130,15 @@ impl<'d> Pipeline<'d> {
         spec: &WorldSpec,
         seed: u32,
         game: Option<GameConfig>,
-        (graphs, lanes): (bool, Lanes),
+        (graphs, lanes, persistent): (bool, Lanes, Persistent),
     ) -> Result<Self, Error> {
         let world = World::new(device, spec, seed, game, lanes)?;
+        let persistent = persistent.choose(device);
+        // The whole step's ops, as one persistent launch where chosen.
+        let whole = |ops: Vec<_>| match persistent.0 {
+            true => device.plan(vec![device.program(&ops, 1)?], graphs),
+            false => device.plan(ops, graphs),
+        };
         // Every stage's ops, and those of the steps that do not renumber.
         let (mut all, mut plain) = (Vec::new(), Vec::new());
         let mut stages = Vec::new();
@@ -161,11 +174,14 @@ impl<'d> Pipeline<'d> {
         }
         let renumbering = match world.config.renumber_every {
             0 => None,
-            _ => Some(device.plan(all, graphs)?),
+            _ => Some(whole(all)?),
         };
+        let launches = plain.iter().filter(|op| op.is_launch()).count();
         let pipeline = Pipeline {
+            persistent,
             plans: Plans {
-                step: device.plan(plain, graphs)?,
+                step: whole(plain)?,
+                launches,
                 renumbering,
                 stages,
             },
@@ -240,7 +256,12 @@ impl<'d> Pipeline<'d> {
 
     /// Kernel launches per step (of a step that does not renumber).
     pub fn launches_per_step(&self) -> usize {
-        self.plans.step.launches()
+        self.plans.launches
+    }
+
+    /// Whether the step runs as one persistent launch, and why.
+    pub fn persistent(&self) -> (bool, &'static str) {
+        self.persistent
     }
 
     /// Whether the step replays as a CUDA graph.

@@ -1,6 +1,6 @@
 //! The simulation-only configuration of the pipeline: a world of bodies without a game.
 
-use super::{Lanes, Pipeline};
+use super::{Lanes, Persistent, Pipeline};
 use crate::sim::WorldSpec;
 use crate::{Device, Error};
 
@@ -14,6 +14,12 @@ impl<'d> Pipeline<'d> {
     /// An empty world (every slot free) for `spec` without a game, its generators seeded
     /// from `seed`; the step replays as a CUDA graph on the GPU.
     pub fn new(device: &'d Device, spec: &WorldSpec, seed: u32) -> Result<Self, Error> {
-        Pipeline::configured(device, spec, seed, None, (true, Lanes::Auto))
+        Pipeline::configured(
+            device,
+            spec,
+            seed,
+            None,
+            (true, Lanes::Auto, Persistent::Auto),
+        )
     }
 }

@@ -192,6 +192,24 @@ pub fn run_block<A>(
     }
 }
 
+/// A kernel whose blocks wait for one another (a cooperative launch: every block resident
+/// at once). On the GPU its PTX entry point runs each thread; the emulator runs each block
+/// whole on a thread of its own, `block`'s last argument being its barrier across them.
+pub struct Cooperative<A> {
+    /// Name of the `.entry` in the PTX module.
+    pub name: &'static str,
+    /// Runs every thread of block `block`, `(block, block_dim, grid_dim, args, wait)`, where
+    /// `wait` returns once every block of the launch has called it as often (the CPU's).
+    pub block: fn(u32, u32, u32, &A, &(dyn Fn() + Sync)),
+}
+
+impl<A> Clone for Cooperative<A> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<A> Copy for Cooperative<A> {}
+
 impl<A> Clone for Kernel<A> {
     fn clone(&self) -> Self {
         *self
@@ -661,6 +679,20 @@ fn out_of_bounds(index: u32, len: u32) -> ! {
     }
     #[cfg(not(target_arch = "nvptx64"))]
     panic!("device index {index} out of bounds for a buffer of {len} elements")
+}
+
+/// A persistent program's stage names kernel `kernel`, but only `stages` are known.
+#[cold]
+#[inline(never)]
+pub(crate) fn no_such_stage(kernel: u32, stages: u32) -> ! {
+    #[cfg(target_arch = "nvptx64")]
+    {
+        let _ = (kernel, stages);
+        // SAFETY: `trap` aborts the kernel; it has no preconditions.
+        unsafe { core::arch::nvptx::trap() }
+    }
+    #[cfg(not(target_arch = "nvptx64"))]
+    panic!("a persistent stage names kernel {kernel}, but there are {stages} stage kernels")
 }
 
 #[cold]

@@ -7,7 +7,9 @@
 //! The execution model ([`exec`]) is deliberately small: a kernel body is a plain function of
 //! the calling thread's coordinates and a `#[repr(C)]` argument struct, and kernels never wait
 //! for each other's threads (no barriers, no shared memory). A phase boundary is a new launch,
-//! so the emulator's semantics are exactly the GPU's. The lanes of one warp may exchange
+//! so the emulator's semantics are exactly the GPU's; or, in the persistent step
+//! ([`persistent`]), a barrier across a grid whose blocks all stay resident, which both
+//! targets honour. The lanes of one warp may exchange
 //! values through [`warp`]'s collectives, which give the same bits on both targets.
 #![cfg_attr(not(test), no_std)]
 #![cfg_attr(
@@ -22,6 +24,7 @@ pub mod elementary;
 pub mod exec;
 pub mod game;
 pub mod math;
+pub mod persistent;
 pub mod primitives;
 pub mod registry;
 pub mod render;

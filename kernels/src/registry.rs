@@ -4,13 +4,16 @@
 //! [`ALL`], and, on nvptx, the `extern "ptx-kernel"` entry point that calls the body. Because
 //! the entry's name and the constant's `name` come from the same identifier, they cannot drift.
 
+use crate::access::Read;
+use crate::exec::Cooperative;
 use crate::game::{ai, autopilot, effects, master};
 use crate::math;
+use crate::persistent::{self, ProgramArgs, Runner, Stage};
 use crate::primitives::{histogram, scan, sort, touch};
 use crate::render::{self, camera, particles, radar};
 use crate::rng::streams;
 use crate::sim::{broad, contact, free_list, integrate, narrow, renumber, scatter};
-use crate::{Kernel, KernelInfo};
+use crate::{DevSlice, Kernel, KernelInfo};
 
 macro_rules! kernels {
     (@wait) => {
@@ -51,8 +54,9 @@ macro_rules! kernels {
             }),*
         ];
 
-        /// The PTX entry points: one per kernel, each a call of its body.
-        #[cfg(target_arch = "nvptx64")]
+        /// The PTX entry points: one per kernel, each a call of its body (not in the
+        /// persistent step's module).
+        #[cfg(all(target_arch = "nvptx64", not(gpuwars_program)))]
         mod entries {
             use super::*;
             $(
@@ -178,4 +182,104 @@ kernels! {
     WRITE_VERTICES = write_vertices(render::VertexArgs) => render::write_vertices;
     /// Writes every particle's vertex for the GL renderer, after the bodies'.
     WRITE_PARTICLE_VERTICES = write_particle_vertices(particles::ParticleVertexArgs) => particles::write_particle_vertices;
+}
+
+macro_rules! stages {
+    ($($konst:ident),* $(,)?) => {
+        /// The kernels a persistent step can run as stages ([`persistent::Stage::kernel`]
+        /// is an index here): every kernel of a step's plans, and the launch floor's touch.
+        pub const STAGES: &[&str] = &[$($konst.name),*];
+
+        /// Runs `stage` (its kernel's body, with the argument struct it finds in `blob`)
+        /// for the virtual threads `runner` holds; a stage naming no kernel of [`STAGES`]
+        /// is a kernel fault.
+        #[inline(always)]
+        pub fn run_stage(stage: &Stage, blob: &DevSlice<u64, Read>, runner: &impl Runner) {
+            let mut index = 0;
+            $(
+                if stage.kernel == index {
+                    return runner.run(stage, blob, |t, args| ($konst.body)(t, args));
+                }
+                index += 1;
+            )*
+            crate::exec::no_such_stage(stage.kernel, index)
+        }
+    };
+}
+
+stages! {
+    TOUCH,
+    SCAN_REDUCE,
+    SCAN_TILES,
+    SCAN_TILES_AFTER_SUMS,
+    COUNT_CELLS,
+    PLACE_IN_CELLS,
+    ORDER_CELLS,
+    MERGE_RUNS,
+    GATHER_IN_CELL_ORDER,
+    SETTLE_IN_CELL_ORDER,
+    COLLIDE,
+    COLLIDE_CIRCLES,
+    COLLIDE_SWEPT,
+    COLLIDE_CIRCLES_SWEPT,
+    INTEGRATE,
+    MARK_FREE,
+    GATHER_FREE,
+    MARK_AND_GATHER_FREE,
+    MASTER,
+    AUTOPILOT,
+    BURST_AND_FADE,
+    TALLY,
+    BIRTHS,
+    BIRTHS_AND_COUNT,
+    THINK,
+    THINK_IN_TEAMS,
+    COLLIDE_THINK_INTEGRATE,
+    COLLIDE_THINK_INTEGRATE_SWEPT,
+}
+
+/// The persistent step: a program of stages, each a launch of [`STAGES`], with a barrier
+/// across the grid between them (a cooperative launch; see [`persistent`]).
+pub const PROGRAM: Cooperative<ProgramArgs> = Cooperative {
+    name: "program",
+    block: {
+        #[cfg(not(target_arch = "nvptx64"))]
+        fn block(
+            block: u32,
+            block_dim: u32,
+            grid_dim: u32,
+            args: &ProgramArgs,
+            wait: &(dyn Fn() + Sync),
+        ) {
+            let runner = persistent::OnCpu {
+                block,
+                block_dim,
+                grid_dim,
+                wait,
+            };
+            persistent::program(&runner, args)
+        }
+        #[cfg(target_arch = "nvptx64")]
+        fn block(_: u32, _: u32, _: u32, _: &ProgramArgs, _: &(dyn Fn() + Sync)) {}
+        block
+    },
+};
+
+/// Every cooperative kernel: the entry points of the persistent step's module.
+pub const COOPERATIVE: &[KernelInfo] = &[KernelInfo {
+    name: PROGRAM.name,
+    summary: "The persistent step: a program of the step's launches, with a barrier across \
+              the grid between them.",
+    reads_before_waiting: false,
+}];
+
+/// The persistent step's PTX entry point, alone in a module of its own.
+#[cfg(all(target_arch = "nvptx64", gpuwars_program))]
+#[unsafe(no_mangle)]
+pub unsafe extern "ptx-kernel" fn program(args: ProgramArgs) {
+    let runner = persistent::OnGpu {
+        thread: crate::Thread::current(),
+        barrier: args.barrier,
+    };
+    persistent::program(&runner, &args)
 }
