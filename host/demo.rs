@@ -43,7 +43,9 @@ pub struct Report {
     pub sim_steps_per_s: f64,
     /// Kernel launches per step (as stages, where the step is one persistent launch).
     pub launches_per_step: usize,
-    /// Why the step ran as one persistent launch, if it did (`--persistent`).
+    /// Why the step ran as one persistent launch, if it did (`--persistent`); absent from
+    /// the JSON report if it did not.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub persistent: Option<String>,
     /// Whether each step replayed a CUDA graph.
     pub graphs: bool,
