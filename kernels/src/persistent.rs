@@ -22,12 +22,12 @@
 use crate::access::Read;
 use crate::{DevSlice, Thread, kernel_args};
 
-/// One launch of a program: which kernel ([`crate::registry::STAGES`]), its grid and block,
-/// and where its argument struct lies in the program's blob.
+/// One launch of a program: which kernel (an index in the registry's `STAGES`), its grid and
+/// block, and where its argument struct lies in the program's blob.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct Stage {
-    /// Index of the kernel in [`crate::registry::STAGES`].
+    /// Index of the kernel in the registry's `STAGES`.
     pub kernel: u32,
     /// Blocks of the launch it stands for.
     pub grid: u32,
@@ -83,15 +83,20 @@ pub fn share(stage: &Stage, first: u32, threads: u32, mut f: impl FnMut(Thread))
     }
 }
 
-/// Runs the program: every stage of `args` in order, a grid barrier after each but the
-/// last of the last step, `args.steps` times.
+/// Runs the program: every stage of `args` in order (each by `run_stage`, the registry's
+/// dispatch to its kernel), a grid barrier after each but the last of the last step,
+/// `args.steps` times.
 #[inline(always)]
-pub fn program(runner: &impl Runner, args: &ProgramArgs) {
+pub fn program<R: Runner>(
+    runner: &R,
+    args: &ProgramArgs,
+    run_stage: impl Fn(&Stage, &DevSlice<u64, Read>, &R),
+) {
     let stages = args.stages.len();
     for step in 0..args.steps {
         for i in 0..stages {
             let stage = args.stages.get(i);
-            crate::registry::run_stage(&stage, &args.blob, runner);
+            run_stage(&stage, &args.blob, runner);
             if step + 1 < args.steps || i + 1 < stages {
                 runner.sync();
             }

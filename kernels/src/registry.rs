@@ -257,7 +257,7 @@ pub const PROGRAM: Cooperative<ProgramArgs> = Cooperative {
                 grid_dim,
                 wait,
             };
-            persistent::program(&runner, args)
+            persistent::program(&runner, args, run_stage)
         }
         #[cfg(target_arch = "nvptx64")]
         fn block(_: u32, _: u32, _: u32, _: &ProgramArgs, _: &(dyn Fn() + Sync)) {}
@@ -281,5 +281,5 @@ pub unsafe extern "ptx-kernel" fn program(args: ProgramArgs) {
         thread: crate::Thread::current(),
         barrier: args.barrier,
     };
-    persistent::program(&runner, &args)
+    persistent::program(&runner, &args, run_stage)
 }
