@@ -37,7 +37,7 @@ pub use buffer::{Buffer, Buffers, Hold, Reader, Vecs, Zeroed};
 pub use cpu::Schedule;
 pub use cuda::GpuProperties;
 pub use interop::GlBuffer;
-pub use plan::{Binder, Op, PROGRAM_BLOCK, Plan};
+pub use plan::{Binder, Op, Plan};
 pub use ring::Ring;
 
 /// The largest block the GPU accepts; the emulator enforces it too, so that a launch that runs

@@ -16,8 +16,6 @@
 
 mod program;
 
-pub use program::PROGRAM_BLOCK;
-
 use std::fmt;
 use std::sync::Arc;
 use std::time::Instant;
@@ -184,11 +182,9 @@ pub struct Op {
     stage: Option<Arc<StageSource>>,
 }
 
-/// A launch as a persistent program stores it: the kernel, grid, block and the bytes of its
-/// argument struct.
+/// What a persistent program needs of a launch beside the op's name and grid: its block and
+/// the bytes of its argument struct.
 struct StageSource {
-    kernel: &'static str,
-    grid: u32,
     block: u32,
     args: Box<[u8]>,
 }
@@ -218,8 +214,6 @@ impl Op {
     pub unsafe fn launch<A: KernelArgs>(launch: Launch<A>, binder: Binder, bytes: u64) -> Op {
         let (holds, touches, home) = bound(binder);
         let stage = StageSource {
-            kernel: launch.kernel.name,
-            grid: launch.grid,
             block: launch.block,
             args: bytemuck::bytes_of(&launch.args).into(),
         };

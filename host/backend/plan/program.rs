@@ -12,7 +12,7 @@ use crate::backend::{Device, Error, MAX_BLOCK};
 
 /// Threads per block of a persistent launch: the heavier kernels' blocks (see
 /// docs/pipeline.md, "Block sizes").
-pub const PROGRAM_BLOCK: u32 = 128;
+const PROGRAM_BLOCK: u32 = 128;
 
 impl Device {
     /// One op that runs the launches of `ops` in order, `steps` times, inside one
@@ -35,17 +35,17 @@ impl Device {
                     op.name
                 ))
             })?;
-            if source.grid == 0 {
+            if op.grid == 0 {
                 continue;
             }
             let kernel = registry::STAGES
                 .iter()
-                .position(|&k| k == source.kernel)
+                .position(|&k| k == op.name)
                 .ok_or_else(|| {
                     Error::Invalid(format!(
                         "kernel `{}` cannot be a stage of a persistent step (the stage kernels: \
                          {})",
-                        source.kernel,
+                        op.name,
                         registry::STAGES.join(", ")
                     ))
                 })?;
@@ -53,7 +53,7 @@ impl Device {
                 return Err(Error::Invalid(format!(
                     "kernel `{}`: a stage's blocks must be whole warps (32 to {MAX_BLOCK} \
                      threads, a multiple of 32), not {}",
-                    source.kernel, source.block
+                    op.name, source.block
                 )));
             }
             let args = u32::try_from(blob.len()).map_err(|_| {
@@ -65,11 +65,11 @@ impl Device {
             blob.extend(words);
             stages.push(Stage {
                 kernel: kernel as u32,
-                grid: source.grid,
+                grid: op.grid,
                 block: source.block,
                 args,
             });
-            threads = threads.max(u64::from(source.grid) * u64::from(source.block));
+            threads = threads.max(u64::from(op.grid) * u64::from(source.block));
         }
         if steps == 0 || stages.is_empty() {
             return Err(Error::Invalid(format!(
