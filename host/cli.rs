@@ -124,6 +124,11 @@ pub enum Command {
         /// Small sizes and short runs (seconds; the figures less sure).
         #[arg(long)]
         quick: bool,
+        /// Measure only this choice (its name as `tradeoff`'s game table gives it; repeat
+        /// for more) besides the scene as given: for worlds where measuring every choice
+        /// would take too long [default: every choice].
+        #[arg(long = "choice", value_name = "NAME")]
+        choices: Vec<String>,
         /// Seed of every game.
         #[arg(long, default_value_t = 1, value_parser = whole(0, u32::MAX))]
         seed: u32,

@@ -1008,9 +1008,9 @@ fn the_headless_report_is_short_and_the_json_complete() {
 #[test]
 fn tune_writes_a_scene_that_plays_and_refuses_in_words() {
     let dir = tempfile::tempdir().unwrap();
-    let tune = |scene: &str, target: &str, out: &std::path::Path| {
+    let tune_only = |scene: &str, target: &str, out: &std::path::Path, only: &[&str]| {
         let out = out.to_str().unwrap();
-        gpuwars(&[
+        let mut args = vec![
             "--backend",
             "cpu",
             "tune",
@@ -1021,8 +1021,12 @@ fn tune_writes_a_scene_that_plays_and_refuses_in_words() {
             "--quick",
             "--out",
             out,
-        ])
+        ];
+        only.iter().for_each(|c| args.extend(["--choice", c]));
+        gpuwars(&args)
     };
+    let tune =
+        |scene: &str, target: &str, out: &std::path::Path| tune_only(scene, target, out, &[]);
     let tuned = dir.path().join("tuned.toml");
     let out = tune("kamikaze", "30", &tuned);
     let text = String::from_utf8_lossy(&out.stdout);
@@ -1058,12 +1062,22 @@ fn tune_writes_a_scene_that_plays_and_refuses_in_words() {
         );
     }
 
+    // Out of reach, with two choices measured: the fastest named is one of them.
     let never = dir.path().join("never.toml");
-    let out = tune("kamikaze", "1000000000", &never);
+    let out = tune_only("kamikaze", "1000000000", &never, &["cap 8"]);
     let text = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{text}");
     assert!(
-        text.contains("no choice holds") && text.contains("the fastest, `"),
+        text.contains("no choice holds")
+            && (text.contains("the fastest, `default`") || text.contains("the fastest, `cap 8`")),
+        "{text}"
+    );
+    assert!(!never.exists());
+    let out = tune_only("kamikaze", "30", &never, &["cap 8", "8 substeps"]);
+    let text = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("--choice: `8 substeps` is not a choice") && text.contains("`4 substeps`"),
         "{text}"
     );
     assert!(!never.exists());

@@ -31,6 +31,9 @@ pub struct TuneOptions {
     pub margin: f64,
     /// Small sizes and short runs.
     pub quick: bool,
+    /// The choices to measure besides the scene as given, by their names in `tradeoff`'s
+    /// game table; empty: every one.
+    pub only: Vec<String>,
     /// Seed of every game.
     pub seed: u32,
     /// Where the tuned scene goes.
@@ -132,6 +135,26 @@ fn rate_words(rate: Rate, unit: &str) -> String {
         figure(rate.low),
         figure(rate.high)
     )
+}
+
+/// The choices of `all` named in `only`, the scene as given (the first, `default`) always
+/// kept as the one the others are weighed against; every one where `only` is empty. A name
+/// that is not a choice of this scene is an error listing those that are.
+pub fn selected(
+    all: Vec<(String, Scene)>,
+    only: &[String],
+) -> anyhow::Result<Vec<(String, Scene)>> {
+    if let Some(unknown) = only.iter().find(|n| !all.iter().any(|(c, _)| c == *n)) {
+        let names: Vec<String> = all.iter().map(|(c, _)| format!("`{c}`")).collect();
+        bail!(
+            "--choice: `{unknown}` is not a choice of this scene; its choices are {}",
+            names.join(", ")
+        );
+    }
+    Ok((all.into_iter().enumerate())
+        .filter(|(i, (c, _))| *i == 0 || only.is_empty() || only.contains(c))
+        .map(|(_, choice)| choice)
+        .collect())
 }
 
 /// The slowest round a choice may have and still hold `target` with `margin`.
@@ -302,7 +325,7 @@ fn table<'d>(doc: &'d mut DocumentMut, key: &str) -> &'d mut Table {
 pub fn run(device: &Device, options: &TuneOptions) -> anyhow::Result<TuneReport> {
     let machine = Provenance::now(device);
     let sizes = RunSizes::new(device, options.quick);
-    let choices = game_choices(&options.scene);
+    let choices = selected(game_choices(&options.scene), &options.only)?;
     let mut bar = progress(choices.len() as u64, options.progress, "tune", "choices");
     // Said before anything is measured: the choices are warmed up and timed together before
     // the first is done, so a rate taken from the first would be far too slow.
@@ -543,6 +566,32 @@ mod tests {
         // Rows without frames (not timed) hold no frame rate.
         let e = choose(&rows, fps(60.0), 0.2).unwrap_err();
         assert!(e.contains("`4 substeps`") && e.contains("frames/s"), "{e}");
+    }
+
+    /// `--choice` keeps the named choices and the scene as given, in the table's order;
+    /// a name the scene lacks is refused naming the ones it has.
+    #[test]
+    fn only_the_named_choices_and_the_given_scene_are_measured() {
+        let scene = Scene::load("paper").unwrap();
+        let names = |only: &[&str]| {
+            let only: Vec<String> = only.iter().map(|s| s.to_string()).collect();
+            selected(game_choices(&scene), &only)
+                .map(|c| c.into_iter().map(|(n, _)| n).collect::<Vec<_>>())
+        };
+        let all = names(&[]).unwrap();
+        assert_eq!(all.len(), game_choices(&scene).len());
+        assert_eq!(
+            names(&["4 substeps", "dt 1/30, nothing swept"]).unwrap(),
+            ["default", "4 substeps", "dt 1/30, nothing swept"]
+        );
+        assert_eq!(names(&["default"]).unwrap(), ["default"]);
+        let e = names(&["4 substeps", "8 substeps"])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`8 substeps`") && e.contains("`2 substeps`") && e.contains("`cap 8`"),
+            "{e}"
+        );
     }
 
     /// Every game choice of each built-in game scene written into the scene's own text

@@ -30,6 +30,7 @@ use super::rounds::Rounds;
 use super::{Outputs, Provenance, write_csv, write_json};
 use crate::Device;
 use crate::files::write_atomically;
+use crate::game::accuracy::{AuditLength, audit_game};
 use crate::game::{Game, Options, Scene};
 use crate::sim::Physics;
 use crate::terminal::progress;
@@ -144,10 +145,11 @@ impl RunSizes {
 const PROBE_STEPS: u32 = 2;
 
 /// Roughly what a run of `rows` (crowd, game and feature choices) will take, in seconds,
-/// from `scene`'s game made and played from `seed` for [`PROBE_STEPS`] steps: the game rows
-/// are most of a slow run, and each is made, played, timed in its rounds (twice if its
-/// `frames` are timed too) and (the game table's) audited with a snapshot a step. The
-/// crowd's rows are timed in their rounds, their error runs being short.
+/// from `scene`'s game made and played from `seed` for [`PROBE_STEPS`] steps, and audited
+/// for as many: the game rows are most of a slow run, and each is made, played, timed in
+/// its rounds (twice if its `frames` are timed too) and (the game table's) audited, a
+/// snapshot and the exact check of every pair a step (in a world of millions, most of the
+/// run). The crowd's rows are timed in their rounds, their error runs being short.
 pub(crate) fn estimate(
     device: &Device,
     (scene, seed): (&Scene, u32),
@@ -163,14 +165,21 @@ pub(crate) fn estimate(
         game.step(None)?;
     }
     let step = start.elapsed().as_secs_f64() / f64::from(PROBE_STEPS);
+    drop(game);
     let start = Instant::now();
-    game.snapshot()?;
-    let snapshot = start.elapsed().as_secs_f64();
+    let probe = AuditLength {
+        warmup: 0,
+        busy_within: 0,
+        steps: PROBE_STEPS,
+    };
+    audit_game(device, scene, seed, probe)?;
+    // Its game made (as above), then each step played, read back and checked.
+    let audit_step = ((start.elapsed().as_secs_f64() - made) / f64::from(PROBE_STEPS)).max(step);
     let timed = f64::from(sizes.speed.rounds + 1) * sizes.speed.seconds;
     let warmup = made + f64::from(sizes.game_warmup) * step;
     let frames_timed = if frames { timed } else { 0.0 };
     let played = warmup + f64::from(sizes.profiled_steps) * step + timed + frames_timed;
-    let audited = warmup + f64::from(sizes.audit_steps) * (step + snapshot);
+    let audited = warmup + f64::from(sizes.audit_steps) * audit_step;
     let rows = |n: usize| n as f64;
     Ok(rows(crowd) * timed + rows(games) * (played + audited) + rows(features) * played)
 }
