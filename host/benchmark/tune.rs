@@ -140,7 +140,7 @@ fn rate_words(rate: Rate, unit: &str) -> String {
 /// The choices of `all` named in `only`, the scene as given (the first, `default`) always
 /// kept as the one the others are weighed against; every one where `only` is empty. A name
 /// that is not a choice of this scene is an error listing those that are.
-pub fn selected(
+fn selected(
     all: Vec<(String, Scene)>,
     only: &[String],
 ) -> anyhow::Result<Vec<(String, Scene)>> {
