@@ -140,10 +140,7 @@ fn rate_words(rate: Rate, unit: &str) -> String {
 /// The choices of `all` named in `only`, the scene as given (the first, `default`) always
 /// kept as the one the others are weighed against; every one where `only` is empty. A name
 /// that is not a choice of this scene is an error listing those that are.
-fn selected(
-    all: Vec<(String, Scene)>,
-    only: &[String],
-) -> anyhow::Result<Vec<(String, Scene)>> {
+fn selected(all: Vec<(String, Scene)>, only: &[String]) -> anyhow::Result<Vec<(String, Scene)>> {
     if let Some(unknown) = only.iter().find(|n| !all.iter().any(|(c, _)| c == *n)) {
         let names: Vec<String> = all.iter().map(|(c, _)| format!("`{c}`")).collect();
         bail!(
