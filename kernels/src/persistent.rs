@@ -70,16 +70,29 @@ pub trait Runner {
 /// real warp hold 32 lanes of one virtual warp, each its own lane, and loop alike.
 #[inline(always)]
 pub fn share(stage: &Stage, first: u32, threads: u32, mut f: impl FnMut(Thread)) {
-    let total = u64::from(stage.grid) * u64::from(stage.block);
-    let mut v = u64::from(first);
-    while v < total {
+    // The stride in the stage's blocks and threads, divided once: a virtual thread's
+    // coordinates then advance by additions (no 64-bit division a virtual thread).
+    let (Some(blocks), Some(rest)) = (
+        threads.checked_div(stage.block),
+        threads.checked_rem(stage.block),
+    ) else {
+        return;
+    };
+    let (mut block, mut thread) = (u64::from(first / stage.block), first % stage.block);
+    while block < u64::from(stage.grid) {
         f(Thread {
-            thread: (v % u64::from(stage.block)) as u32,
-            block: (v / u64::from(stage.block)) as u32,
+            thread,
+            block: block as u32,
             block_dim: stage.block,
             grid_dim: stage.grid,
         });
-        v += u64::from(threads);
+        // Both below `stage.block` (at most 1,024), so the sum cannot wrap.
+        thread += rest;
+        block += u64::from(blocks);
+        if thread >= stage.block {
+            thread -= stage.block;
+            block += 1;
+        }
     }
 }
 

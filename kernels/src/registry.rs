@@ -198,7 +198,19 @@ macro_rules! stages {
             let mut index = 0;
             $(
                 if stage.kernel == index {
-                    return runner.run(stage, blob, |t, args| ($konst.body)(t, args));
+                    // A function of its own on the GPU, called once a stage: ptxas gives
+                    // each stage the registers it needs alone, as its launch had, rather
+                    // than one allocation across every stage's body in which each carries
+                    // the others' spills (docs/pipeline.md, "The persistent step").
+                    #[cfg_attr(target_arch = "nvptx64", inline(never))]
+                    fn stage_of<R: Runner>(
+                        stage: &Stage,
+                        blob: &DevSlice<u64, Read>,
+                        runner: &R,
+                    ) {
+                        runner.run(stage, blob, |t, args| ($konst.body)(t, args))
+                    }
+                    return stage_of(stage, blob, runner);
                 }
                 index += 1;
             )*
