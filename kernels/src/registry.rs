@@ -208,7 +208,10 @@ macro_rules! stages {
                         blob: &DevSlice<u64, Read>,
                         runner: &R,
                     ) {
-                        runner.run(stage, blob, |t, args| ($konst.body)(t, args))
+                        // The body itself, not a closure around it: a closure is not
+                        // inlined where LLVM finds it large, and a call a virtual thread
+                        // spills what the call keeps live.
+                        runner.run(stage, blob, $konst.body)
                     }
                     return stage_of(stage, blob, runner);
                 }
