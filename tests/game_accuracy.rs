@@ -5,12 +5,12 @@
 
 mod common;
 
-use gpuwars::Device;
-use gpuwars::game::Scene;
 use gpuwars::game::accuracy::{AuditLength, GameAudit, audit_game};
 use gpuwars::game::scene::BUILT_IN;
+use gpuwars::game::{Game, Options, Scene};
 use gpuwars::sim::Sweep;
 use gpuwars::sim::audit::{Accuracy, SHOT_ENEMY};
+use gpuwars::{Device, Error};
 
 /// `paper` at time step `dt` (its own if `None`), every kind's sweep set to `sweep` if given.
 fn paper(dt: Option<f32>, sweep: Option<Sweep>) -> Scene {
@@ -169,7 +169,47 @@ fn every_game_scene_swept_exact_at_three_steps(device: &Device) {
     }
 }
 
+/// `arena` squeezed into a field of 32 by 32, its ship made to last: its bodies pile up,
+/// each touching far more than the contact log's 16 a slot. The audit plays the game again
+/// with room for them, and finds what an audit given that room from the start finds.
+fn a_pile_denser_than_the_log_is_audited_whole(device: &Device) {
+    let mut scene = Scene::load("arena").unwrap();
+    scene.world.size = glam::Vec2::splat(32.0);
+    let ship = scene.world.kind_index(&scene.game.ship.kind).unwrap();
+    scene.world.kinds[ship].energy = 1_000_000;
+    let length = AuditLength {
+        warmup: 2,
+        busy_within: 0,
+        steps: 6,
+    };
+    // The log as a game makes it overflows in the first steps.
+    let mut traced = scene.clone();
+    traced.world.physics.trace_paths = true;
+    let mut game = Game::with_options(device, &traced, 1, Options::default()).unwrap();
+    game.step(None).unwrap();
+    match game.pipeline().contact_log(0) {
+        Err(Error::ContactLogFull {
+            logged, per_slot, ..
+        }) => assert!(
+            logged > 0 && per_slot == 16,
+            "{logged} logged, {per_slot} a slot"
+        ),
+        other => panic!("a log of 16 a slot held the pile: {other:?}"),
+    }
+    let audit = audit_game(device, &scene, 1, length).unwrap();
+    let mut roomy = scene.clone();
+    roomy.world.physics.log_room = 1 << 12;
+    assert_eq!(audit, audit_game(device, &roomy, 1, length).unwrap());
+    assert_eq!(audit.contacts.steps, 6);
+    assert!(
+        audit.contacts.all.expected > 1000,
+        "a pile: {:?}",
+        audit.contacts.all
+    );
+}
+
 on_both_backends!(
     shots_swept_miss_no_enemy_and_unswept_ones_do,
-    every_game_scene_swept_exact_at_three_steps
+    every_game_scene_swept_exact_at_three_steps,
+    a_pile_denser_than_the_log_is_audited_whole,
 );

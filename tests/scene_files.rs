@@ -863,7 +863,7 @@ fn the_physics_table_reads_every_choice() {
             sight_budget: 24,
             contact_budget: 48,
             renumber_every: Some(4),
-            trace_paths: false,
+            ..Physics::default()
         }
     );
     // Without the table, and with an empty one, the paper's defaults.

@@ -252,7 +252,7 @@ fn a_world_takes_the_bytes_its_memory_check_counts() {
             renumbers,
             moving: false,
             traces: spec.traces(),
-            logs: spec.physics.trace_paths,
+            logs: spec.physics.logged_per_slot(),
         };
         let expected = state::bytes_needed(layout, sim.space(), kinds, extras);
         assert_eq!(device.allocated_bytes(), expected);

@@ -90,6 +90,20 @@ pub enum Error {
     /// A launch, buffer or size outside what the backends accept.
     #[error("invalid request: {0}")]
     Invalid(String),
+    /// More contacts were logged since the contact log's last read than it holds (see
+    /// `Pipeline::contact_log`): its world's contacts are denser than its room a slot.
+    #[error(
+        "{logged} contacts logged since the last read, more than the contact log holds \
+         ({room}, {per_slot} a slot)"
+    )]
+    ContactLogFull {
+        /// Contacts logged since the read before.
+        logged: usize,
+        /// Records the log holds.
+        room: usize,
+        /// Its room a slot ([`crate::sim::Physics::log_room`]).
+        per_slot: usize,
+    },
     /// Drawing with OpenGL failed (or no GL context could be made).
     #[error("OpenGL: {during}: {message}")]
     Graphics {

@@ -205,7 +205,12 @@ pub fn choose(
                     fastest.choice,
                     target.shown(target.rate(fastest)),
                 ),
-                None => "no choice could be measured (each row says why)".to_owned(),
+                None => {
+                    let why: Vec<String> = (rows.iter())
+                        .filter_map(|r| Some(format!("`{}`: {}", r.choice, r.skipped.as_ref()?)))
+                        .collect();
+                    format!("no choice could be measured: {}", why.join("; "))
+                }
             }
         })?;
     let rejected = (0..rows.len())
@@ -418,12 +423,15 @@ impl TuneReport {
             kills(row)
         );
         if let Some(g) = given.filter(|g| g.choice != row.choice) {
-            out += &format!(
-                "as given:         {}, {} missed per thousand, kills per shot {}\n",
-                target.shown(target.rate(g)),
-                missed(g),
-                kills(g)
-            );
+            out += &match &g.skipped {
+                None => format!(
+                    "as given:         {}, {} missed per thousand, kills per shot {}\n",
+                    target.shown(target.rate(g)),
+                    missed(g),
+                    kills(g)
+                ),
+                Some(why) => format!("as given:         not measured: {why}\n"),
+            };
         }
         out += &format!("written:          {}\n", self.out);
         for (i, why) in &self.rejected {
@@ -524,12 +532,14 @@ mod tests {
             e.contains("`nothing swept`") && e.contains("160") && e.contains("1200"),
             "{e}"
         );
+        // Where none could be measured, the error says why for each.
         let none: Vec<GameRow> = rows.into_iter().filter(|r| r.skipped.is_some()).collect();
-        assert!(
-            choose(&none, Target::StepsPerSecond(1.0), 0.0)
-                .unwrap_err()
-                .contains("could be measured")
-        );
+        let e = choose(&none, Target::StepsPerSecond(1.0), 0.0).unwrap_err();
+        assert!(e.contains("could be measured"), "{e}");
+        for r in &none {
+            let why = format!("`{}`: {}", r.choice, r.skipped.as_ref().unwrap());
+            assert!(e.contains(&why), "{e} lacks {why}");
+        }
     }
 
     /// A frame-rate target is held by the frames' slowest round, not the steps': a choice

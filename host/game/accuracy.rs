@@ -6,9 +6,9 @@
 use super::{Game, Options, Scene};
 use gpuwars_kernels::sim::Touched;
 
-use crate::Device;
 use crate::sim::audit::{Accuracy, Roles, StepEnd};
 use crate::sim::{Snapshot, WorldSpec};
+use crate::{Device, Error};
 
 /// How long an audit plays: `warmup` steps unaudited (the field fills up), more until the
 /// ship has fired (up to `busy_within`), then `steps` audited ones.
@@ -45,7 +45,9 @@ impl GameAudit {
 /// `scene` played from `seed` by the autopilot on `device`, the contacts of `length.steps`
 /// steps audited after the warm-up (see [`AuditLength`]). The world keeps its bodies' paths for the audit
 /// ([`crate::sim::Physics::trace_paths`]), which changes nothing it computes: the game is
-/// the one `scene` plays, bit for bit. It stops early if the game ends.
+/// the one `scene` plays, bit for bit. It stops early if the game ends. A step of contacts
+/// denser than the contact log has room for plays the game again with room for them (the
+/// same game, as the log's size changes nothing it computes).
 pub fn audit_game(
     device: &Device,
     scene: &Scene,
@@ -54,6 +56,33 @@ pub fn audit_game(
 ) -> anyhow::Result<GameAudit> {
     let mut traced = scene.clone();
     traced.world.physics.trace_paths = true;
+    loop {
+        match audit_traced(device, &traced, seed, length) {
+            Err(e) => match e.downcast_ref::<Error>() {
+                Some(&Error::ContactLogFull { logged, room, .. }) => {
+                    // The log holds fewer than twice its slots' room, so this much more
+                    // room a slot holds what overflowed it.
+                    let more = logged.div_ceil(room).next_power_of_two() * 2;
+                    let physics = &mut traced.world.physics;
+                    physics.log_room = u32::try_from(more)
+                        .ok()
+                        .and_then(|m| physics.log_room.checked_mul(m))
+                        .ok_or(e)?;
+                }
+                _ => return Err(e),
+            },
+            audit => return audit,
+        }
+    }
+}
+
+/// [`audit_game`] of a scene whose world logs its contacts.
+fn audit_traced(
+    device: &Device,
+    traced: &Scene,
+    seed: u32,
+    length: AuditLength,
+) -> anyhow::Result<GameAudit> {
     let world = &traced.world;
     let index = |name: &str| world.kind_index(name).map(|k| k as u32);
     let roles = Roles::of(
@@ -61,7 +90,7 @@ pub fn audit_game(
         index(&traced.game.ship.kind),
         index(&traced.game.ship.shot),
     );
-    let mut game = Game::with_options(device, &traced, seed, Options::default())?;
+    let mut game = Game::with_options(device, traced, seed, Options::default())?;
     let mut fired = false;
     for _ in 0..length.warmup {
         game.submit(None)?;

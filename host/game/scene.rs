@@ -325,8 +325,9 @@ fn read_physics(node: &Node<'_>) -> Result<Physics, SceneError> {
         renumber_every: table.or("renumber_every", d.renumber_every, |n| {
             n.whole(0, MAX_RENUMBER_EVERY).map(Some)
         })?,
-        // Kept for audits, which ask for it; a scene has no say.
+        // Kept for audits, which ask for them; a scene has no say.
         trace_paths: false,
+        log_room: d.log_room,
     })
 }
 

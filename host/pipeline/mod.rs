@@ -55,7 +55,6 @@ use gpuwars_kernels::sim::{Space, Touched};
 
 use crate::backend::Vecs;
 use crate::sim::layout::Layout;
-use crate::sim::state::LOGGED_PER_SLOT;
 use crate::sim::{Snapshot, WorldSpec};
 use crate::{Buffer, Device, Error, Plan};
 use world::World;
@@ -306,11 +305,11 @@ impl<'d> Pipeline<'d> {
         let ring = self.device.download(&contacts.log)?;
         let new = cursor.wrapping_sub(since) as usize;
         if new > ring.len() {
-            return Err(Error::Invalid(format!(
-                "{new} contacts logged since the last read, more than the log's {} (at most \
-                 {LOGGED_PER_SLOT} a slot a step: read it every step)",
-                ring.len()
-            )));
+            return Err(Error::ContactLogFull {
+                logged: new,
+                room: ring.len(),
+                per_slot: self.world.spec.physics.logged_per_slot(),
+            });
         }
         let mask = ring.len() - 1;
         let mut log: Vec<Touched> = (0..new)

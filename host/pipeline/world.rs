@@ -181,7 +181,7 @@ pub fn bytes_needed(spec: &WorldSpec, game: Option<(u32, usize)>) -> u64 {
         renumbers: renumber_every(spec, &layout, plays) != 0,
         moving: moves_in_one_launch(spec, &layout, plays),
         traces: spec.traces(),
-        logs: spec.physics.trace_paths,
+        logs: spec.physics.logged_per_slot(),
     };
     state::bytes_needed(&layout, &layout::space(spec), kinds, extras) + sizes.bytes
 }
@@ -306,7 +306,7 @@ impl World {
             renumbers: config.renumber_every != 0,
             moving,
             traces: spec.traces(),
-            logs: spec.physics.trace_paths,
+            logs: spec.physics.logged_per_slot(),
         };
         let scratch = Scratch::new(device, &layout, &space, kinds, extras)?;
         let warps = TeamWarps::new(device, &config, &layout)?;

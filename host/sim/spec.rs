@@ -145,7 +145,15 @@ pub struct Physics {
     /// (`crate::sim::audit`): a store a body a step and one a contact, nothing else changes.
     #[serde(skip)]
     pub trace_paths: bool,
+    /// Records the contact log holds a slot, where `trace_paths` logs contacts (each contact
+    /// logged from both sides): [`LOGGED_PER_SLOT`] unless an audit asked for more room
+    /// after a step of denser contacts (`crate::game::accuracy::audit_game`).
+    #[serde(skip)]
+    pub log_room: u32,
 }
+
+/// The contact log's room a slot unless an audit asks for more ([`Physics::log_room`]).
+pub const LOGGED_PER_SLOT: u32 = 16;
 
 impl Default for Physics {
     fn default() -> Self {
@@ -161,11 +169,21 @@ impl Default for Physics {
             contact_budget: 0,
             renumber_every: None,
             trace_paths: false,
+            log_room: LOGGED_PER_SLOT,
         }
     }
 }
 
 impl Physics {
+    /// Records the contact log holds a slot: [`Physics::log_room`] where the world logs its
+    /// contacts ([`Physics::trace_paths`]), none elsewhere.
+    pub fn logged_per_slot(&self) -> usize {
+        match self.trace_paths {
+            true => self.log_room as usize,
+            false => 0,
+        }
+    }
+
     /// Checks every choice; fields are named `physics.<name>`.
     pub fn validate(&self) -> Result<(), SpecError> {
         if !(1..=MAX_SUBSTEPS).contains(&self.substeps) {

@@ -190,9 +190,9 @@ pub struct Extras {
     pub moving: bool,
     /// The bodies' last paths (and the grid entries' copies of them, where `moving`).
     pub traces: bool,
-    /// The narrow phase's log of every contact it counts, for an audit (see
-    /// [`Contacts::log`]).
-    pub logs: bool,
+    /// Records a slot of the narrow phase's log of every contact it counts, for an audit
+    /// (see [`Contacts::log`]); 0 for no log.
+    pub logs: usize,
 }
 
 impl Scratch {
@@ -276,16 +276,12 @@ impl Scratch {
     }
 }
 
-/// Records a step's contacts may take, each contact logged from both sides: room for this
-/// many a live body.
-pub const LOGGED_PER_SLOT: usize = 16;
-
-/// The contact log's records (a power of two) and cursors where a world `logs` its contacts
-/// (see [`Contacts::log`]), none elsewhere.
-fn log_sizes(slots: usize, logs: bool) -> (usize, usize) {
-    match logs {
-        true => ((slots * LOGGED_PER_SLOT).next_power_of_two(), 1),
-        false => (0, 0),
+/// The contact log's records (a power of two) and cursors where a world logs its contacts,
+/// `per_slot` records a slot (see [`Contacts::log`]); none where `per_slot` is 0.
+fn log_sizes(slots: usize, per_slot: usize) -> (usize, usize) {
+    match per_slot {
+        0 => (0, 0),
+        _ => (slots.saturating_mul(per_slot).next_power_of_two(), 1),
     }
 }
 
