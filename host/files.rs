@@ -383,6 +383,29 @@ pub fn check_output(path: &Path) -> Result<(), FileError> {
     }
 }
 
+/// Checks that a file can be made in the folder `dir` (which exists), where the output
+/// `path` is written: makes a temporary one there and removes it.
+fn check_folder_writable(path: &Path, dir: &Path) -> Result<(), FileError> {
+    tempfile::NamedTempFile::new_in(dir)
+        .map(drop)
+        .map_err(|e| no_file_in(path, dir, &e))
+}
+
+/// The error of a file at `path` that cannot be written because no file can be made in its
+/// folder `dir` (where it is written first, then renamed over `path`).
+fn no_file_in(path: &Path, dir: &Path, e: &std::io::Error) -> FileError {
+    FileError::new(
+        &origin(path),
+        None,
+        "",
+        format!(
+            "cannot write: no file can be made in the folder {}: {}",
+            shown(dir),
+            io_words(e)
+        ),
+    )
+}
+
 /// The folder `path` is in (`.` for a bare file name).
 fn folder(path: &Path) -> PathBuf {
     // `Path::new("x").parent()` is the empty path, which the file system does not take.
@@ -406,7 +429,8 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
             format!("cannot write: {}", io_words(&e)),
         )
     };
-    let mut file = tempfile::NamedTempFile::new_in(folder(path)).map_err(fail)?;
+    let dir = folder(path);
+    let mut file = tempfile::NamedTempFile::new_in(&dir).map_err(|e| no_file_in(path, &dir, &e))?;
     file.write_all(bytes).map_err(fail)?;
     file.flush().map_err(fail)?;
     #[cfg(unix)]
@@ -519,17 +543,27 @@ impl RunFiles {
             .map(|u| (u.flag.as_str(), u.path.as_path()))
     }
 
-    /// Checks, before the run, that every output may be written (see [`check_output`]) and
-    /// that no two uses are one file but where both only read it: an output that is an
-    /// input or another output is refused, naming both.
+    /// Checks, before the run, that every output may be written (see [`check_output`]), in
+    /// a folder where a file can be made (so that a run's results are not lost at its end
+    /// to a folder it may not write), and that no two uses are one file but where both only
+    /// read it: an output that is an input or another output is refused, naming both.
     pub fn check(&self) -> Result<(), FileError> {
         let files = |how: How| matches!(how, How::Writes | How::WritesInto);
+        fn flagged(flag: &str) -> impl FnOnce(FileError) -> FileError + '_ {
+            move |e| FileError {
+                problem: format!("{} ({flag})", e.problem),
+                ..e
+            }
+        }
         for out in self.uses.iter().filter(|u| files(u.how)) {
             if out.how == How::Writes || std::fs::metadata(folder(&out.path)).is_ok() {
-                check_output(&out.path).map_err(|e| FileError {
-                    problem: format!("{} ({})", e.problem, out.flag),
-                    ..e
-                })?;
+                check_output(&out.path).map_err(flagged(&out.flag))?;
+                check_folder_writable(&out.path, &folder(&out.path)).map_err(flagged(&out.flag))?;
+            }
+        }
+        for many in self.uses.iter().filter(|u| u.how == How::Many) {
+            if std::fs::metadata(&many.path).is_ok_and(|m| m.is_dir()) {
+                check_folder_writable(&many.path, &many.path).map_err(flagged(&many.flag))?;
             }
         }
         // A folder's files may land on any other file of the run named like one of them, in

@@ -547,6 +547,18 @@ fn outputs_replace_only_regular_files_and_are_checked_before_the_game() {
             let args = [&steps[..], &["--record", pipe.to_str().unwrap()]].concat();
             refused(&args, 1, &["it is a named pipe, left as it is"]);
         }
+        // A folder that is there but takes no new file (Linux's /proc, even for root), for
+        // a file or for frames: refused before the game, naming the folder.
+        if cfg!(target_os = "linux") {
+            let args = [&steps[..], &["--record", "/proc/gpuwars.json"]].concat();
+            refused(
+                &args,
+                1,
+                &["no file can be made in the folder /proc", "--record"],
+            );
+            let args = [&steps[..], &["--frames-every", "60", "/proc"]].concat();
+            refused(&args, 1, &["no file can be made in the folder /proc"]);
+        }
     }
     let mut left: Vec<_> = std::fs::read_dir(dir.path())
         .unwrap()
