@@ -394,6 +394,37 @@ fn shapes() {
     assert_error(&text, line, "kinds[1]", &["has no shape"]);
 }
 
+/// Names and the description are one line of printable text: a control character (the
+/// first and the last of C0, DEL, a C1 one, a newline) is refused, naming its code and
+/// place; text beyond ASCII is kept.
+#[test]
+fn names_hold_no_control_characters() {
+    let name = "name = \"paper\"";
+    let kind = "name = \"ship\"";
+    let first = paper()
+        .lines()
+        .find(|l| l.starts_with("description"))
+        .unwrap();
+    for (field, from, escape, code) in [
+        ("name", name, "\\u0000", "U+0000"),
+        ("name", name, "\\u001f", "U+001F"),
+        ("name", name, "\\u007f", "U+007F"),
+        ("description", first, "\\u009b", "U+009B"),
+        ("kinds[0].name", kind, "\\n", "U+000A"),
+        ("kinds[0].name", kind, "\\u001b[31m", "U+001B"),
+    ] {
+        // The character after the value's first: character 2.
+        let at = from.find('"').unwrap() + 2;
+        let to = format!("{}{escape}{}", &from[..at], &from[at..]);
+        let text = mutate(from, &to);
+        let message = format!("control character ({code}, character 2) is not allowed");
+        assert_error(&text, line_of(&text, &to), field, &[&message]);
+    }
+    let text = mutate(name, "name = \"paper · 论文\"");
+    let scene = Scene::from_toml(&text, "paper.toml").unwrap();
+    assert_eq!(scene.name, "paper · 论文");
+}
+
 #[test]
 fn duplicate_kind_names() {
     let text = format!(

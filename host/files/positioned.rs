@@ -383,6 +383,22 @@ impl<'a> Node<'a> {
         }
     }
 
+    /// A string of one line of printable text (a name, a description): no control
+    /// character, which would reach a terminal as a command; `what` the value is, for the
+    /// error.
+    pub fn line_of_text(&self, what: &str) -> Result<String, FileError> {
+        let text = self.string(what)?;
+        match text.chars().enumerate().find(|(_, c)| c.is_control()) {
+            Some((at, c)) => Err(self.fail(format!(
+                "a control character (U+{:04X}, character {}) is not allowed (allowed: one \
+                 line of printable text)",
+                u32::from(c),
+                at + 1
+            ))),
+            None => Ok(text),
+        }
+    }
+
     /// One of `options`, by name; `what` the value is, for the error.
     pub fn choice<T: Copy>(&self, what: &str, options: &[(&str, T)]) -> Result<T, FileError> {
         let names: Vec<String> = options

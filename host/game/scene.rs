@@ -215,11 +215,13 @@ fn read_scene(root: &Node<'_>) -> Result<Scene, SceneError> {
         "effects",
     ])?;
     let name_node = top.need("name")?;
-    let name = name_node.string("a name in quotes")?;
+    let name = name_node.line_of_text("a name in quotes")?;
     if name.trim().is_empty() {
         return Err(name_node.fail("must not be empty"));
     }
-    let description = top.need("description")?.string("a description in quotes")?;
+    let description = top
+        .need("description")?
+        .line_of_text("a description in quotes")?;
 
     let world = top
         .need("world")?
@@ -421,7 +423,7 @@ fn read_kind(node: &Node<'_>) -> Result<(KindSpec, Option<Behaviour>), SceneErro
         "swept",
         "behaviour",
     ])?;
-    let name = kind.need("name")?.string("a name in quotes")?;
+    let name = kind.need("name")?.line_of_text("a name in quotes")?;
     let shape = match (kind.get("circle"), kind.get("rect")) {
         (Some(radius), None) => Shape::Circle {
             radius: radius.real(side())?,
