@@ -111,7 +111,8 @@ pub enum Command {
         #[arg(long, value_parser = decimal(0.001, 1.0e9))]
         steps_per_second: Option<f64>,
         /// Frames per second the tuned scene must hold, each frame the steps due and the
-        /// frame drawn as `play` draws it (instead of --steps-per-second).
+        /// frame drawn as `play` draws it (instead of --steps-per-second); at least the rate
+        /// at which a frame is the 8 steps `play` plays at most (7.5 for steps of 1/60 s).
         #[arg(long, value_parser = decimal(0.001, 1.0e6))]
         fps: Option<f64>,
         /// With --fps: the frame's size, WIDTHxHEIGHT in pixels [default: 1280x720, `play`'s

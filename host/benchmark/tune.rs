@@ -327,6 +327,12 @@ fn table<'d>(doc: &'d mut DocumentMut, key: &str) -> &'d mut Table {
 pub fn run(device: &Device, options: &TuneOptions) -> anyhow::Result<TuneReport> {
     let machine = Provenance::now(device);
     let sizes = RunSizes::new(device, options.quick);
+    if let Some(frames) = options.target.frames() {
+        // The scene as given is what every choice is weighed against: it must be measured.
+        frames
+            .keeps_game_time(options.scene.world.dt)
+            .map_err(|why| anyhow::anyhow!("--fps for {}: {why}", options.scene_given))?;
+    }
     let choices = selected(game_choices(&options.scene), &options.only)?;
     let mut bar = progress(choices.len() as u64, options.progress, "tune", "choices");
     // Said before anything is measured: the choices are warmed up and timed together before
@@ -540,6 +546,29 @@ mod tests {
             let why = format!("`{}`: {}", r.choice, r.skipped.as_ref().unwrap());
             assert!(e.contains(&why), "{e} lacks {why}");
         }
+    }
+
+    /// A frame rate is measured only where `play` keeps the game's time: up to 8 steps a
+    /// frame (its most), not one more; the refusal says the lowest rate that is.
+    #[test]
+    fn a_frame_rate_below_plays_catch_up_is_refused() {
+        // A step of 1/8 s: 1 frame a second is 8 steps.
+        let at = |fps: f64| {
+            FrameTiming {
+                fps,
+                size: (64, 64),
+            }
+            .keeps_game_time(0.125)
+        };
+        assert_eq!(at(1.0), Ok(()));
+        assert_eq!(at(1000.0), Ok(()));
+        let e = at(1.0 - 1e-9).unwrap_err();
+        assert!(
+            e.contains("more than the 8") && e.contains("aim at 1.00 frames/s"),
+            "{e}"
+        );
+        let e = at(0.001).unwrap_err();
+        assert!(e.contains("8000 steps"), "{e}");
     }
 
     /// A frame-rate target is held by the frames' slowest round, not the steps': a choice

@@ -6,11 +6,13 @@ use serde::{Deserialize, Serialize};
 use super::RunSizes;
 use crate::benchmark::rounds::{Point, Rate, frontier, interleaved};
 use crate::camera::Camera;
+use crate::files::figure;
 use crate::game::accuracy::{AuditLength, GameAudit, audit_game};
 use crate::game::engine::footprint;
 use crate::game::spec::Machine;
 use crate::game::{Game, Options, Scene};
 use crate::pipeline::Profile;
+use crate::play::MAX_CATCH_UP;
 use crate::sim::audit::{BODY_WALL, ENEMY_SHIP, SHOT_ENEMY};
 use crate::sim::{Integrator, Physics, Shape, Sweep, WorldSpec};
 use crate::{BackendKind, Device, Error};
@@ -71,14 +73,35 @@ pub struct FrameTiming {
 }
 
 impl FrameTiming {
+    /// Whether `play` keeps the game time of a scene of time step `dt` at this frame rate:
+    /// a frame's share of game time is at most the [`MAX_CATCH_UP`] steps `play` plays in a
+    /// frame (beyond them the game slows down); an error in words where it is not.
+    pub fn keeps_game_time(&self, dt: f32) -> Result<(), String> {
+        let steps = 1.0 / (self.fps * f64::from(dt));
+        let lowest = 1.0 / (MAX_CATCH_UP as f64 * f64::from(dt));
+        match steps <= MAX_CATCH_UP as f64 {
+            true => Ok(()),
+            false => Err(format!(
+                "at {} frames/s a frame is {} steps of {} s, more than the {MAX_CATCH_UP} \
+                 `play` plays in a frame (the game would slow down): aim at {} frames/s or \
+                 more",
+                figure(self.fps),
+                figure(steps),
+                figure(f64::from(dt)),
+                figure(lowest)
+            )),
+        }
+    }
+
     /// One frame of `game`, whose steps due not yet played (a fraction of one) are
     /// `banked`: those steps, then the kernel renderer's frame as `play` shows it, read
     /// back where the window uploads it (the CPU emulation), left in device memory where
     /// CUDA hands it to GL.
     fn frame(self, game: &mut Game, banked: &mut f64) -> Result<(), Error> {
         *banked += 1.0 / (self.fps * f64::from(game.scene().world.dt));
-        let due = banked.floor();
-        *banked -= due;
+        // As `play`: the steps beyond its most a frame are given up.
+        let due = banked.floor().min(MAX_CATCH_UP as f64);
+        *banked = (*banked - due).min(1.0);
         for _ in 0..due as u64 {
             game.submit(None)?;
         }
@@ -380,7 +403,12 @@ fn group_rows(
 ) -> anyhow::Result<Vec<GameRow>> {
     let mut warm: Vec<Result<(Game, u32), String>> = choices
         .iter()
-        .map(|(_, scene)| warmed(device, scene, seed, sizes))
+        .map(|(_, scene)| match measure.frames {
+            Some(timing) => timing.keeps_game_time(scene.world.dt),
+            None => Ok(()),
+        })
+        .zip(choices)
+        .map(|(frames, (_, scene))| frames.and_then(|()| warmed(device, scene, seed, sizes)))
         .collect();
     let mut games: Vec<&mut Game> = warm.iter_mut().flatten().map(|(g, _)| g).collect();
     // The autopilot flies.
