@@ -464,8 +464,18 @@ impl DemoArgs {
         };
         let every = whole(1, MAX_STEPS)(every).map_err(|e| anyhow!("--frames-every: N: {e}"))?;
         let dir = PathBuf::from(dir);
-        if !dir.is_dir() {
-            bail!("--frames-every: {} is not a folder", shown(&dir));
+        match std::fs::metadata(&dir) {
+            Ok(meta) if meta.is_dir() => {}
+            Ok(_) => bail!("--frames-every: {} is not a folder", shown(&dir)),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => bail!(
+                "--frames-every: the folder {} does not exist (make it first)",
+                shown(&dir)
+            ),
+            Err(e) => bail!(
+                "--frames-every: the folder {}: {}",
+                shown(&dir),
+                crate::files::io_words(&e)
+            ),
         }
         Ok(Some(Frames { every, dir, size }))
     }

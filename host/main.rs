@@ -68,6 +68,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         let (a, b) = (compare::load(a)?, compare::load(b)?);
         let changes = compare::compare(&a, &a_name, &b, &b_name)?;
         print!("{}", compare::to_text(&changes, &a, &b));
+        let (only_a, only_b) = compare::unshared(&a, &b);
+        for (which, only) in [("A", only_a), ("B", only_b)] {
+            if !only.is_empty() {
+                println!("only in {which}: {}", only.join(", "));
+            }
+        }
         return Ok(());
     }
     if let Command::Scenes = command {

@@ -481,7 +481,11 @@ fn demo_writes_numbered_frames_and_plays_the_same_game() {
     assert_eq!((frame.width(), frame.height()), (32, 24));
     for (every, folder, says) in [
         ("0", folder, "--frames-every: N: out of range"),
-        ("5", "/no/such/folder", "is not a folder"),
+        (
+            "5",
+            "/no/such/folder",
+            "the folder /no/such/folder does not exist",
+        ),
     ] {
         let out = gpuwars(&["demo", "--backend", "cpu", "--frames-every", every, folder]);
         assert!(!out.status.success());
@@ -1116,7 +1120,7 @@ fn tune_for_a_frame_rate_times_frames() {
     let base = ["--backend", "cpu", "tune", "--scene", "kamikaze", "--quick"];
     let framed = [
         &base[..],
-        &["--fps", "5", "--size", "320x180", "--out", tuned],
+        &["--fps", "10", "--size", "320x180", "--out", tuned],
     ]
     .concat();
     let out = gpuwars(&[&framed[..], &["--json"]].concat());
@@ -1126,7 +1130,7 @@ fn tune_for_a_frame_rate_times_frames() {
         String::from_utf8_lossy(&out.stderr)
     );
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(report["target"]["frames_per_second"]["fps"], 5.0);
+    assert_eq!(report["target"]["frames_per_second"]["fps"], 10.0);
     let rows = report["rows"].as_array().unwrap();
     let measured: Vec<_> = rows.iter().filter(|r| r["skipped"].is_null()).collect();
     assert!(!measured.is_empty());
@@ -1141,9 +1145,24 @@ fn tune_for_a_frame_rate_times_frames() {
     }
     let chosen = &rows[report["chosen"].as_u64().unwrap() as usize];
     assert!(
-        chosen["frames_per_s"]["low"].as_f64().unwrap() >= 6.0,
+        chosen["frames_per_s"]["low"].as_f64().unwrap() >= 12.0,
         "{chosen}"
     );
+    // A step of 1/120 s at 10 frames/s is 12 steps a frame, more than `play` plays in one.
+    let fine = rows.iter().find(|r| r["choice"] == "dt 1/120").unwrap();
+    assert!(
+        fine["skipped"]
+            .as_str()
+            .unwrap()
+            .contains("more than the 8"),
+        "{fine}"
+    );
+    // Nor can the scene as given (steps of 1/60 s) be held at 5 frames/s.
+    let slow = [&base[..], &["--fps", "5", "--out", tuned]].concat();
+    let out = gpuwars(&slow);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("aim at 7.50 frames/s or more"), "{stderr}");
     let out = gpuwars(&framed);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(

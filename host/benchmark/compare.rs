@@ -79,11 +79,16 @@ pub fn parse(text: &str, origin: &str) -> Result<Value, FileError> {
         let problem = format!("not a benchmark summary: {}", json_problem(&e));
         FileError::new(origin, (e.line() > 0).then_some(e.line()), "", problem)
     })?;
-    if value.get("benchmark").and_then(Value::as_str).is_none() {
-        let problem = "not a benchmark summary (it has no \"benchmark\" field)";
-        return Err(FileError::new(origin, None, "", problem));
-    }
-    Ok(value)
+    let problem = match value.get("benchmark") {
+        Some(Value::String(_)) => return Ok(value),
+        Some(other) => format!(
+            "not a benchmark summary: its \"benchmark\" field is {} (expected the benchmark's \
+             name, in quotes)",
+            excerpt(&other.to_string())
+        ),
+        None => "not a benchmark summary (it has no \"benchmark\" field)".to_owned(),
+    };
+    Err(FileError::new(origin, None, "", problem))
 }
 
 /// Every value in `value` that is not a list or an object, with its path; rows that have
@@ -167,6 +172,21 @@ pub fn compare(a: &Value, a_name: &str, b: &Value, b_name: &str) -> anyhow::Resu
         }
     }
     Ok(changes)
+}
+
+/// The figures (numbers) that only one of `a` and `b` has: `(a's, b's)`, each in its
+/// summary's order. Rows of other sizes (`rows[enemies=…]`) show here too.
+pub fn unshared(a: &Value, b: &Value) -> (Vec<String>, Vec<String>) {
+    let (mut xs, mut ys) = (Vec::new(), Vec::new());
+    leaves(a, "", &mut xs);
+    leaves(b, "", &mut ys);
+    let only = |these: &[(String, &Value)], other: &[(String, &Value)]| {
+        (these.iter())
+            .filter(|(f, v)| v.is_number() && !other.iter().any(|(g, _)| g == f))
+            .map(|(f, _)| f.clone())
+            .collect()
+    };
+    (only(&xs, &ys), only(&ys, &xs))
 }
 
 /// The changes as an aligned table.
@@ -266,5 +286,42 @@ mod tests {
                 .iter()
                 .any(|c| c.figure == "frames_per_s.median" && c.inside_spreads())
         );
+    }
+
+    /// A figure one summary lacks is listed, not dropped unsaid; text is not a figure.
+    #[test]
+    fn figures_of_one_summary_only_are_named() {
+        let a = json!({ "benchmark": "paper", "step_us": 12.5, "frames": 100,
+                        "rows": [ { "enemies": 8, "steps_per_s": 1.0 } ], "note": "x" });
+        let b = json!({ "benchmark": "paper", "frames": 90,
+                        "rows": [ { "enemies": 16, "steps_per_s": 2.0 } ] });
+        assert_eq!(
+            unshared(&a, &b),
+            (
+                vec![
+                    "rows[enemies=8].enemies".to_owned(),
+                    "rows[enemies=8].steps_per_s".to_owned(),
+                    "step_us".to_owned()
+                ],
+                vec![
+                    "rows[enemies=16].enemies".to_owned(),
+                    "rows[enemies=16].steps_per_s".to_owned()
+                ]
+            )
+        );
+        assert_eq!(unshared(&a, &a), (vec![], vec![]));
+    }
+
+    /// A `benchmark` field that is not a name is refused saying what it holds.
+    #[test]
+    fn a_benchmark_field_not_a_name_is_named() {
+        let e = parse(r#"{"benchmark": 5}"#, "b.json").unwrap_err();
+        assert!(
+            e.to_string().contains("its \"benchmark\" field is 5"),
+            "{e}"
+        );
+        let e = parse(r#"{"bench": "paper"}"#, "b.json").unwrap_err();
+        assert!(e.to_string().contains("no \"benchmark\" field"), "{e}");
+        assert!(parse(r#"{"benchmark": "paper"}"#, "b.json").is_ok());
     }
 }

@@ -410,7 +410,11 @@ impl<'a> Node<'a> {
             Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
             None => String::new(),
         };
-        let name = self.string(&format!("a {what} in quotes ({names})"))?;
+        let article = match what.starts_with(['a', 'e', 'i', 'o', 'u']) {
+            true => "an",
+            false => "a",
+        };
+        let name = self.string(&format!("{article} {what} in quotes ({names})"))?;
         options
             .iter()
             .find(|(option, _)| *option == name)

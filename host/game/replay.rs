@@ -466,7 +466,11 @@ fn read_runs(node: &Node<'_>) -> Result<Vec<(u64, Input)>, ReplayError> {
         };
         // At the closing bracket, where the count is known.
         let length = |found: usize| {
-            let problem = format!("has {found} numbers, expected 5: {RUN}");
+            let numbers = match found {
+                1 => "number",
+                _ => "numbers",
+            };
+            let problem = format!("has {found} {numbers}, expected 5: {RUN}");
             name(run.fail_at(run.span().end.saturating_sub(1), problem), "")
         };
         let mut numbers = run.items(&a_run).map_err(|e| name(e, ""))?;
