@@ -307,6 +307,41 @@ fn wrong_types() {
     let (text, line) = mutate(RUN, "[1, 5, true, 100, 1]");
     let field = format!("inputs[{run}].move_y");
     expect_error(&text, Some(line), &field, &["true", "-1000 to 1000"]);
+
+    let (text, line) = mutate(RUN, "[1, 5, -5]");
+    expect_error(&text, Some(line), &format!("inputs[{run}]"), &["3 numbers"]);
+    let (text, line) = mutate(RUN, "[1]");
+    expect_error(
+        &text,
+        Some(line),
+        &format!("inputs[{run}]"),
+        &["has 1 number,"],
+    );
+
+    // The backend is one this build has, as written.
+    for other in ["bogus", "CPU", ""] {
+        let (text, line) = mutate("\"backend\": \"cpu\"", &format!("\"backend\": \"{other}\""));
+        expect_error(&text, Some(line), "backend", &["allowed `cpu` or `cuda`"]);
+    }
+    let (text, _) = mutate("\"backend\": \"cpu\"", "\"backend\": \"cuda\"");
+    assert_eq!(Replay::parse(&text, "cuda.json").unwrap().backend, "cuda");
+}
+
+/// The scene's name is the one its TOML holds: a replay whose two disagree is refused
+/// when its scene is read, naming both.
+#[test]
+fn the_scene_named_is_the_scene_held() {
+    let mut replay = sample();
+    replay.scene_toml = gpuwars::game::scene::BUILT_IN[0].source.to_owned();
+    assert_eq!(replay.scene("r.json").unwrap().name, "paper");
+    replay.scene = "arena".into();
+    let e = replay.scene("r.json").unwrap_err();
+    assert_eq!(e.field, "scene", "{e}");
+    assert!(
+        e.to_string()
+            .contains("\"arena\" is not the name of the scene its scene_toml holds (\"paper\")"),
+        "{e}"
+    );
 }
 
 #[test]

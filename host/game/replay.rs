@@ -32,6 +32,7 @@ use gpuwars_kernels::game::control::Input;
 
 use super::Scene;
 use super::scene::SceneError;
+use crate::BackendKind;
 use crate::files::positioned::{Doc, Entry, Node, Value};
 use crate::files::{MAX_SCENE_BYTES, excerpt, json_problem, line_of, read_text, thousands};
 
@@ -168,6 +169,14 @@ impl Replay {
     /// worlds renumbered their bodies by default, so its scene renumbers only if it says so.
     pub fn scene(&self, origin: &str) -> Result<Scene, SceneError> {
         let mut scene = Scene::from_toml(&self.scene_toml, origin)?;
+        if scene.name != self.scene {
+            let problem = format!(
+                "\"{}\" is not the name of the scene its scene_toml holds (\"{}\")",
+                excerpt(&self.scene),
+                excerpt(&scene.name)
+            );
+            return Err(SceneError::new(origin, None, "scene", problem));
+        }
         if self.version < VERSION {
             scene.world.physics.renumber_every.get_or_insert(0);
         }
@@ -329,7 +338,12 @@ fn read_fields(entries: &[Entry<'_>], header: Option<bool>) -> Result<Fields, Re
                 }
             })?,
             "seed" => store(&mut f.seed, entry, || ranged(node, 0, u32::MAX))?,
-            "backend" => store(&mut f.backend, entry, text)?,
+            "backend" => store(&mut f.backend, entry, || {
+                let kinds = [BackendKind::Cpu, BackendKind::Cuda];
+                let names = kinds.map(|k| k.to_string());
+                let options: Vec<(&str, &str)> = names.iter().map(|n| (&**n, &**n)).collect();
+                node.choice("backend", &options).map(str::to_owned)
+            })?,
             "steps" => store(&mut f.steps, entry, || {
                 // Found, as before, only if written without escapes.
                 let plain = node.text().get(entry.key_span.clone()) == Some("\"steps\"");
