@@ -467,7 +467,7 @@ pub fn demo(
         scene: scene.name.clone(),
         scene_toml: scene.source.clone(),
         seed,
-        backend: report.backend.to_string(),
+        backend: report.backend,
         state_hash,
         inputs,
     };

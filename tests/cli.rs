@@ -604,7 +604,7 @@ fn inputs_that_would_hang_are_refused_at_once() {
         scene: "kamikaze".into(),
         scene_toml: gpuwars::game::scene::BUILT_IN[1].source.into(),
         seed: 1,
-        backend: "cpu".into(),
+        backend: gpuwars::BackendKind::Cpu,
         state_hash: 0,
         inputs: Vec::new(),
     };

@@ -12,7 +12,6 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use clap::Parser;
-use gpuwars::Device;
 use gpuwars::benchmark::compare;
 use gpuwars::cli::{BenchCommand, Cli, Command};
 use gpuwars::demo::{Report, RunOptions, demo};
@@ -24,6 +23,7 @@ use gpuwars::game::{Game, Scene};
 use gpuwars::kernels::game::control::Input;
 use gpuwars::sim::Shape;
 use gpuwars::sim::spec::{MAX_MASS, MIN_MASS};
+use gpuwars::{BackendKind, Device};
 use proptest::prelude::*;
 use proptest::test_runner::TestCaseError;
 
@@ -817,7 +817,7 @@ prop_compose! {
         scene in any_text(),
         scene_toml in any_text(),
         seed in any::<u32>(),
-        backend in any_text(),
+        backend in prop_oneof![Just(BackendKind::Cpu), Just(BackendKind::Cuda)],
         state_hash in any::<u64>(),
         runs in prop::collection::vec((1usize..50, any_input()), 0..40),
     ) -> Replay {
@@ -851,7 +851,7 @@ fn sample_replay() -> Replay {
         scene: "kamikaze".into(),
         scene_toml: BUILT_IN[1].source.into(),
         seed: 7,
-        backend: "cpu".into(),
+        backend: BackendKind::Cpu,
         state_hash: 0x0123_4567_89ab_cdef,
         inputs,
     }

@@ -34,7 +34,7 @@ fn sample() -> Replay {
         scene: "paper".into(),
         scene_toml: "name = \"paper\"\n# a \\ and a \"quote\",\ta tab, ünïcödé ✓\n[world]\n".into(),
         seed: u32::MAX,
-        backend: "cpu".into(),
+        backend: gpuwars::BackendKind::Cpu,
         state_hash: 0x0123_4567_89ab_cdef,
         inputs: runs
             .iter()
@@ -324,7 +324,8 @@ fn wrong_types() {
         expect_error(&text, Some(line), "backend", &["allowed `cpu` or `cuda`"]);
     }
     let (text, _) = mutate("\"backend\": \"cpu\"", "\"backend\": \"cuda\"");
-    assert_eq!(Replay::parse(&text, "cuda.json").unwrap().backend, "cuda");
+    let replay = Replay::parse(&text, "cuda.json").unwrap();
+    assert_eq!(replay.backend, gpuwars::BackendKind::Cuda);
 }
 
 /// The scene's name is the one its TOML holds: a replay whose two disagree is refused

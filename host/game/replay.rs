@@ -70,7 +70,7 @@ pub struct Replay {
     /// The game's random seed.
     pub seed: u32,
     /// The backend that recorded it (informational: every backend gives the same hash).
-    pub backend: String,
+    pub backend: BackendKind,
     /// The state hash after the last step.
     pub state_hash: u64,
     /// The input of each step, in order.
@@ -111,7 +111,7 @@ impl Replay {
             string(&self.scene),
             string(&self.scene_toml),
             self.seed,
-            string(&self.backend),
+            string(&self.backend.to_string()),
             self.inputs.len(),
             self.state_hash,
         )
@@ -292,7 +292,7 @@ struct Fields {
     scene: Option<String>,
     scene_toml: Option<String>,
     seed: Option<u32>,
-    backend: Option<String>,
+    backend: Option<BackendKind>,
     steps: Option<(u64, Option<usize>)>,
     state_hash: Option<u64>,
     inputs: Option<Vec<(u64, Input)>>,
@@ -339,10 +339,10 @@ fn read_fields(entries: &[Entry<'_>], header: Option<bool>) -> Result<Fields, Re
             })?,
             "seed" => store(&mut f.seed, entry, || ranged(node, 0, u32::MAX))?,
             "backend" => store(&mut f.backend, entry, || {
-                let kinds = [BackendKind::Cpu, BackendKind::Cuda];
-                let names = kinds.map(|k| k.to_string());
-                let options: Vec<(&str, &str)> = names.iter().map(|n| (&**n, &**n)).collect();
-                node.choice("backend", &options).map(str::to_owned)
+                node.choice(
+                    "backend",
+                    &[("cpu", BackendKind::Cpu), ("cuda", BackendKind::Cuda)],
+                )
             })?,
             "steps" => store(&mut f.steps, entry, || {
                 // Found, as before, only if written without escapes.

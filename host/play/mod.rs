@@ -455,7 +455,7 @@ impl<'d> App<'d> {
                 scene: self.scene.name.clone(),
                 scene_toml: self.scene.source.clone(),
                 seed: self.options.seed,
-                backend: self.device.kind().to_string(),
+                backend: self.device.kind(),
                 state_hash: hash,
                 inputs: record.inputs.clone(),
             };
