@@ -160,7 +160,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             seed,
             out,
         } => {
-            let loaded = Scene::load(&scene)?;
+            let loaded = load_scene(&scene)?;
             // Its game tables play the scene many times: a large one is said first.
             announce(&device, &loaded);
             let options = TradeoffOptions {
@@ -195,7 +195,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     )
                     .exit();
             }
-            let loaded = Scene::load(&scene)?;
+            let loaded = load_scene(&scene)?;
             announce(&device, &loaded);
             let options = TuneOptions {
                 scene_given: given_name(&loaded, scene),
@@ -216,6 +216,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             };
             let report = tune::run(&device, &options)?;
             print_summary(&report, json, TuneReport::to_text)?;
+            // A tuned scene written under a built-in's name is not what that name plays.
+            if let Some(note) = options.out.to_str().and_then(scene::shadowed) {
+                eprintln!("gpuwars: note: {note}");
+            }
         }
         Command::Info { json } => {
             let info = Info::gather(&device);
@@ -226,7 +230,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Command::Demo(args) => {
-            let scene = Scene::load(&args.scene)?;
+            let scene = load_scene(&args.scene)?;
             let slow = announce(&device, &scene);
             let options = RunOptions {
                 progress: slow && !args.json,
@@ -247,7 +251,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             print_report(&report, args.json, args.screenshot.as_deref())?;
         }
         Command::Play(args) => {
-            let scene = Scene::load(&args.scene)?;
+            let scene = load_scene(&args.scene)?;
             announce(&device, &scene);
             let options = PlayOptions {
                 seed: args.seed,
@@ -315,6 +319,15 @@ fn run(cli: Cli) -> anyhow::Result<()> {
 
 /// Bytes of a world from which the CPU emulation says, before allocating it, how large it is.
 const LARGE_WORLD_BYTES: u64 = 1 << 30;
+
+/// The scene of `--scene`, with a note on stderr where a built-in's name is also a file
+/// here (see [`scene::shadowed`]).
+fn load_scene(name_or_path: &str) -> Result<Scene, scene::SceneError> {
+    if let Some(note) = scene::shadowed(name_or_path) {
+        eprintln!("gpuwars: note: {note}");
+    }
+    Scene::load(name_or_path)
+}
 
 /// Says on stderr, before a large world is allocated on the CPU emulation, how large it is
 /// and that it plays slowly there (the device's free memory is checked next); returns

@@ -1576,3 +1576,47 @@ fn windowed(args: &[&str], wayland: Option<&std::path::Path>) -> std::process::O
     }
     command.output().unwrap()
 }
+
+/// A built-in scene's name that is also a file here plays the built-in, and says so with
+/// the way to play the file; `./name` plays the file, without the note.
+#[test]
+fn a_file_named_like_a_built_in_is_pointed_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let source = gpuwars::game::scene::BUILT_IN[1].source;
+    let renamed = source.replacen(
+        &format!("name = \"{}\"", gpuwars::game::scene::BUILT_IN[1].name),
+        "name = \"from the file\"",
+        1,
+    );
+    std::fs::write(dir.path().join("paper"), renamed).unwrap();
+    let demo = |scene: &str| {
+        Command::new(env!("CARGO_BIN_EXE_gpuwars"))
+            .args(["--backend", "cpu", "demo", "--steps", "2", "--scene", scene])
+            .current_dir(dir.path())
+            .output()
+            .unwrap()
+    };
+    let out = demo("paper");
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert!(out.status.success(), "{stderr}");
+    assert!(stdout.contains("scene:            paper\n"), "{stdout}");
+    let dot = std::path::Path::new(".").join("paper");
+    let hint = format!("give `--scene {}`", dot.display());
+    assert!(
+        stderr.contains("`paper` is a built-in scene") && stderr.contains(&hint),
+        "{stderr}"
+    );
+    let out = demo(dot.to_str().unwrap());
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert!(
+        stdout.contains("scene:            from the file"),
+        "{stdout}"
+    );
+    assert!(!stderr.contains("built-in scene"), "{stderr}");
+}

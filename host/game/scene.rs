@@ -145,6 +145,20 @@ impl Scene {
     }
 }
 
+/// Where `name` is a built-in scene's and also a file here, which of the two `--scene name`
+/// plays (the built-in) and how to give the file instead; `None` elsewhere.
+pub fn shadowed(name: &str) -> Option<String> {
+    let file = Path::new(name);
+    (BUILT_IN.iter().any(|b| b.name == name) && file.exists()).then(|| {
+        let dot = Path::new(".").join(file);
+        format!(
+            "`{name}` is a built-in scene, played as such; to play the file of that name \
+             here, give `--scene {}`",
+            excerpt(&dot.display().to_string())
+        )
+    })
+}
+
 /// What the toml crate's parse error `message` says, in the scene's terms; `at` is the text
 /// its span covers, if any.
 fn parse_problem(message: &str, at: Option<&str>) -> String {
