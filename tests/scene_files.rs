@@ -425,6 +425,29 @@ fn names_hold_no_control_characters() {
     assert_eq!(scene.name, "paper · 论文");
 }
 
+/// The spawn distance reaches at most as far as a place can be from the ship: the field's
+/// diagonal, or half of it on a torus; one unit past it is refused naming the bound.
+#[test]
+fn the_spawn_distance_fits_the_field() {
+    let from = "distance = 400.0";
+    for (boundary, fits, past, bound) in [
+        ("clamp", "5792.0", "5793.0", "allowed 0 to 5792.6187"),
+        ("wrap", "2896.0", "2897.0", "allowed 0 to 2896.3093"),
+    ] {
+        let base = mutate("boundary = \"clamp\"", &format!("boundary = \"{boundary}\""));
+        let at = |distance: &str| base.replacen(from, &format!("distance = {distance}"), 1);
+        let scene = Scene::from_toml(&at(fits), "paper.toml").unwrap();
+        assert_eq!(scene.game.spawn.distance, fits.parse::<f32>().unwrap());
+        let text = at(past);
+        assert_error(
+            &text,
+            line_of(&text, "distance = "),
+            "spawn.distance",
+            &["farther than any place of the 4096 x 4096 field", bound],
+        );
+    }
+}
+
 #[test]
 fn duplicate_kind_names() {
     let text = format!(

@@ -251,7 +251,7 @@ fn read_scene(root: &Node<'_>) -> Result<Scene, SceneError> {
 
     let ship = read_ship(&top.need("ship")?)?;
     let fps = read_fps(&top.need("fps")?)?;
-    let spawn = read_spawn(&top.need("spawn")?)?;
+    let spawn = read_spawn(&top.need("spawn")?, (size, boundary))?;
     let effects = top.or("effects", None, |n| read_effects(n).map(Some))?;
     let (mut kinds, behaviours): (Vec<KindSpec>, _) = top
         .need("kinds")?
@@ -388,9 +388,33 @@ fn read_effects(node: &Node<'_>) -> Result<EffectsSpec, SceneError> {
     })
 }
 
-fn read_spawn(node: &Node<'_>) -> Result<SpawnSpec, SceneError> {
+/// `[spawn]`, in a field of `size` and `boundary`.
+fn read_spawn(
+    node: &Node<'_>,
+    (size, boundary): (Vec2, Boundary),
+) -> Result<SpawnSpec, SceneError> {
     let spawn = node.table(&["distance", "waves"])?;
-    let distance = spawn.need("distance")?.real(side_or_zero())?;
+    let distance_node = spawn.need("distance")?;
+    let distance = distance_node.real(side_or_zero())?;
+    // The farthest a place can be from the ship: across the field, or half across a torus
+    // (its offsets go the short way round); beyond it no place is far enough.
+    let (farthest, across) = match boundary {
+        Boundary::Clamp => (size.length(), "its diagonal"),
+        Boundary::Wrap => (
+            (size / 2.0).length(),
+            "half its diagonal, the short way round",
+        ),
+    };
+    if distance > farthest {
+        return Err(distance_node.fail(format!(
+            "{} is farther than any place of the {} x {} field can be from the ship \
+             (allowed 0 to {}: {across})",
+            number(distance),
+            number(size.x),
+            number(size.y),
+            number(farthest)
+        )));
+    }
     let waves = spawn.or("waves", Vec::new(), |n| {
         n.array("an array of tables ([[spawn.waves]])")
     })?;
