@@ -434,7 +434,10 @@ fn the_spawn_distance_fits_the_field() {
         ("clamp", "5792.0", "5793.0", "allowed 0 to 5792.6187"),
         ("wrap", "2896.0", "2897.0", "allowed 0 to 2896.3093"),
     ] {
-        let base = mutate("boundary = \"clamp\"", &format!("boundary = \"{boundary}\""));
+        let base = mutate(
+            "boundary = \"clamp\"",
+            &format!("boundary = \"{boundary}\""),
+        );
         let at = |distance: &str| base.replacen(from, &format!("distance = {distance}"), 1);
         let scene = Scene::from_toml(&at(fits), "paper.toml").unwrap();
         assert_eq!(scene.game.spawn.distance, fits.parse::<f32>().unwrap());
