@@ -214,6 +214,26 @@ fn load_of_a_file_that_is_not_text() {
     assert_eq!(e.line, Some(3), "{e}");
 }
 
+/// A scene file given as a replay is named as what it is, not as broken JSON.
+#[test]
+fn a_scene_given_as_a_replay_is_named() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let path = dir.path().join("arena.toml");
+    let source = gpuwars::game::scene::BUILT_IN[1].source;
+    std::fs::write(&path, source).expect("written");
+    let e = Replay::load(&path).expect_err("a scene");
+    let name = gpuwars::game::scene::BUILT_IN[1].name;
+    assert!(
+        e.problem
+            .contains(&format!("not a replay but the scene `{name}`")),
+        "{e}"
+    );
+    // Text that is neither keeps the JSON reader's words.
+    std::fs::write(&path, "name = ").expect("written");
+    let e = Replay::load(&path).expect_err("neither");
+    assert!(e.problem.contains("not a JSON value"), "{e}");
+}
+
 fn entries(dir: &Path) -> Vec<String> {
     let entries = std::fs::read_dir(dir).expect("a readable directory");
     let mut names: Vec<String> = entries

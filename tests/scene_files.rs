@@ -249,7 +249,7 @@ fn out_of_range() {
             "min = 12.0",
             "min = 70.0",
             "fps.min",
-            "70.0 is out of range (allowed [0, 60])",
+            "70.0 is out of range (allowed [0, 60]: at most fps.start)",
         ),
         (
             "restitution = 0.2",
@@ -513,7 +513,7 @@ fn behaviours() {
         &text,
         line,
         "kinds[2].behaviour.speed",
-        &["75.0 is out of range (allowed (0, 70])"],
+        &["75.0 is out of range (allowed (0, 70]: at most the kind's max_speed)"],
     );
 }
 

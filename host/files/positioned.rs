@@ -633,8 +633,9 @@ pub struct Interval {
     low: f32,
     closed: bool,
     high: f32,
-    /// Whether `high` is another value of the file as stored (see [`Interval::up_to_stored`]).
-    stored: bool,
+    /// Where `high` is another value of the file as stored, that value's name (see
+    /// [`Interval::up_to_stored`]).
+    stored: Option<&'static str>,
 }
 
 /// `(low, high]`.
@@ -643,7 +644,7 @@ pub fn above(low: f32, high: f32) -> Interval {
         low,
         closed: false,
         high,
-        stored: false,
+        stored: None,
     }
 }
 
@@ -653,14 +654,18 @@ pub fn within(low: f32, high: f32) -> Interval {
         low,
         closed: true,
         high,
-        stored: false,
+        stored: None,
     }
 }
 
 impl fmt::Display for Interval {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let open = if self.closed { '[' } else { '(' };
-        write!(f, "{open}{}, {}]", number(self.low), number(self.high))
+        write!(f, "{open}{}, {}]", number(self.low), number(self.high))?;
+        match self.stored {
+            Some(bound) => write!(f, ": at most {bound}"),
+            None => Ok(()),
+        }
     }
 }
 
@@ -668,10 +673,11 @@ impl Interval {
     /// The range whose upper bound is another value of the file, read and stored as an
     /// `f32` (a speed at most its kind's `max_speed`): a number is then compared as it
     /// will be stored, with the same rounding on both sides, so that `70.7` is at most
-    /// `70.7` whatever `f32` makes of it, in any spelling.
-    pub fn up_to_stored(self) -> Interval {
+    /// `70.7` whatever `f32` makes of it, in any spelling. `bound` names that value in
+    /// errors (`fps.start`).
+    pub fn up_to_stored(self, bound: &'static str) -> Interval {
         Interval {
-            stored: true,
+            stored: Some(bound),
             ..self
         }
     }
@@ -680,8 +686,8 @@ impl Interval {
     /// range (NaN never is).
     fn contains(&self, x: f64) -> bool {
         let x = match self.stored {
-            true => f64::from(x as f32),
-            false => x,
+            Some(_) => f64::from(x as f32),
+            None => x,
         };
         let (low, high) = (f64::from(self.low), f64::from(self.high));
         let above = if self.closed { x >= low } else { x > low };

@@ -187,7 +187,20 @@ impl Replay {
     /// UTF-8 (see [`crate::files::read_text`]).
     pub fn load(path: &Path) -> Result<Replay, ReplayError> {
         let text = read_text(path, MAX_REPLAY_BYTES)?;
-        Replay::parse(&text, &path.display().to_string())
+        let origin = path.display().to_string();
+        Replay::parse(&text, &origin).map_err(|e| match Scene::from_toml(&text, &origin) {
+            // A scene given where a replay was asked for: say so, not how JSON differs.
+            Ok(scene) => ReplayError {
+                line: None,
+                problem: format!(
+                    "not a replay but the scene `{}` (a replay is the JSON file `--record` \
+                     writes; a scene is given with `--scene`)",
+                    excerpt(&scene.name)
+                ),
+                ..e
+            },
+            Err(_) => e,
+        })
     }
 
     /// Writes atomically (see [`crate::files::write_atomically`]): an existing regular file

@@ -371,7 +371,9 @@ fn read_fps(node: &Node<'_>) -> Result<FpsSpec, SceneError> {
     let start = fps.need("start")?.real(above(0.0, MAX_FPS))?;
     Ok(FpsSpec {
         start,
-        min: fps.need("min")?.real(within(0.0, start).up_to_stored())?,
+        min: fps
+            .need("min")?
+            .real(within(0.0, start).up_to_stored("fps.start"))?,
         recovery: fps.need("recovery")?.real(within(0.0, MAX_FPS))?,
     })
 }
@@ -572,7 +574,7 @@ fn read_behaviour(node: &Node<'_>, max_speed: f32) -> Result<Behaviour, SceneErr
         // At most the kind's speed limit, both as stored.
         speed: b
             .need("speed")?
-            .real(above(0.0, max_speed.min(MAX)).up_to_stored())?,
+            .real(above(0.0, max_speed.min(MAX)).up_to_stored("the kind's max_speed"))?,
         avoid_bullets,
         low_energy,
         recovery,
