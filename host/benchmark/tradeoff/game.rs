@@ -98,10 +98,10 @@ impl FrameTiming {
     /// back where the window uploads it (the CPU emulation), left in device memory where
     /// CUDA hands it to GL.
     fn frame(self, game: &mut Game, banked: &mut f64) -> Result<(), Error> {
+        // At most `MAX_CATCH_UP` steps: only a rate that `keeps_game_time` is timed.
         *banked += 1.0 / (self.fps * f64::from(game.scene().world.dt));
-        // As `play`: the steps beyond its most a frame are given up.
-        let due = banked.floor().min(MAX_CATCH_UP as f64);
-        *banked = (*banked - due).min(1.0);
+        let due = banked.floor();
+        *banked -= due;
         for _ in 0..due as u64 {
             game.submit(None)?;
         }
@@ -403,12 +403,11 @@ fn group_rows(
 ) -> anyhow::Result<Vec<GameRow>> {
     let mut warm: Vec<Result<(Game, u32), String>> = choices
         .iter()
-        .map(|(_, scene)| match measure.frames {
-            Some(timing) => timing.keeps_game_time(scene.world.dt),
-            None => Ok(()),
+        .map(|(_, scene)| {
+            (measure.frames)
+                .map_or(Ok(()), |timing| timing.keeps_game_time(scene.world.dt))
+                .and_then(|()| warmed(device, scene, seed, sizes))
         })
-        .zip(choices)
-        .map(|(frames, (_, scene))| frames.and_then(|()| warmed(device, scene, seed, sizes)))
         .collect();
     let mut games: Vec<&mut Game> = warm.iter_mut().flatten().map(|(g, _)| g).collect();
     // The autopilot flies.
