@@ -345,6 +345,31 @@ pub fn quote_short(error: &mut clap::Error) {
     }
 }
 
+/// Parses `args` (the program's name first) as [`command`] does.
+pub fn parse_from<I, T>(args: I) -> Result<Cli, clap::Error>
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
+    use clap::FromArgMatches;
+    let mut matches = command().try_get_matches_from(args)?;
+    Cli::from_arg_matches_mut(&mut matches).map_err(|e| e.format(&mut command()))
+}
+
+/// [`Cli`]'s command in which a flag that takes a value takes a negative number too, so that
+/// `--steps -5` gets the flag's own range error rather than "unexpected argument '-5'".
+pub fn command() -> clap::Command {
+    fn negatives_as_values(command: clap::Command) -> clap::Command {
+        command
+            .mut_args(|arg| {
+                let takes_value = arg.get_action().takes_values();
+                arg.allow_negative_numbers(takes_value)
+            })
+            .mut_subcommands(negatives_as_values)
+    }
+    negatives_as_values(<Cli as clap::CommandFactory>::command())
+}
+
 /// `--lanes`: `auto`, or a power of two from 1 to 32.
 fn parse_lanes(text: &str) -> Result<Lanes, String> {
     let text = text.trim();

@@ -5,7 +5,7 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::bail;
-use clap::{CommandFactory, Parser};
+
 use gpuwars::benchmark::compare;
 use gpuwars::benchmark::paper::{self, PaperOptions, PaperSummary};
 use gpuwars::benchmark::scale::{self, ScaleOptions, ScaleSummary};
@@ -27,7 +27,7 @@ use gpuwars::play::{self, PlayOptions, PlayReport};
 use gpuwars::{BackendKind, Device};
 
 fn main() -> ExitCode {
-    let cli = Cli::try_parse().unwrap_or_else(|mut e| {
+    let cli = gpuwars::cli::parse_from(std::env::args_os()).unwrap_or_else(|mut e| {
         gpuwars::cli::quote_short(&mut e);
         e.exit()
     });
@@ -188,7 +188,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         } => {
             if size.is_some() && fps.is_none() {
                 // Checked here: clap's `requires` lets it through beside the target group.
-                Cli::command()
+                gpuwars::cli::command()
                     .error(
                         clap::error::ErrorKind::MissingRequiredArgument,
                         "--size sets the frame of --fps: give --fps too",

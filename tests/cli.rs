@@ -853,6 +853,11 @@ fn every_command_checks_its_flags_in_the_same_words() {
                 "4294967296",
                 "out of range (allowed a whole number from 0 to 4,294,967,295)",
             ),
+            // A minus sign makes it the flag's value, not another flag.
+            (
+                "-1",
+                "out of range (allowed a whole number from 0 to 4,294,967,295)",
+            ),
         ] {
             let args = [&command[..], &["--seed", seed]].concat();
             let stderr = refused(&args, 2, &[says]);

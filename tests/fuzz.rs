@@ -11,9 +11,8 @@
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use clap::Parser;
 use gpuwars::benchmark::compare;
-use gpuwars::cli::{BenchCommand, Cli, Command};
+use gpuwars::cli::{BenchCommand, Command};
 use gpuwars::demo::{Report, RunOptions, demo};
 use gpuwars::files::FileError;
 use gpuwars::game::engine::footprint;
@@ -1325,7 +1324,7 @@ proptest! {
         line in prop_oneof![3 => command_line(), 1 => files_line()],
     ) {
         let argv = std::iter::once("gpuwars".to_owned()).chain(line.iter().cloned());
-        match timed("a command line", || Cli::try_parse_from(argv))? {
+        match timed("a command line", || gpuwars::cli::parse_from(argv))? {
             Ok(cli) => {
                 if let Some(command) = &cli.command {
                     checks_before_a_game(command)?;
