@@ -334,13 +334,22 @@ fn compare_refuses_figures_that_are_not_numbers_and_prints_what_means_something(
         stderr.contains("a.json:1: not a benchmark summary: the text ends"),
         "{stderr}"
     );
-    // A vanishing or zero figure has no change in percent; huge ones are readable.
+    let stderr = compare_error(&summary("60"), &summary("-60"));
+    assert!(
+        stderr.contains("b.json: frames_per_s.median: -60.000 is below 0"),
+        "{stderr}"
+    );
+    // A vanishing or zero figure has no change in percent; huge ones are readable (a
+    // figure that may be negative, which a rate may not).
+    let summary = |median: &str| {
+        format!(r#"{{"benchmark": "paper", "drift": {{"median": {median}, "p5": 2}}}}"#)
+    };
     for (a, b) in [("5e-324", "1"), ("0", "1"), ("-1e308", "1e308")] {
         let out = compare(&summary(a), &summary(b));
         let text = String::from_utf8_lossy(&out.stdout);
         let line = text
             .lines()
-            .find(|l| l.starts_with("frames_per_s.median"))
+            .find(|l| l.starts_with("drift.median"))
             .unwrap_or_else(|| panic!("{text}"));
         assert!(line.len() < 80, "{line}");
         assert!(!line.contains("inf"), "{line}");

@@ -80,7 +80,7 @@ pub fn parse(text: &str, origin: &str) -> Result<Value, FileError> {
         FileError::new(origin, (e.line() > 0).then_some(e.line()), "", problem)
     })?;
     let problem = match value.get("benchmark") {
-        Some(Value::String(_)) => return Ok(value),
+        Some(Value::String(_)) => return check_figures(value, origin),
         Some(other) => format!(
             "not a benchmark summary: its \"benchmark\" field is {} (expected the benchmark's \
              name, in quotes)",
@@ -89,6 +89,56 @@ pub fn parse(text: &str, origin: &str) -> Result<Value, FileError> {
         None => "not a benchmark summary (it has no \"benchmark\" field)".to_owned(),
     };
     Err(FileError::new(origin, None, "", problem))
+}
+
+/// `summary`, if none of its figures is one no run can give: a rate or a time below 0, a
+/// spread whose least is above its most, or a median outside its spread.
+fn check_figures(summary: Value, origin: &str) -> Result<Value, FileError> {
+    let mut figures = Vec::new();
+    leaves(&summary, "", &mut figures);
+    let number = |path: &str| {
+        (figures.iter())
+            .find(|(f, _)| f == path)
+            .and_then(|(_, v)| v.as_f64())
+    };
+    for (figure, value) in &figures {
+        let Some(x) = value.as_f64() else {
+            continue;
+        };
+        let problem = if x < 0.0 && never_negative(figure) {
+            format!(
+                "{} is below 0, which no rate or time can be",
+                self::figure(x)
+            )
+        } else if let Some((least, most)) = spread_of(figure)
+            .into_iter()
+            .find_map(|(low, high)| Some((number(&low)?, number(&high)?)))
+            .filter(|(least, most)| !(least <= most && (least..=most).contains(&&x)))
+        {
+            format!(
+                "the median {} is not inside its spread, {} to {}",
+                self::figure(x),
+                self::figure(least),
+                self::figure(most)
+            )
+        } else {
+            continue;
+        };
+        return Err(FileError::new(origin, None, figure, problem));
+    }
+    Ok(summary)
+}
+
+/// Whether `figure` is a rate or a time (a part of its path named `…_per_s`, `…_us` or
+/// `seconds`, or a spread's end of one), which no run makes negative.
+fn never_negative(figure: &str) -> bool {
+    figure.split('.').any(|part| {
+        let name = part.split('[').next().unwrap_or_default();
+        let name = ["_low", "_high", "_range"]
+            .iter()
+            .fold(name, |n, end| n.strip_suffix(end).unwrap_or(n));
+        name.ends_with("_per_s") || name.ends_with("_us") || name == "seconds"
+    })
 }
 
 /// Every value in `value` that is not a list or an object, with its path; rows that have
@@ -310,6 +360,69 @@ mod tests {
             )
         );
         assert_eq!(unshared(&a, &a), (vec![], vec![]));
+    }
+
+    /// A figure no run can give is refused, naming it: the edges (0, a spread of one value,
+    /// a median on its spread's ends) pass.
+    #[test]
+    fn impossible_figures_are_refused_by_name() {
+        let summary = |fps: (f64, f64, f64), rate: f64, range: (f64, f64), extra: Value| {
+            let mut v = json!({
+                "benchmark": "scale",
+                "frames_per_s": { "min": fps.0, "median": fps.1, "mean": fps.1, "max": fps.2 },
+                "stages_us": { "broad": { "min": 0.0, "median": 0.0, "max": 0.0 } },
+                "rows": [ { "enemies": 8, "steps_per_s": rate,
+                            "steps_per_s_range": [range.0, range.1] } ],
+                "penetration_change": -3.5,
+            });
+            v.as_object_mut()
+                .unwrap()
+                .extend(extra.as_object().unwrap().clone());
+            parse(&v.to_string(), "s.json")
+        };
+        let fine = json!({});
+        assert!(summary((5.0, 5.0, 5.0), 7.0, (7.0, 7.0), fine.clone()).is_ok());
+        assert!(summary((1.0, 1.0, 9.0), 9.0, (2.0, 9.0), fine.clone()).is_ok());
+        for (fps, rate, range, extra, says) in [
+            (
+                (1.0, 5.0, 9.0),
+                -1.0,
+                (-2.0, 0.0),
+                fine.clone(),
+                "rows[enemies=8].steps_per_s: -1.000 is below 0",
+            ),
+            (
+                (9.0, 5.0, 1.0),
+                7.0,
+                (7.0, 7.0),
+                fine.clone(),
+                "frames_per_s.median: the median 5.000 is not inside its spread, 9.000 to 1.000",
+            ),
+            (
+                (1.0, 5.0, 9.0),
+                7.0,
+                (7.5, 8.0),
+                fine.clone(),
+                "rows[enemies=8].steps_per_s: the median 7.000 is not inside its spread",
+            ),
+            (
+                (1.0, 5.0, 9.0),
+                7.0,
+                (7.0, 7.0),
+                json!({ "seconds": -0.5 }),
+                "seconds: -0.500 is below 0",
+            ),
+            (
+                (1.0, 5.0, 9.0),
+                7.0,
+                (7.0, 7.0),
+                json!({ "stages_us": { "narrow": { "max": -1e-300 } } }),
+                "stages_us.narrow.max: -1.000e-300 is below 0",
+            ),
+        ] {
+            let e = summary(fps, rate, range, extra).unwrap_err().to_string();
+            assert!(e.contains("s.json") && e.contains(says), "{e}");
+        }
     }
 
     /// A `benchmark` field that is not a name is refused saying what it holds.
