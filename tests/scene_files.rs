@@ -315,10 +315,10 @@ fn out_of_range() {
         &["allowed 1 without `every`"],
     );
 
-    // A rectangle's half extents are one key.
+    // A rectangle's half extents are one key, whose element is named.
     let text = mutate("circle = 2.0", "rect = [2.0, 0.0]");
     let line = line_of(&text, "rect");
-    assert_error(&text, line, "kinds[1].rect", &["allowed (0, 1000000]"]);
+    assert_error(&text, line, "kinds[1].rect[1]", &["allowed (0, 1000000]"]);
 }
 
 #[test]
@@ -648,13 +648,30 @@ fn arrays_have_exactly_their_length() {
             "4096.0",
             "expected an array [width, height] of two numbers in (0, 1000000]",
         ),
-        (
-            "[4096.0, \"x\"]",
-            "expected a number in (0, 1000000], found \"x\"",
-        ),
     ] {
         let text = mutate("[4096.0, 4096.0]", to);
         assert_error(&text, line_of(&text, "size"), "world.size", &[says]);
+    }
+    // An element's error names the element.
+    for (to, field, says) in [
+        (
+            "[4096.0, \"x\"]",
+            "world.size[1]",
+            "expected a number in (0, 1000000], found \"x\"",
+        ),
+        (
+            "[-0.0, 4096.0]",
+            "world.size[0]",
+            "-0.0 is out of range (allowed (0, 1000000])",
+        ),
+        (
+            "[4096.0, 1000000.1]",
+            "world.size[1]",
+            "1000000.1 is out of range",
+        ),
+    ] {
+        let text = mutate("[4096.0, 4096.0]", to);
+        assert_error(&text, line_of(&text, "size"), field, &[says]);
     }
     let text = mutate("circle = 2.0", "rect = [1.0, 2.0, 3.0]");
     assert_error(

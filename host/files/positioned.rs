@@ -502,7 +502,7 @@ impl<'a> Node<'a> {
     }
 
     /// `[x, y]`: exactly two numbers in `range`; `what` says what they are
-    /// (`[width, height]`). An error about either names the array.
+    /// (`[width, height]`). An error about either names it by its index (`world.size[1]`).
     pub fn pair(&self, range: Interval, what: &str) -> Result<[f32; 2], FileError> {
         let items = self.array(&format!("an array {what} of two numbers in {range}"))?;
         let [x, y] = &items[..] else {
@@ -514,8 +514,9 @@ impl<'a> Node<'a> {
                 "has {values} (allowed exactly 2: {what}, each in {range})"
             )));
         };
-        let read = |item: &Node<'a>| item.renamed(self.path.clone()).real(range);
-        Ok([read(x)?, read(y)?])
+        let read =
+            |i: usize, item: &Node<'a>| item.renamed(format!("{}[{i}]", self.path)).real(range);
+        Ok([read(0, x)?, read(1, y)?])
     }
 }
 

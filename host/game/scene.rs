@@ -581,11 +581,12 @@ fn read_behaviour(node: &Node<'_>, max_speed: f32) -> Result<Behaviour, SceneErr
     })
 }
 
-/// [`WorldSpec::validate`]'s error with its field in TOML terms: `size.x` → `world.size`,
+/// [`WorldSpec::validate`]'s error with its field in TOML terms: `size.x` → `world.size[0]`,
 /// `kinds[2] (shot).radius` → `kinds[2].circle`, …
 fn toml_field(world: &WorldSpec, e: SpecError) -> SpecError {
     let field = match e.field.as_str() {
-        "size.x" | "size.y" => "world.size".to_owned(),
+        "size.x" => "world.size[0]".to_owned(),
+        "size.y" => "world.size[1]".to_owned(),
         "dt" => "world.dt".to_owned(),
         "vision" => "world.cell".to_owned(),
         field => world
@@ -598,7 +599,8 @@ fn toml_field(world: &WorldSpec, e: SpecError) -> SpecError {
                 let rest = field.strip_prefix(&prefix)?;
                 let rest = match rest {
                     "radius" => "circle",
-                    "half.x" | "half.y" => "rect",
+                    "half.x" => "rect[0]",
+                    "half.y" => "rect[1]",
                     rest => rest,
                 };
                 Some(format!("kinds[{k}].{rest}"))
