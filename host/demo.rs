@@ -116,6 +116,9 @@ impl PairReport {
 pub struct ProfileReport {
     /// Bytes per second of a large device-to-device copy (read plus written).
     pub copy_bandwidth: f64,
+    /// Bytes per second of a copy as large as each stage's run, in the stages' order: the
+    /// ceiling of a stage whose bytes stay in a cache, as the small worlds' do.
+    pub stage_copies: Vec<f64>,
     /// A chain of as many one-touch launches as the step makes, over its slots.
     pub floor: Floor,
     /// The stages' times.
@@ -185,11 +188,12 @@ impl Report {
         }
         if let Some(p) = &self.profile {
             out += &format!(
-                "\nstage times over {} steps (copy bandwidth {:.1} GB/s):\n{}{}\n",
+                "\nstage times over {} steps (copy bandwidth {:.1} GB/s; a stage's `of copy` \
+                 against a copy of as many bytes):\n{}{}\n",
                 p.profile.steps,
                 p.copy_bandwidth / 1e9,
                 p.profile.to_table(
-                    Some(p.copy_bandwidth),
+                    Some(&p.stage_copies),
                     Some(p.floor.graph_s / p.floor.launches.max(1) as f64)
                 ),
                 p.floor.describe(p.profile.step_seconds())
@@ -396,7 +400,10 @@ fn play(
     let device = pipeline.device();
     let profile = match profile {
         Some(profile) => Some(ProfileReport {
-            copy_bandwidth: device.copy_bandwidth()?,
+            copy_bandwidth: device.copy_bandwidth(u64::MAX)?,
+            stage_copies: (profile.run_bytes())
+                .map(|bytes| device.copy_bandwidth(bytes))
+                .collect::<Result<_, _>>()?,
             floor: floor::measure(
                 device,
                 pipeline.launches_per_step(),

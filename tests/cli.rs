@@ -282,6 +282,13 @@ fn demo_profiles_every_stage_and_runs_the_same_game() {
     let profile = &profiled["profile"];
     assert_eq!(profile["steps"], 30);
     assert!(profile["copy_bandwidth"].as_f64().unwrap() > 0.0);
+    // A copy as large as each stage's run, for every stage.
+    let copies = profile["stage_copies"].as_array().unwrap();
+    assert_eq!(copies.len(), profile["stages"].as_array().unwrap().len());
+    assert!(
+        copies.iter().all(|c| c.as_f64().unwrap() > 0.0),
+        "{copies:?}"
+    );
     let stages: Vec<&str> = profile["stages"]
         .as_array()
         .unwrap()

@@ -473,13 +473,20 @@ impl Device {
         }
     }
 
-    /// Bytes per second of a large device-to-device copy, read plus written: the
-    /// bandwidth ceiling a memory-bound kernel is measured against.
-    pub fn copy_bandwidth(&self) -> Result<f64, Error> {
-        let (len, reps) = match self.kind() {
-            BackendKind::Cuda => (1usize << 26, 20),
-            BackendKind::Cpu => (1 << 23, 5),
+    /// Bytes per second of a device-to-device copy that moves `bytes` (read plus written,
+    /// so half of them each way; at most 512 MiB on the GPU and 64 MiB on the CPU, past
+    /// which a copy runs at the memory's own rate): the ceiling of a kernel that moves as
+    /// many, whose bytes stay in the same caches as the copy's do.
+    pub fn copy_bandwidth(&self, bytes: u64) -> Result<f64, Error> {
+        // The largest copy, and the bytes copied in all, enough to time the smallest.
+        let (most, total) = match self.kind() {
+            BackendKind::Cuda => (1u64 << 26, 1u64 << 33),
+            BackendKind::Cpu => (1 << 23, 1 << 28),
         };
+        let len = (bytes / (2 * size_of::<u32>() as u64)).clamp(1, most);
+        let moved = 2 * len * size_of::<u32>() as u64;
+        let reps = (total / moved).clamp(5, 2_000);
+        let len = len as usize;
         let src = self.alloc_zeroed::<u32>(len)?;
         let mut dst = self.alloc_zeroed::<u32>(len)?;
         self.copy(&src, &mut dst)?;
@@ -488,7 +495,7 @@ impl Device {
             self.copy(&src, &mut dst)?;
         }
         let seconds = self.mark()?.seconds_since(&start)?;
-        Ok((2 * len * size_of::<u32>() * reps) as f64 / seconds.max(f64::MIN_POSITIVE))
+        Ok((moved * reps) as f64 / seconds.max(f64::MIN_POSITIVE))
     }
 
     /// Waits until every queued launch and copy has finished, and reports a kernel fault.

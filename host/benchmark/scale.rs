@@ -181,7 +181,7 @@ pub fn scene(enemies: u64) -> anyhow::Result<Scene> {
 pub fn run(device: &Device, options: &ScaleOptions) -> anyhow::Result<ScaleSummary> {
     let outputs = Outputs::in_dir(&options.out, "scale")?;
     let machine = Provenance::now(device);
-    let copy_bandwidth = device.copy_bandwidth()?;
+    let copy_bandwidth = device.copy_bandwidth(u64::MAX)?;
     let sizes = sizes(options.max);
     let mut bar = progress(sizes.len() as u64, options.progress, "bench scale", "sizes");
     let mut rows = Vec::new();

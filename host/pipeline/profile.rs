@@ -65,6 +65,11 @@ impl Profile {
         }
     }
 
+    /// Bytes of one run of each stage, in step order: what a copy as large moves.
+    pub fn run_bytes(&self) -> impl Iterator<Item = u64> + '_ {
+        self.stages.iter().map(|s| s.run_bytes)
+    }
+
     /// Mean seconds per step of all stages together.
     pub fn step_seconds(&self) -> f64 {
         self.stages.iter().map(|s| s.seconds).sum::<f64>() / self.steps.max(1) as f64
@@ -82,11 +87,12 @@ impl Profile {
     }
 
     /// The profile as an aligned table: per stage, microseconds per step, share of the step,
-    /// launches, bytes and the bandwidth they make; with `copy_bandwidth` (bytes per second,
-    /// measured in the same run), the fraction of it each stage achieves; with `launch_s`
-    /// (seconds a launch of a chain of launches that do nothing takes, measured in the same
-    /// run), each stage's floor: what its launches would take a step doing nothing.
-    pub fn to_table(&self, copy_bandwidth: Option<f64>, launch_s: Option<f64>) -> String {
+    /// launches, bytes and the bandwidth they make; with `copies` (bytes per second of a
+    /// copy as large as each stage's run, in the stages' order, measured in the same run),
+    /// the fraction of it each stage achieves; with `launch_s` (seconds a launch of a chain
+    /// of launches that do nothing takes, measured in the same run), each stage's floor:
+    /// what its launches would take a step doing nothing.
+    pub fn to_table(&self, copies: Option<&[f64]>, launch_s: Option<f64>) -> String {
         let steps = self.steps.max(1) as f64;
         let total: f64 = self.stages.iter().map(|s| s.seconds).sum();
         let floor_us =
@@ -96,15 +102,17 @@ impl Profile {
             "{:<10} {:>10} {:>7} {:>8} {:>10} {:>12} {:>10} {:>9}\n",
             "stage", "us/step", "share", "launches", "floor us", "bytes/step", "GB/s", "of copy"
         );
-        for s in &self.stages {
+        for (i, s) in self.stages.iter().enumerate() {
             let per_step = s.seconds / steps;
             let rate = if per_step > 0.0 {
                 s.bytes as f64 / per_step
             } else {
                 0.0
             };
-            let of_copy =
-                copy_bandwidth.map_or("-".to_string(), |bw| format!("{:.1}%", 100.0 * rate / bw));
+            let of_copy = match copies.and_then(|c| c.get(i)) {
+                Some(&copy) if s.bytes > 0 => format!("{:.1}%", 100.0 * rate / copy),
+                _ => "-".to_string(),
+            };
             out += &format!(
                 "{:<10} {:>10.2} {:>6.1}% {:>8} {:>10} {:>12} {:>10.1} {:>9}\n",
                 s.stage,
@@ -167,5 +175,17 @@ mod tests {
         assert_eq!(row("every")[4..6], ["4.00", "1000"]);
         assert_eq!(row("seldom")[4..6], ["2.00", "2000"]);
         assert_eq!(row("step")[4..6], ["6.00", "3000"]);
+        // Against copies as large as each stage's run: "every" moves 1000 bytes in 0.75 µs
+        // a step, 1.33 GB/s, two thirds of its 2 GB/s copy; "seldom" its 8000 in its one
+        // run of 1 µs, 8 GB/s, half of its 16; a stage that moves nothing has no fraction.
+        profile.stages.push(stage("none", 1, 4, 0, 1e-6));
+        let table = profile.to_table(Some(&[2e9, 16e9, 1e9]), None);
+        let row = |name: &str| {
+            let line = table.lines().find(|l| l.starts_with(name)).expect("a row");
+            line.split_whitespace().last().unwrap().to_owned()
+        };
+        assert_eq!(row("every"), "66.7%");
+        assert_eq!(row("seldom"), "50.0%");
+        assert_eq!(row("none"), "-");
     }
 }
