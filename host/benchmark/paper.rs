@@ -160,7 +160,7 @@ pub fn run(device: &Device, options: &PaperOptions) -> anyhow::Result<PaperSumma
     let mut counter = Seconds::new(Instant::now());
     let mut last = game.status();
     while counter.rows().len() < seconds {
-        if counter.wants_sample() {
+        if counter.wants_sample(Instant::now()) {
             // One step of each second is profiled stage by stage (it waits for the GPU).
             let mut profile = Profile::default();
             game.submit_profiled(None, &mut profile)?;

@@ -40,7 +40,7 @@ impl App<'_> {
         let sample = self
             .bench
             .as_ref()
-            .is_some_and(|b| b.seconds.wants_sample());
+            .is_some_and(|b| b.seconds.wants_sample(now));
         let profile = self.advance(now, sample)?;
         let (render, gl) = self.draw(profile.is_some())?;
         let alive = self.round.record.last.enemies_alive;
