@@ -199,9 +199,11 @@ pub fn choose(
                 .max_by(|a, b| target.rate(a).low.total_cmp(&target.rate(b).low))
             {
                 Some(fastest) => format!(
-                    "no choice holds {} {unit} with its slowest round: the fastest, `{}`, ran \
-                     {}; lower the target, or tune a smaller scene",
+                    "no choice holds {} {unit} with its slowest round ({} with the {}% margin): \
+                     the fastest, `{}`, ran {}; lower the target, or tune a smaller scene",
+                    figure(target.value()),
                     figure(need),
+                    format!("{:.1}", margin * 100.0).trim_end_matches(".0"),
                     fastest.choice,
                     target.shown(target.rate(fastest)),
                 ),
@@ -535,7 +537,9 @@ mod tests {
         let rows = table();
         let e = choose(&rows, Target::StepsPerSecond(1000.0), 0.2).unwrap_err();
         assert!(
-            e.contains("`nothing swept`") && e.contains("160") && e.contains("1200"),
+            e.contains("holds 1000 steps/s with its slowest round (1200 with the 20% margin)")
+                && e.contains("`nothing swept`")
+                && e.contains("160"),
             "{e}"
         );
         // Where none could be measured, the error says why for each.
