@@ -446,7 +446,7 @@ pub struct DemoArgs {
     pub pilot: DemoFlyer,
     /// Draw the final state with the kernel renderer and write it to this PNG file (a bare
     /// `gpuwars` writes gpuwars-demo.png in the system's temporary folder).
-    #[arg(long, env = "GPUWARS_SCREENSHOT")]
+    #[arg(long, env = "GPUWARS_SCREENSHOT", value_parser = png_path)]
     pub screenshot: Option<PathBuf>,
     /// Write a frame every N steps into DIR, as frame-STEP.png (with --size), for a video.
     #[arg(long, num_args = 2, value_names = ["N", "DIR"])]
@@ -544,6 +544,16 @@ pub struct PlayArgs {
     /// Print JSON instead of text when the window closes.
     #[arg(long)]
     pub json: bool,
+}
+
+/// A path whose name ends in `.png` (in any case): what a PNG file is written to, not a
+/// `.jpg` that would hold a PNG.
+fn png_path(text: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(text);
+    match path.extension() {
+        Some(ext) if ext.eq_ignore_ascii_case("png") => Ok(path),
+        _ => Err("not a PNG file's name (allowed a name ending in .png)".to_owned()),
+    }
 }
 
 /// `WIDTHxHEIGHT`, each side 1 to 16,384 pixels.

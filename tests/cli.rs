@@ -526,7 +526,8 @@ fn refused(args: &[&str], code: i32, says: &[&str]) -> String {
 #[test]
 fn outputs_replace_only_regular_files_and_are_checked_before_the_game() {
     let dir = tempfile::tempdir().unwrap();
-    let folder = dir.path().join("folder");
+    // Named as a screenshot is (a PNG), so that only its being a folder is wrong.
+    let folder = dir.path().join("folder.png");
     std::fs::create_dir(&folder).unwrap();
     let folder = folder.to_str().unwrap();
     // A billion steps: refused at once, not after the game, because of the output.
@@ -535,6 +536,19 @@ fn outputs_replace_only_regular_files_and_are_checked_before_the_game() {
         let args = [&steps[..], &[flag, folder]].concat();
         refused(&args, 1, &["cannot write: it is a folder, left as it is"]);
     }
+    // A screenshot is a PNG: a name for another format is refused before the game, in
+    // any case of the extension but `.png`'s.
+    for name in ["shot.jpg", "shot", "shot.png.bak", ".png"] {
+        let shot = dir.path().join(name);
+        let args = [&steps[..], &["--screenshot", shot.to_str().unwrap()]].concat();
+        refused(
+            &args,
+            2,
+            &["not a PNG file's name (allowed a name ending in .png)"],
+        );
+        assert!(!shot.exists());
+    }
+    assert!(gpuwars::cli::parse_from(["gpuwars", "demo", "--screenshot", "SHOT.PNG"]).is_ok());
     let missing = dir.path().join("missing").join("game.json");
     let args = [&steps[..], &["--record", missing.to_str().unwrap()]].concat();
     refused(&args, 1, &["does not exist"]);
@@ -578,8 +592,8 @@ fn outputs_replace_only_regular_files_and_are_checked_before_the_game() {
     left.sort();
     left.retain(|name| name != "pipe.json");
     let expected: &[&str] = match cfg!(unix) {
-        true => &["folder", "link.json", "target.json"],
-        false => &["folder"],
+        true => &["folder.png", "link.json", "target.json"],
+        false => &["folder.png"],
     };
     assert_eq!(left, expected, "nothing is left behind");
 }
@@ -731,10 +745,16 @@ fn an_output_never_replaces_an_input_or_another_output() {
     #[cfg(not(unix))]
     std::fs::hard_link(&scene, path("link.toml")).unwrap();
     std::fs::hard_link(&scene, path("hard.toml")).unwrap();
+    // A scene file named as a screenshot is, so that only the collision is wrong.
+    std::fs::write(path("k.png"), source).unwrap();
     let long = ["demo", "--steps", "1000000", "--scene"];
     let cases: [(&[&str], &str, &str); 6] = [
         (&[&scene, "--record", &scene], "--record", "--scene"),
-        (&[&scene, "--screenshot", &scene], "--screenshot", "--scene"),
+        (
+            &[&path("k.png"), "--screenshot", &path("k.png")],
+            "--screenshot",
+            "--scene",
+        ),
         (
             &[&path("link.toml"), "--record", &scene],
             "--record",
@@ -746,7 +766,13 @@ fn an_output_never_replaces_an_input_or_another_output() {
             "--scene",
         ),
         (
-            &["paper", "--record", &path("x"), "--screenshot", &path("x")],
+            &[
+                "paper",
+                "--record",
+                &path("x.png"),
+                "--screenshot",
+                &path("x.png"),
+            ],
             "--screenshot",
             "--record",
         ),
@@ -754,9 +780,9 @@ fn an_output_never_replaces_an_input_or_another_output() {
             &[
                 "paper",
                 "--record",
-                &path("x"),
+                &path("x.png"),
                 "--screenshot",
-                &format!("{}/./x", dir.path().display()),
+                &format!("{}/./x.png", dir.path().display()),
             ],
             "--screenshot",
             "--record",
@@ -824,7 +850,13 @@ fn an_output_never_replaces_an_input_or_another_output() {
     left.sort();
     assert_eq!(
         left,
-        ["bench-tradeoff.csv", "hard.toml", "k.toml", "link.toml"]
+        [
+            "bench-tradeoff.csv",
+            "hard.toml",
+            "k.png",
+            "k.toml",
+            "link.toml"
+        ]
     );
 }
 
@@ -1533,8 +1565,8 @@ fn outputs_through_a_bind_mount_are_refused() {
         mount.to_str().unwrap(),
     ];
     // Two outputs, one file: the replay and the screenshot through the mount.
-    let record = real.join("y.out");
-    let screenshot = mount.join("y.out");
+    let record = real.join("y.png");
+    let screenshot = mount.join("y.png");
     let both = [
         "--backend",
         "cpu",
