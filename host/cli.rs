@@ -352,8 +352,41 @@ where
     T: Into<std::ffi::OsString> + Clone,
 {
     use clap::FromArgMatches;
-    let mut matches = command().try_get_matches_from(args)?;
+    let args: Vec<std::ffi::OsString> = args.into_iter().map(Into::into).collect();
+    let mut matches =
+        (command().try_get_matches_from(&args)).map_err(|e| from_environment(e, &args))?;
     Cli::from_arg_matches_mut(&mut matches).map_err(|e| e.format(&mut command()))
+}
+
+/// `error` with a tip naming the environment variable its value came from: where the flag
+/// it names is not on the command line `args` but its variable is set (`GPUWARS_STEPS=abc`
+/// is refused as `--steps`'s value).
+fn from_environment(mut error: clap::Error, args: &[std::ffi::OsString]) -> clap::Error {
+    use clap::error::{ContextKind, ContextValue};
+    fn flags(command: &clap::Command) -> Vec<clap::Arg> {
+        let own = command.get_arguments().cloned();
+        own.chain(command.get_subcommands().flat_map(flags))
+            .collect()
+    }
+    let Some(ContextValue::String(arg)) = error.get(ContextKind::InvalidArg) else {
+        return error;
+    };
+    let flag = arg.split_whitespace().next().unwrap_or_default().to_owned();
+    let given = (args.iter().filter_map(|a| a.to_str()))
+        .any(|a| a == flag || a.starts_with(&format!("{flag}=")));
+    let variable = flags(&command())
+        .into_iter()
+        .find(|a| a.get_long().is_some_and(|long| format!("--{long}") == flag))
+        .and_then(|a| a.get_env().map(|v| v.to_string_lossy().into_owned()))
+        .filter(|v| std::env::var_os(v).is_some());
+    if let (false, Some(variable)) = (given, variable) {
+        let tip = format!("the value is the environment's {variable}: unset it, or give {flag}");
+        error.insert(
+            ContextKind::Suggested,
+            ContextValue::StyledStrs(vec![tip.into()]),
+        );
+    }
+    error
 }
 
 /// [`Cli`]'s command in which a flag that takes a value takes a negative number too, so that

@@ -1664,3 +1664,36 @@ fn a_file_named_like_a_built_in_is_pointed_out() {
     );
     assert!(!stderr.contains("built-in scene"), "{stderr}");
 }
+
+/// A value refused that came from the environment names its variable, unless the flag was
+/// given too (then the flag's value is the one refused).
+#[test]
+fn a_bad_value_from_the_environment_names_its_variable() {
+    let run = |args: &[&str], variable: &str, value: &str| {
+        let out = Command::new(env!("CARGO_BIN_EXE_gpuwars"))
+            .args(args)
+            .env_remove("GPUWARS_BACKEND")
+            .env_remove("GPUWARS_CPU_THREADS")
+            .env(variable, value)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2));
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let stderr = run(&["demo"], "GPUWARS_STEPS", "abc");
+    assert!(
+        stderr.contains("invalid value 'abc' for '--steps <STEPS>'"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("the value is the environment's GPUWARS_STEPS: unset it, or give --steps"),
+        "{stderr}"
+    );
+    let stderr = run(&["info"], "GPUWARS_CPU_THREADS", "0");
+    assert!(stderr.contains("GPUWARS_CPU_THREADS"), "{stderr}");
+    for given in [&["demo", "--steps", "x"][..], &["demo", "--steps=x"]] {
+        let stderr = run(given, "GPUWARS_STEPS", "abc");
+        assert!(stderr.contains("invalid value 'x'"), "{stderr}");
+        assert!(!stderr.contains("GPUWARS_STEPS"), "{stderr}");
+    }
+}
