@@ -10,6 +10,7 @@ use serde::Serialize;
 use crate::backend::device_name;
 use crate::backend::floor::{self, Floor};
 use crate::camera::Camera;
+use crate::files::thousands;
 use crate::game::Game;
 use crate::game::engine::Options;
 use crate::game::replay::Replay;
@@ -188,9 +189,12 @@ impl Report {
         }
         if let Some(p) = &self.profile {
             out += &format!(
-                "\nstage times over {} steps (copy bandwidth {:.1} GB/s; a stage's `of copy` \
+                "\nstage times over {} (copy bandwidth {:.1} GB/s; a stage's `of copy` \
                  against a copy of as many bytes):\n{}{}\n",
-                p.profile.steps,
+                match p.profile.steps {
+                    1 => "1 step".to_owned(),
+                    n => format!("{} steps", thousands(n)),
+                },
                 p.copy_bandwidth / 1e9,
                 p.profile.to_table(
                     Some(&p.stage_copies),
