@@ -117,7 +117,7 @@ pub enum Command {
         fps: Option<f64>,
         /// With --fps: the frame's size, WIDTHxHEIGHT in pixels [default: 1280x720, `play`'s
         /// window].
-        #[arg(long, value_parser = parse_size)]
+        #[arg(long, value_parser = parse_size, allow_hyphen_values = true)]
         size: Option<(u32, u32)>,
         /// How far above the target the slowest timed round of a choice must be, in percent.
         #[arg(long, default_value_t = 20.0, value_parser = decimal(0.0, 1000.0))]
@@ -155,7 +155,7 @@ pub enum Command {
         #[arg(long, value_enum, default_value_t, requires = "window")]
         render: Renderer,
         /// With --window: the window's size, WIDTHxHEIGHT in pixels.
-        #[arg(long, default_value = "1280x720", value_parser = parse_size, requires = "window")]
+        #[arg(long, default_value = "1280x720", value_parser = parse_size, allow_hyphen_values = true, requires = "window")]
         size: (u32, u32),
         /// With --window: start with the sound off (M toggles it).
         #[arg(long, requires = "window")]
@@ -230,7 +230,7 @@ pub enum BenchCommand {
         #[arg(long, default_value_t = 5.0, value_parser = decimal(0.001, 1440.0))]
         minutes: f64,
         /// Size of the frames, WIDTHxHEIGHT in pixels.
-        #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
+        #[arg(long, default_value = "1920x1080", value_parser = parse_size, allow_hyphen_values = true)]
         size: (u32, u32),
         /// What draws the frames: the kernel renderer or GL from the interop buffer.
         #[arg(long, value_enum, default_value_t)]
@@ -262,7 +262,7 @@ pub enum BenchCommand {
         #[arg(long, default_value_t = 2.0, value_parser = decimal(0.01, 3600.0))]
         seconds: f64,
         /// Size of the frames, WIDTHxHEIGHT in pixels.
-        #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
+        #[arg(long, default_value = "1920x1080", value_parser = parse_size, allow_hyphen_values = true)]
         size: (u32, u32),
         /// What the frames show: the whole field, as earlier runs drew it (field), or the
         /// ship followed at the default zoom with the radar, the view a player sees (follow).
@@ -485,7 +485,7 @@ pub struct DemoArgs {
     #[arg(long, num_args = 2, value_names = ["N", "DIR"])]
     pub frames_every: Option<Vec<String>>,
     /// Size of the screenshot and the frames, WIDTHxHEIGHT in pixels.
-    #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
+    #[arg(long, default_value = "1920x1080", value_parser = parse_size, allow_hyphen_values = true)]
     pub size: (u32, u32),
     /// What draws the screenshot and the frames: the kernel renderer, or GL without a
     /// window from a CUDA–GL interop vertex buffer (an EGL device).
@@ -569,7 +569,7 @@ pub struct PlayArgs {
     #[arg(long, value_enum, default_value_t)]
     pub render: Renderer,
     /// The window's size, WIDTHxHEIGHT in pixels.
-    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    #[arg(long, default_value = "1280x720", value_parser = parse_size, allow_hyphen_values = true)]
     pub size: (u32, u32),
     /// Steps in flight before the host reads a status back.
     #[arg(long, default_value_t = 4, value_parser = whole(1u16, 1024))]

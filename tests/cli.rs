@@ -905,6 +905,15 @@ fn every_command_checks_its_flags_in_the_same_words() {
             }
         }
     }
+    // A size with a minus sign is the flag's value, refused by its own check.
+    for command in [&["demo"][..], &["play"], &["bench", "paper"]] {
+        let args = [command, &["--size", "-3x4"]].concat();
+        refused(
+            &args,
+            2,
+            &["invalid value '-3x4' for '--size <SIZE>': not WIDTHxHEIGHT"],
+        );
+    }
     // A constraint is said in the help and checked with the flag, not after it.
     let stderr = refused(
         &["bench", "scale", "--max", "1025"],
