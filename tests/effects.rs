@@ -35,7 +35,7 @@ fn check_step(
     p1: &ParticleSnapshot,
 ) -> u32 {
     let burst = p1.burst;
-    let n = burst.per_kill as usize;
+    let n = burst.per_kill.get() as usize;
     let dt = scene.world.dt;
     let mut bursts = 0;
     for p in 0..p1.particles.life.len() {
@@ -214,7 +214,7 @@ fn a_scene_without_explosions_launches_nothing_for_them() {
     let burst = particles.burst;
     assert_eq!(
         particles.particles.life.len() as u32,
-        (burst.end_slot - burst.first_slot) * burst.per_kill
+        (burst.end_slot - burst.first_slot) * burst.per_kill.get()
     );
 }
 

@@ -156,7 +156,7 @@ fn kills_burst_where_renumbered_enemies_died(device: &Device) {
     let particles = |g: &Game| g.pipeline().particles().unwrap().expect("explosions");
     let mut p0 = particles(&game);
     let burst = p0.burst;
-    let (n, dt) = (burst.per_kill as usize, scene.world.dt);
+    let (n, dt) = (burst.per_kill.get() as usize, scene.world.dt);
     let mut kills = 0;
     for step in 0..300 {
         let status = game.step(None).unwrap();

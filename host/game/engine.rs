@@ -7,6 +7,7 @@ use bytemuck::Zeroable;
 use gpuwars_kernels::game::control::{Input, Order, Status};
 use gpuwars_kernels::game::effects::Burst;
 use gpuwars_kernels::game::rules::{Brain, Rules, Wave};
+use gpuwars_kernels::math::Divisor;
 use gpuwars_kernels::render::camera::Lens;
 use xxhash_rust::xxh3::Xxh3;
 
@@ -154,7 +155,7 @@ fn waves(scene: &Scene) -> Vec<Wave> {
 /// How kills burst, in the kernels' terms; the slots owning particles are the pipeline's.
 fn burst(effects: &EffectsSpec, dt: f32) -> Burst {
     Burst {
-        per_kill: effects.particles,
+        per_kill: Divisor::new(effects.particles),
         lifetime: steps(effects.lifetime, dt),
         speed: effects.speed,
         // The fraction kept after a second, spread over its steps.
@@ -162,7 +163,6 @@ fn burst(effects: &EffectsSpec, dt: f32) -> Burst {
         dt,
         first_slot: 0,
         end_slot: 0,
-        reserved: 0,
     }
 }
 

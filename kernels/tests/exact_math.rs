@@ -72,3 +72,57 @@ fn the_lengths_are_glams_bit_for_bit() {
         }
     }
 }
+
+/// Divisors at the edges: every one to 1,024 (the explosions' counts among them), each
+/// power of two with its neighbours, the largest prime, three times 2³⁰ and the largest.
+fn divisors() -> impl Iterator<Item = u32> {
+    let powers = (1..32).flat_map(|k| {
+        let p = 1u32 << k;
+        [p - 1, p, p + 1]
+    });
+    (1..=1024)
+        .chain(powers)
+        .chain([4_294_967_291, 3 << 30, u32::MAX - 1, u32::MAX])
+}
+
+/// Numerators at the edges for `d`: zero, the first and last multiples of `d` with their
+/// neighbours, the largest, and a sweep across the range.
+fn numerators(d: u32) -> impl Iterator<Item = u32> {
+    let last = u32::MAX / d * d;
+    let edges = [0, 1, d - 1, d, d.saturating_add(1), 2 * (d / 2)];
+    let top = [last.wrapping_sub(1), last, last.saturating_add(1)];
+    let wide = [u32::MAX - 1, u32::MAX, 1 << 31, (1 << 31) - 1];
+    edges
+        .into_iter()
+        .chain(top)
+        .chain(wide)
+        .chain((0..=u32::MAX).step_by(40_009_379))
+}
+
+#[test]
+fn a_divisor_divides_as_the_division_does() {
+    for d in divisors() {
+        let divisor = math::Divisor::new(d);
+        assert_eq!(divisor.get(), d);
+        for n in numerators(d) {
+            assert_eq!(divisor.quotient(n), n / d, "{n} / {d}");
+            assert_eq!(divisor.remainder(n), n % d, "{n} mod {d}");
+        }
+    }
+}
+
+#[test]
+fn the_default_divisor_is_one() {
+    let one = math::Divisor::default();
+    assert_eq!(one, math::Divisor::new(1));
+    assert_eq!(
+        (one.quotient(u32::MAX), one.remainder(u32::MAX)),
+        (u32::MAX, 0)
+    );
+}
+
+#[test]
+#[should_panic(expected = "a divisor is at least 1")]
+fn zero_is_no_divisor() {
+    math::Divisor::new(0);
+}

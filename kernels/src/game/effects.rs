@@ -18,6 +18,7 @@ use glam::Vec2;
 use super::rules::Brain;
 use crate::access::{Read, Unused};
 use crate::data::View;
+use crate::math::Divisor;
 use crate::sim::{Bodies, BodiesAccess};
 use crate::{DevSlice, Thread, access, device_data, kernel_args};
 
@@ -61,8 +62,9 @@ impl Particles {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct Burst {
-    /// Particles per kill, 1 to [`MAX_PER_KILL`].
-    pub per_kill: u32,
+    /// Particles per kill, 1 to [`MAX_PER_KILL`] (each particle's thread divides its index
+    /// by it).
+    pub per_kill: Divisor,
     /// Steps a particle lives at most (at least 1).
     pub lifetime: u32,
     /// Fastest speed a particle leaves with, relative to the enemy, in units per second.
@@ -75,15 +77,13 @@ pub struct Burst {
     pub first_slot: u32,
     /// One past the last enemy slot owning particles.
     pub end_slot: u32,
-    /// Keeps the struct free of implicit padding.
-    pub reserved: u32,
 }
 
 impl Burst {
     /// Particles the owners `first_slot .. end_slot` need.
     #[inline(always)]
     pub fn particles(&self) -> u32 {
-        (self.end_slot - self.first_slot) * self.per_kill
+        (self.end_slot - self.first_slot) * self.per_kill.get()
     }
 }
 
@@ -155,15 +155,15 @@ pub fn burst_and_fade(t: Thread, args: &EffectsArgs) {
         return;
     }
     let burst = &args.burst;
-    let slot = burst.first_slot + p / burst.per_kill;
+    let slot = burst.first_slot + burst.per_kill.quotient(p);
     if slot < burst.end_slot && sees_a_kill(args, p, slot) {
         let b = &args.bodies;
         let pos = b.pos.get(slot);
         // Different for every particle and every death (the place of death varies).
         let seed = mix(p ^ mix(pos.x.to_bits() ^ mix(pos.y.to_bits())));
         let (h1, h2, h3) = (mix(seed ^ 1), mix(seed ^ 2), mix(seed ^ 3));
-        let share = (p % burst.per_kill) as f32 + unit(h1);
-        let angle = share * (TAU / burst.per_kill as f32);
+        let share = burst.per_kill.remainder(p) as f32 + unit(h1);
+        let angle = share * (TAU / burst.per_kill.get() as f32);
         let speed = burst.speed * (1.0 + 2.0 * unit(h2)) * (1.0 / 3.0);
         let dir = Vec2::new(libm::cosf(angle), libm::sinf(angle));
         let life = burst.lifetime - (unit(h3) * (burst.lifetime / 3) as f32) as u32;
