@@ -381,9 +381,7 @@ impl World {
         Some(MasterArgs {
             bodies: self.state.bodies(b),
             kinds: b.view(&self.state.tables.info),
-            ranges: b.view(&self.state.tables.ranges),
             free: self.state.free(b),
-            contacts: self.scratch.contacts(b),
             status: b.view(&data.status),
             mailbox: self.mailbox(b)?,
             input: b.view(&data.input),
@@ -437,8 +435,12 @@ impl World {
         })
     }
 
-    /// The game's mailbox as kernels take it, made by `b`, if the world plays a game.
-    pub fn mailbox(&self, b: &mut Binder) -> Option<Mailbox> {
+    /// The game's mailbox as kernels take it (each part of the access its kernel's field
+    /// asks for), made by `b`, if the world plays a game.
+    pub fn mailbox<C: Access, S: Access, T: Access>(
+        &self,
+        b: &mut Binder,
+    ) -> Option<Mailbox<C, S, T>> {
         let game = self.game.as_ref()?;
         Some(Mailbox {
             commands: b.view(&game.commands),

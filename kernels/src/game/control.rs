@@ -6,6 +6,7 @@ use core::f32::consts::TAU;
 
 use glam::Vec2;
 
+use crate::access::{Access, Read, Readable, Unused, Write};
 use crate::{DevSlice, math};
 
 /// Steps of [`Input::move_x`] / [`Input::move_y`] per unit of stick deflection.
@@ -181,25 +182,61 @@ impl Status {
 /// Where the host and the steps in flight meet: the commands the host writes and the
 /// statuses the steps leave, one of each per step in flight, in memory both reach without a
 /// copy (the host's ring), and the device's count of the steps tallied, which picks the
-/// slot: step `n` (counted modulo 2³²) uses element `n % depth` of both.
+/// slot: step `n` (counted modulo 2³²) uses element `n % depth` of both. Each part's access
+/// is a parameter: the master reads its command ([`Reading`]), the tally posts its status
+/// and counts the step ([`Posting`]). So the master cannot post:
+/// ```compile_fail,E0599
+/// use gpuwars_kernels::game::{control::Status, master::MasterArgs};
+/// fn post(args: &MasterArgs) {
+///     args.mailbox.post(Status::default());
+/// }
+/// ```
+/// nor the tally read a command:
+/// ```compile_fail,E0599
+/// use gpuwars_kernels::game::{control::Order, master::TallyArgs};
+/// fn command(args: &TallyArgs) -> Order {
+///     args.mailbox.command()
+/// }
+/// ```
+/// while the master reads it:
+/// ```
+/// use gpuwars_kernels::game::{control::Order, master::MasterArgs};
+/// fn command(args: &MasterArgs) -> Order {
+///     args.mailbox.command()
+/// }
+/// ```
 #[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::NoUninit)]
-pub struct Mailbox {
+#[derive(Clone, Copy, Debug)]
+pub struct Mailbox<C: Access = Write, S: Access = Write, T: Access = Write> {
     /// The commands, one per step in flight (at least one).
-    pub commands: DevSlice<Order>,
+    pub commands: DevSlice<Order, C>,
     /// The statuses, as many.
-    pub statuses: DevSlice<Status>,
+    pub statuses: DevSlice<Status, S>,
     /// Steps tallied so far, modulo 2³² (one element): the step under way is the next.
-    pub tallied: DevSlice<u32>,
+    pub tallied: DevSlice<u32, T>,
 }
 
-impl Mailbox {
+// SAFETY: `repr(C)`: three 16-byte views (each a `NoUninit` whatever its access), 48 bytes
+// with no padding (checked below).
+unsafe impl<C: Access, S: Access, T: Access> bytemuck::NoUninit for Mailbox<C, S, T> {}
+const _: () = assert!(size_of::<Mailbox>() == 48);
+const _: () = assert!(size_of::<Reading>() == 48);
+
+/// The mailbox as the master uses it: the command of the step under way, read.
+pub type Reading = Mailbox<Read, Unused, Read>;
+
+/// The mailbox as the tally uses it: the step's status written, the step counted.
+pub type Posting = Mailbox<Unused, Write, Write>;
+
+impl<C: Readable, S: Access, T: Readable> Mailbox<C, S, T> {
     /// The command of the step under way.
     #[inline(always)]
     pub fn command(&self) -> Order {
         self.commands.get(self.tallied.get(0) % self.commands.len())
     }
+}
 
+impl<C: Access> Mailbox<C, Write, Write> {
     /// Leaves `status` as the step's and counts the step: the step's last write (one
     /// thread's).
     #[inline(always)]

@@ -19,7 +19,7 @@
 
 use glam::Vec2;
 
-use super::control::{DESTROYED, Events, Input, Mailbox, PLAYING, Status, TOO_SLOW};
+use super::control::{DESTROYED, Events, Input, PLAYING, Posting, Reading, Status, TOO_SLOW};
 use super::rules::{Rules, Wave};
 use crate::access::{Read, Unused, Write};
 use crate::data::View;
@@ -30,29 +30,35 @@ use crate::sim::scatter::{Place, birth, random_place};
 use crate::sim::{Bodies, BodiesAccess, Contacts, KindInfo, SlotRange, Space};
 use crate::{DevSlice, Thread, access, asked, kernel_args, warp};
 
+access! {
+    /// What the master does with the bodies: reads the ship's, flies it, and brings a new
+    /// shot (or, at step 0, the ship) to life.
+    pub struct Commanding: BodiesAccess {
+        pos: Write, vel: Write, force: Write, dir: Write, kind: Unused, energy: Write,
+        mass: Unused, alive: Write, state: Write, age: Write, prev: Write, frozen: Unused,
+        rng: Unused,
+    }
+}
+
 kernel_args! {
     /// Arguments of [`master`].
     pub struct MasterArgs {
         /// The bodies (the ship and new shots are written).
-        pub bodies: Bodies,
+        pub bodies: Bodies<View, Commanding>,
         /// Kind table.
-        pub kinds: DevSlice<KindInfo>,
-        /// Slot range of each kind.
-        pub ranges: DevSlice<SlotRange>,
+        pub kinds: DevSlice<KindInfo, Read>,
         /// Free slots after the previous step.
-        pub free: FreeSlots,
-        /// This step's contacts (the ship's hits, for [`tally`]).
-        pub contacts: Contacts,
+        pub free: FreeSlots<View, Read>,
         /// The game's state: read, advanced, written back (one element).
         pub status: DevSlice<Status>,
-        /// Where [`tally`] posts the step's status for the host.
-        pub mailbox: Mailbox,
+        /// Where the host left the step's command.
+        pub mailbox: Reading,
         /// Output of [`master`]: this step's input, the player's or the autopilot's (one
         /// element).
         pub input: DevSlice<Input>,
         /// The autopilot's input for this step, left by the step before (one element; see
         /// [`super::autopilot`]).
-        pub steered: DevSlice<Input>,
+        pub steered: DevSlice<Input, Read>,
         /// Enemies spawned so far, per kind.
         pub spawned: DevSlice<u32>,
         /// Output: enemies to spawn this step, per kind (for [`births`]).
@@ -66,7 +72,7 @@ kernel_args! {
         /// zero by [`master`], read by [`tally`] and by the free lists' rebuild beside it.
         pub deaths: DevSlice<u32>,
         /// The spawn schedule.
-        pub waves: DevSlice<Wave>,
+        pub waves: DevSlice<Wave, Read>,
         /// The world.
         pub space: Space,
         /// The scene's rules.
@@ -408,7 +414,7 @@ kernel_args! {
         /// The game's state: read, advanced, written back (one element).
         pub status: DevSlice<Status>,
         /// Where the step's status is posted for the host.
-        pub mailbox: Mailbox,
+        pub mailbox: Posting,
         /// Enemies spawned so far, per kind.
         pub spawned: DevSlice<u32, Read>,
         /// Enemies born this step, per kind (see [`MasterArgs::births`]).

@@ -2,8 +2,10 @@
 
 use glam::Vec2;
 
-use super::bodies::Bodies;
+use super::bodies::{Bodies, BodiesAccess};
 use super::space::Space;
+use crate::access::Write;
+use crate::data::View;
 use crate::math::try_normalize;
 use crate::{DevSlice, Thread, kernel_args};
 
@@ -66,9 +68,23 @@ pub fn random_place(b: &Bodies, slot: u32, space: &Space, speed: f32) -> Place {
 }
 
 /// Brings `slot` to life at `place`, kept inside the world: no force, `energy`, age 0, its
-/// machine's initial state, facing its velocity (or the place's facing at rest).
+/// machine's initial state, facing its velocity (or the place's facing at rest). Writes
+/// what a birth sets, and nothing else of the bodies (`M` allows that much).
 #[inline(always)]
-pub fn birth(b: &Bodies, space: &Space, slot: u32, place: Place, energy: i32) {
+pub fn birth<M>(b: &Bodies<View, M>, space: &Space, slot: u32, place: Place, energy: i32)
+where
+    M: BodiesAccess<
+            pos = Write,
+            prev = Write,
+            vel = Write,
+            force = Write,
+            dir = Write,
+            energy = Write,
+            state = Write,
+            age = Write,
+            alive = Write,
+        >,
+{
     let (pos, vel) = space.confine(place.pos, place.vel);
     b.pos.set(slot, pos);
     if b.traces() {
