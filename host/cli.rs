@@ -226,8 +226,9 @@ pub enum BenchCommand {
     /// The paper's experiment: `paper` played by the autopilot, one step and one frame per
     /// loop, frames per second every second (CSV, PNG plot, JSON summary).
     Paper {
-        /// Minutes of wall time to play.
-        #[arg(long, default_value_t = 5.0, value_parser = decimal(0.001, 1440.0))]
+        /// Minutes of wall time to play, counted in whole seconds (at least one; a part
+        /// of a second is left out).
+        #[arg(long, default_value_t = 5.0, value_parser = minutes_of_play)]
         minutes: f64,
         /// Size of the frames, WIDTHxHEIGHT in pixels.
         #[arg(long, default_value = "1920x1080", value_parser = parse_size, allow_hyphen_values = true)]
@@ -315,6 +316,20 @@ where
             Ok(_) => Err(format!("out of range ({allowed})")),
             Err(_) => Err(format!("not a number ({allowed})")),
         }
+    }
+}
+
+/// A value parser for `bench paper --minutes`: a number of minutes that holds at least
+/// one whole second (the run counts frames second by second), up to a day.
+fn minutes_of_play(text: &str) -> Result<f64, String> {
+    let allowed = "allowed a number of minutes from 0.0167, one second, to 1440";
+    match decimal(0.0, 1440.0)(text) {
+        Ok(minutes) if minutes * 60.0 >= 1.0 => Ok(minutes),
+        Ok(_) => Err(format!(
+            "too short to count ({allowed}: the run counts whole seconds)"
+        )),
+        Err(e) if e.starts_with("not a number") => Err(format!("not a number ({allowed})")),
+        Err(_) => Err(format!("out of range ({allowed})")),
     }
 }
 

@@ -914,6 +914,27 @@ fn every_command_checks_its_flags_in_the_same_words() {
             &["invalid value '-3x4' for '--size <SIZE>': not WIDTHxHEIGHT"],
         );
     }
+    // `bench paper` counts whole seconds: a run shorter than one is refused, at the edge
+    // and below it, as are the range's outsides; a second is taken.
+    let allowed = "allowed a number of minutes from 0.0167, one second, to 1440";
+    for (minutes, says) in [
+        ("0.001", "too short to count"),
+        ("0.0166", "too short to count"),
+        ("0", "too short to count"),
+        ("-0.5", "out of range"),
+        ("1440.01", "out of range"),
+        ("NaN", "out of range"),
+        ("soon", "not a number"),
+    ] {
+        let says =
+            format!("invalid value '{minutes}' for '--minutes <MINUTES>': {says} ({allowed}");
+        refused(&["bench", "paper", "--minutes", minutes], 2, &[&says]);
+    }
+    let help = gpuwars(&["bench", "paper", "--help"]);
+    assert!(
+        String::from_utf8_lossy(&help.stdout).contains("counted in whole seconds"),
+        "{help:?}"
+    );
     // A constraint is said in the help and checked with the flag, not after it.
     let stderr = refused(
         &["bench", "scale", "--max", "1025"],
@@ -1418,7 +1439,7 @@ fn a_display_that_answers_garbage_is_refused_naming_it() {
             "paper",
             "--window",
             "--minutes",
-            "0.01",
+            "0.02",
             "--out",
             out,
         ],
