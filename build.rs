@@ -86,8 +86,9 @@ fn main() {
 
     let rustc = env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
     check_rust_src(&rustc);
+    let allow_cpu_mismatch = knows_target_cpu_as_modifier(&rustc, &out_dir);
     for module in &MODULES {
-        let ptx = build_ptx(&root, &out_dir, module);
+        let ptx = build_ptx(&root, &out_dir, module, allow_cpu_mismatch);
         let ptx = if module.capped {
             cap_registers(ptx)
         } else {
@@ -99,12 +100,39 @@ fn main() {
     }
 }
 
-/// The PTX text of `module`, built by a nested cargo.
-fn build_ptx(root: &Path, out_dir: &Path, module: &Module) -> String {
+/// Whether `rustc` takes `-C target-cpu` as a target modifier, which every crate of a build
+/// must share (nightlies since late 2026; stable 1.95 does not, and refuses the flag that
+/// allows a mismatch): probed by compiling an empty crate with that flag.
+fn knows_target_cpu_as_modifier(rustc: &str, out_dir: &Path) -> bool {
+    Command::new(rustc)
+        .args([
+            ABI_MISMATCH_ALLOWED,
+            "--crate-type",
+            "lib",
+            "--crate-name",
+            "probe",
+        ])
+        .args(["--emit", "metadata", "-o"])
+        .arg(out_dir.join("probe.rmeta"))
+        .arg("-")
+        .stdin(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .status()
+        .is_ok_and(|status| status.success())
+}
+
+/// Lets the kernels' crate take a `target-cpu` that `core` and the other dependencies, built
+/// without one, do not share. Sound here: fat LTO compiles them into the kernels' one module
+/// for its `target-cpu`, exactly what a stable rustc does without being asked.
+const ABI_MISMATCH_ALLOWED: &str = "-Cunsafe-allow-abi-mismatch=target-cpu";
+
+/// The PTX text of `module`, built by a nested cargo (allowing the kernels' `target-cpu`
+/// apart from their dependencies' where `rustc` would refuse it, `allow_cpu_mismatch`).
+fn build_ptx(root: &Path, out_dir: &Path, module: &Module, allow_cpu_mismatch: bool) -> String {
     // Its own target dir: the outer build holds the lock on ours; one per module, so that
     // each keeps its incremental state.
     let target_dir = out_dir.join(format!("ptx-target-{}", module.dir));
-    let deps = target_dir.join(TARGET).join("ptx").join("deps");
+    let profile_dir = target_dir.join(TARGET).join("ptx");
     let cargo = env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut nested = Command::new(cargo);
     nested
@@ -116,6 +144,7 @@ fn build_ptx(root: &Path, out_dir: &Path, module: &Module) -> String {
         .args(["--", "--emit=asm", "-C"])
         .arg(format!("target-cpu={}", module.arch))
         .args(module.flags)
+        .args(allow_cpu_mismatch.then_some(ABI_MISMATCH_ALLOWED))
         // -Zbuild-std is unstable; this is the documented way to use it on a stable toolchain.
         .env("RUSTC_BOOTSTRAP", "1");
     // What the outer build passes to its own rustc must not leak into the nvptx build.
@@ -142,8 +171,12 @@ fn build_ptx(root: &Path, out_dir: &Path, module: &Module) -> String {
         ));
     }
 
-    let asm = newest_asm(&deps)
-        .unwrap_or_else(|| fail(&format!("no gpuwars_kernels-*.s in {}", deps.display())));
+    let asm = newest_asm(&profile_dir).unwrap_or_else(|| {
+        fail(&format!(
+            "no gpuwars_kernels-*.s under {}",
+            profile_dir.display()
+        ))
+    });
     let ptx = fs::read_to_string(&asm)
         .unwrap_or_else(|e| fail(&format!("cannot read {}: {e}", asm.display())));
     if let Some(line) = ptx.lines().find(|l| l.trim_start().starts_with(".extern")) {
@@ -214,11 +247,22 @@ fn check_rust_src(rustc: &str) {
     }
 }
 
-/// The most recently written `gpuwars_kernels-*.s` (older hashes may linger in `deps`).
-fn newest_asm(deps: &Path) -> Option<PathBuf> {
-    fs::read_dir(deps)
-        .ok()?
-        .filter_map(Result::ok)
+/// The most recently written `gpuwars_kernels-*.s` of the nested build's profile folder
+/// (older hashes may linger): in `deps`, where a stable cargo writes it, or in
+/// `build/gpuwars-kernels/*/out`, where a nightly cargo's per-unit build folders put it (the
+/// nightly that `scripts/miri` runs).
+fn newest_asm(profile_dir: &Path) -> Option<PathBuf> {
+    let files_in = |dir: PathBuf| {
+        fs::read_dir(dir)
+            .into_iter()
+            .flatten()
+            .filter_map(Result::ok)
+    };
+    let units = files_in(profile_dir.join("build").join("gpuwars-kernels"))
+        .map(|unit| unit.path().join("out"));
+    std::iter::once(profile_dir.join("deps"))
+        .chain(units)
+        .flat_map(files_in)
         .filter(|e| {
             let name = e.file_name();
             let name = name.to_string_lossy();
