@@ -323,13 +323,15 @@ where
 /// one whole second (the run counts frames second by second), up to a day.
 fn minutes_of_play(text: &str) -> Result<f64, String> {
     let allowed = "allowed a number of minutes from 0.0167, one second, to 1440";
-    match decimal(0.0, 1440.0)(text) {
-        Ok(minutes) if minutes * 60.0 >= 1.0 => Ok(minutes),
-        Ok(_) => Err(format!(
+    let minutes: f64 = (text.trim().parse()).map_err(|_| format!("not a number ({allowed})"))?;
+    if !(0.0..=1440.0).contains(&minutes) {
+        Err(format!("out of range ({allowed})"))
+    } else if minutes * 60.0 < 1.0 {
+        Err(format!(
             "too short to count ({allowed}: the run counts whole seconds)"
-        )),
-        Err(e) if e.starts_with("not a number") => Err(format!("not a number ({allowed})")),
-        Err(_) => Err(format!("out of range ({allowed})")),
+        ))
+    } else {
+        Ok(minutes)
     }
 }
 
