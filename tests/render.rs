@@ -373,7 +373,7 @@ fn the_gpus_interop_frame_matches_the_cpus() {
     assert!(interop);
     let [cpu, _] = paper_frames(common::cpu(), 300, &camera);
     println!(
-        "paper after 300 steps: the H200's interop frame ({}) and the CPU's kernel frame \
+        "paper after 300 steps: the GPU's interop frame ({}) and the CPU's kernel frame \
          differ in {} of {} pixels (hashes {:#018x}, {:#018x})",
         gl.device(),
         differing(&on_gpu, &cpu),

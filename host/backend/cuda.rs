@@ -63,8 +63,8 @@ pub(super) struct Gpu {
     /// The device's order: held by whoever queues work on the device (a plan from its first
     /// op to its branches' join, a capture, a copy, a fence, a wait), so that no thread's
     /// work lands between another's fork and join; it owns the side streams, so only its
-    /// holder forks onto them.
-    order: Mutex<Sides>,
+    /// holder forks onto them. The GL buffers registered here share it (see `GlBuffer`).
+    order: Order,
     /// The thread issuing an op beside the others, if any, and its branch's stream: its
     /// launches go there.
     beside: Mutex<Option<(ThreadId, Arc<CudaStream>)>>,
@@ -288,7 +288,7 @@ impl Gpu {
             stream,
             in_flight,
             capture: Mutex::new(None),
-            order: Mutex::new(sides),
+            order: Arc::new(Mutex::new(sides)),
             beside: Mutex::new(None),
             functions,
             cooperative: Mutex::new(None),
@@ -319,12 +319,13 @@ impl Gpu {
     }
 
     /// The context and the stream every launch and copy goes to, for raw driver calls that
-    /// must be ordered with them, and the record of kernels in flight that their errors are
-    /// classified by.
-    pub(super) fn context_and_stream(&self) -> (Arc<CudaContext>, Arc<CudaStream>, Arc<InFlight>) {
+    /// must be ordered with them, the order such a call holds (see [`Gpu::in_order`]), and
+    /// the record of kernels in flight that their errors are classified by.
+    pub(super) fn raw_access(&self) -> (Arc<CudaContext>, Arc<CudaStream>, Order, Arc<InFlight>) {
         (
             self.ctx.clone(),
             self.stream.clone(),
+            self.order.clone(),
             self.in_flight.clone(),
         )
     }
@@ -789,6 +790,9 @@ pub(super) fn address<T>(slice: &CudaSlice<T>) -> u64 {
 /// Streams for the branches of a plan (see [`Gpu::beside`]): the autopilot's, the
 /// explosions' and the tally's.
 const BRANCHES: usize = 3;
+
+/// A device's order, shared (see [`Gpu::in_order`]).
+pub(super) type Order = Arc<Mutex<Sides>>;
 
 /// The side streams of a device, which only the holder of its order forks onto (see
 /// [`Gpu::in_order`]).

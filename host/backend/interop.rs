@@ -11,7 +11,7 @@ use std::sync::{Arc, OnceLock};
 use cudarc::driver::{CudaContext, CudaStream, sys};
 use gpuwars_kernels::DevSlice;
 
-use super::cuda::InFlight;
+use super::cuda::{InFlight, Order};
 use super::{Device, Element, Error, Imp};
 
 /// `CU_GRAPHICS_REGISTER_FLAGS_WRITE_DISCARD`: CUDA overwrites the whole buffer each time.
@@ -50,11 +50,14 @@ fn check(in_flight: &InFlight, status: sys::CUresult, during: &str) -> Result<()
 }
 
 /// A GL buffer object registered with the GPU's context. Kernels write it between a map
-/// and an unmap queued on the device's stream, so they see the steps queued before.
+/// and an unmap queued on the device's stream, so they see the steps queued before; each
+/// holds the device's order, as every other queued call does, so that neither lands
+/// between another thread's fork and join or inside its capture.
 pub struct GlBuffer {
     resource: sys::CUgraphicsResource,
     ctx: Arc<CudaContext>,
     stream: Arc<CudaStream>,
+    order: Order,
     in_flight: Arc<InFlight>,
 }
 
@@ -68,7 +71,7 @@ impl Device {
                 "GL buffers are registered only with the CUDA backend".into(),
             ));
         };
-        let (ctx, stream, in_flight) = gpu.context_and_stream();
+        let (ctx, stream, order, in_flight) = gpu.raw_access();
         ctx.bind_to_thread()
             .map_err(in_flight.failed("binding the context"))?;
         let register = register_buffer()?;
@@ -83,6 +86,7 @@ impl Device {
             resource,
             ctx,
             stream,
+            order,
             in_flight,
         })
     }
@@ -101,14 +105,17 @@ impl GlBuffer {
         write: impl FnOnce(DevSlice<T>) -> Result<R, Error>,
     ) -> Result<R, Error> {
         let stream = self.stream.cu_stream();
+        // The order for the map and for the unmap, not between: the launches `write`
+        // queues take it themselves.
+        let in_order = || self.order.lock().unwrap_or_else(|e| e.into_inner());
         // SAFETY: a registered resource, mapped and unmapped on the device's stream; the
         // pointer is used only by launches queued before the unmap.
         unsafe {
-            check(
-                &self.in_flight,
-                sys::cuGraphicsMapResources(1, &mut self.resource, stream),
-                "mapping the GL vertex buffer",
-            )?;
+            let map = {
+                let _order = in_order();
+                sys::cuGraphicsMapResources(1, &mut self.resource, stream)
+            };
+            check(&self.in_flight, map, "mapping the GL vertex buffer")?;
             let mut addr = 0;
             let mut bytes = 0usize;
             let mapped = check(
@@ -118,11 +125,11 @@ impl GlBuffer {
             );
             let len = u32::try_from(bytes / size_of::<T>()).unwrap_or(u32::MAX);
             let written = mapped.and_then(|()| write(DevSlice::from_raw_parts(addr, len)));
-            let unmapped = check(
-                &self.in_flight,
-                sys::cuGraphicsUnmapResources(1, &mut self.resource, stream),
-                "unmapping the GL vertex buffer",
-            );
+            let unmap = {
+                let _order = in_order();
+                sys::cuGraphicsUnmapResources(1, &mut self.resource, stream)
+            };
+            let unmapped = check(&self.in_flight, unmap, "unmapping the GL vertex buffer");
             let result = written?;
             unmapped.map(|()| result)
         }
