@@ -201,13 +201,18 @@ fn build_ptx(root: &Path, out_dir: &Path, module: &Module, allow_cpu_mismatch: b
 /// registers against their plain twins' 76 and 84. At a million enemies almost every body's
 /// narrow phase finds nothing around and only streams its own state, which more warps do
 /// faster: `collide_circles_swept` at 64 rather than 80 took `narrow` from 32.5 to 29.2 µs
-/// a step on an H200 (56 was slower than 64 on an H100).
+/// a step on an H200 (56 was slower than 64 on an H100). The logged twins (audit runs)
+/// keep their twins' caps, so that an audited run's blocks fill the GPU as the game's do.
 const REGISTER_CAPS: &[(&str, u32)] = &[
     ("think_in_teams", 80),
     ("collide_think_integrate", 80),
     ("collide_think_integrate_swept", 80),
+    ("collide_think_integrate_logged", 80),
+    ("collide_think_integrate_swept_logged", 80),
     ("collide_circles_swept", 64),
+    ("collide_circles_swept_logged", 64),
     ("collide_swept", 96),
+    ("collide_swept_logged", 96),
     ("think", 56),
 ];
 

@@ -8,6 +8,7 @@ mod common;
 use gpuwars::game::accuracy::{AuditLength, GameAudit, audit_game};
 use gpuwars::game::scene::BUILT_IN;
 use gpuwars::game::{Game, Options, Scene};
+use gpuwars::pipeline::{Lanes, Persistent};
 use gpuwars::sim::Sweep;
 use gpuwars::sim::audit::{Accuracy, SHOT_ENEMY};
 use gpuwars::{Device, Error};
@@ -208,7 +209,41 @@ fn a_pile_denser_than_the_log_is_audited_whole(device: &Device) {
     );
 }
 
+/// An audited game (its narrow phase's logged kernels) is the game it audits, bit for bit:
+/// every built-in game scene, swept as it says and with nothing swept, its bodies stepping
+/// in three launches and (teams of 8 lanes) in one, and `paper` as a persistent step.
+fn an_audited_game_is_the_game_bit_for_bit(device: &Device) {
+    let lanes = [Lanes::Auto, Lanes::Fixed(8)].map(|lanes| Options {
+        lanes,
+        ..Options::default()
+    });
+    let persistent = Options {
+        persistent: Persistent::On,
+        ..Options::default()
+    };
+    for name in GAME_SCENES {
+        for sweep in [None, Some(Sweep::Off)] {
+            let mut scene = Scene::load(name).unwrap();
+            if let Some(sweep) = sweep {
+                scene.world.kinds.iter_mut().for_each(|k| k.sweep = sweep);
+            }
+            let mut traced = scene.clone();
+            traced.world.physics.trace_paths = true;
+            let runs = match name {
+                "paper" => &[lanes[0], lanes[1], persistent][..],
+                _ => &lanes[..],
+            };
+            for &options in runs {
+                let [plain, audited] =
+                    [&scene, &traced].map(|s| common::game::hash_with(device, s, 1, 180, options));
+                assert_eq!(audited, plain, "{name}, sweep {sweep:?}, {options:?}");
+            }
+        }
+    }
+}
+
 on_both_backends!(
+    an_audited_game_is_the_game_bit_for_bit,
     shots_swept_miss_no_enemy_and_unswept_ones_do,
     every_game_scene_swept_exact_at_three_steps,
     a_pile_denser_than_the_log_is_audited_whole,

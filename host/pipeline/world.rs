@@ -36,6 +36,9 @@ pub(crate) struct Config {
     pub collide: Option<Kernel<CollideArgs>>,
     /// Whether a pair of kinds is swept, so that the narrow phase runs its swept kernels.
     pub swept: bool,
+    /// Whether the narrow phase logs every contact it counts (`Physics::trace_paths`), so
+    /// that it runs its logged kernels: the others carry no log's code.
+    pub logged: bool,
     /// Whether the grid is built (something collides, looks around, or the autopilot may fly).
     pub grid: bool,
     /// The narrow phase's threads per body of each kind.
@@ -268,17 +271,24 @@ impl World {
                 }
                 _ => (false, false),
             };
-        // Only worlds with a swept pair run the swept narrow phase.
+        // Only worlds with a swept pair run the swept narrow phase, and only audit runs the
+        // logged one.
         let swept = spec.has_swept_pairs();
+        let logged = spec.physics.logged_per_slot() != 0;
         let config = Config {
             // No rectangles: the narrow phase without the rectangle tests.
-            collide: collides.then_some(match (spec.has_rects(), swept) {
-                (true, false) => registry::COLLIDE,
-                (false, false) => registry::COLLIDE_CIRCLES,
-                (true, true) => registry::COLLIDE_SWEPT,
-                (false, true) => registry::COLLIDE_CIRCLES_SWEPT,
+            collide: collides.then_some(match (spec.has_rects(), swept, logged) {
+                (true, false, false) => registry::COLLIDE,
+                (false, false, false) => registry::COLLIDE_CIRCLES,
+                (true, true, false) => registry::COLLIDE_SWEPT,
+                (false, true, false) => registry::COLLIDE_CIRCLES_SWEPT,
+                (true, false, true) => registry::COLLIDE_LOGGED,
+                (false, false, true) => registry::COLLIDE_CIRCLES_LOGGED,
+                (true, true, true) => registry::COLLIDE_SWEPT_LOGGED,
+                (false, true, true) => registry::COLLIDE_CIRCLES_SWEPT_LOGGED,
             }),
             swept,
+            logged,
             // A game's autopilot looks through the grid whenever it flies.
             grid: builds_grid(spec, game.is_some()),
             narrow_teams,

@@ -117,6 +117,14 @@ kernels! {
     COLLIDE_SWEPT = collide_swept(narrow::CollideArgs) => narrow::collide_swept;
     /// The narrow phase for worlds of circles only with swept pairs.
     COLLIDE_CIRCLES_SWEPT = collide_circles_swept(narrow::CollideArgs) => narrow::collide_circles_swept;
+    /// [`COLLIDE`] that logs every contact it counts (audit runs).
+    COLLIDE_LOGGED = collide_logged(narrow::CollideArgs) => narrow::collide_logged;
+    /// [`COLLIDE_CIRCLES`] that logs every contact it counts (audit runs).
+    COLLIDE_CIRCLES_LOGGED = collide_circles_logged(narrow::CollideArgs) => narrow::collide_circles_logged;
+    /// [`COLLIDE_SWEPT`] that logs every contact it counts (audit runs).
+    COLLIDE_SWEPT_LOGGED = collide_swept_logged(narrow::CollideArgs) => narrow::collide_swept_logged;
+    /// [`COLLIDE_CIRCLES_SWEPT`] that logs every contact it counts (audit runs).
+    COLLIDE_CIRCLES_SWEPT_LOGGED = collide_circles_swept_logged(narrow::CollideArgs) => narrow::collide_circles_swept_logged;
     /// Euler integration, the boundary rule, and deaths.
     INTEGRATE = integrate(integrate::IntegrateArgs) => integrate::integrate;
     /// Flags the free usable slots (first step of rebuilding the free lists).
@@ -157,6 +165,10 @@ kernels! {
     /// [`COLLIDE_THINK_INTEGRATE`] for worlds with swept pairs. It finds its slot before it
     /// waits for the launch before it.
     COLLIDE_THINK_INTEGRATE_SWEPT = collide_think_integrate_swept(ai::BodyStepArgs) => ai::collide_think_integrate_swept, waits;
+    /// [`COLLIDE_THINK_INTEGRATE`] that logs every contact it counts (audit runs).
+    COLLIDE_THINK_INTEGRATE_LOGGED = collide_think_integrate_logged(ai::BodyStepArgs) => ai::collide_think_integrate_logged, waits;
+    /// [`COLLIDE_THINK_INTEGRATE_SWEPT`] that logs every contact it counts (audit runs).
+    COLLIDE_THINK_INTEGRATE_SWEPT_LOGGED = collide_think_integrate_swept_logged(ai::BodyStepArgs) => ai::collide_think_integrate_swept_logged, waits;
     /// Sets up every slot's generator from its seed and the parameter table.
     SEED_STREAMS = seed_streams(streams::SeedArgs) => streams::seed_streams;
     /// Points the camera: the frame's view from the ship's position (one thread), for the
@@ -237,6 +249,10 @@ stages! {
     COLLIDE_CIRCLES,
     COLLIDE_SWEPT,
     COLLIDE_CIRCLES_SWEPT,
+    COLLIDE_LOGGED,
+    COLLIDE_CIRCLES_LOGGED,
+    COLLIDE_SWEPT_LOGGED,
+    COLLIDE_CIRCLES_SWEPT_LOGGED,
     INTEGRATE,
     MARK_FREE,
     GATHER_FREE,
@@ -251,6 +267,8 @@ stages! {
     THINK_IN_TEAMS,
     COLLIDE_THINK_INTEGRATE,
     COLLIDE_THINK_INTEGRATE_SWEPT,
+    COLLIDE_THINK_INTEGRATE_LOGGED,
+    COLLIDE_THINK_INTEGRATE_SWEPT_LOGGED,
 }
 
 /// The persistent step: a program of stages, each a launch of [`STAGES`], with a barrier

@@ -56,9 +56,11 @@ pub(in crate::pipeline) fn ops(world: &World) -> Vec<Op> {
         // The narrow phase's bytes, the machines' and the integrator's.
         unsafe {
             threads(
-                match world.config.swept {
-                    true => registry::COLLIDE_THINK_INTEGRATE_SWEPT,
-                    false => registry::COLLIDE_THINK_INTEGRATE,
+                match (world.config.swept, world.config.logged) {
+                    (false, false) => registry::COLLIDE_THINK_INTEGRATE,
+                    (true, false) => registry::COLLIDE_THINK_INTEGRATE_SWEPT,
+                    (false, true) => registry::COLLIDE_THINK_INTEGRATE_LOGGED,
+                    (true, true) => registry::COLLIDE_THINK_INTEGRATE_SWEPT_LOGGED,
                 },
                 threads_needed,
                 args,

@@ -624,19 +624,33 @@ kernel_args! {
 /// built), never the places and velocities that their own teams change meanwhile.
 #[inline(always)]
 pub fn collide_think_integrate(t: Thread, args: &BodyStepArgs) {
-    body_step::<false>(t, args);
+    body_step::<false, false>(t, args);
 }
 
 /// [`collide_think_integrate`] for worlds with swept pairs (see
 /// [`crate::sim::KindInfo::swept_kinds`]).
 #[inline(always)]
 pub fn collide_think_integrate_swept(t: Thread, args: &BodyStepArgs) {
-    body_step::<true>(t, args);
+    body_step::<true, false>(t, args);
 }
 
-/// [`collide_think_integrate`], its narrow phase with swept pairs if `SWEPT`.
+/// [`collide_think_integrate`] that logs every contact it counts (audit runs only: see
+/// [`crate::sim::Contacts::log`]).
 #[inline(always)]
-fn body_step<const SWEPT: bool>(t: Thread, args: &BodyStepArgs) {
+pub fn collide_think_integrate_logged(t: Thread, args: &BodyStepArgs) {
+    body_step::<false, true>(t, args);
+}
+
+/// [`collide_think_integrate_swept`] that logs its contacts.
+#[inline(always)]
+pub fn collide_think_integrate_swept_logged(t: Thread, args: &BodyStepArgs) {
+    body_step::<true, true>(t, args);
+}
+
+/// [`collide_think_integrate`], its narrow phase with swept pairs if `SWEPT`, logging its
+/// contacts if `LOGGED`.
+#[inline(always)]
+fn body_step<const SWEPT: bool, const LOGGED: bool>(t: Thread, args: &BodyStepArgs) {
     let think = &args.think;
     // The thread's slot and its kind's tables are the world's: read while the grid's last
     // launch ends.
@@ -658,7 +672,7 @@ fn body_step<const SWEPT: bool>(t: Thread, args: &BodyStepArgs) {
         substep: 0,
         budget: args.contact_budget,
     };
-    collide_slot::<false, true, SWEPT>(&collide, slot, team, |_| known.kind.info);
+    collide_slot::<false, true, SWEPT, LOGGED>(&collide, slot, team, |_| known.kind.info);
     think_slot::<true, true>(think, slot, team, Some(known));
     if team.leads() && slot < think.bodies.slots() {
         let integrate = IntegrateArgs {

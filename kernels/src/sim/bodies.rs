@@ -158,7 +158,8 @@ pub struct Touched {
 
 impl Contacts {
     /// Logs `touched` where the run audits its contacts (a ring of records); does nothing
-    /// elsewhere.
+    /// where the world keeps no log (a logged kernel's launch over a world without one,
+    /// which the host never makes, writes nowhere).
     #[inline(always)]
     pub fn record(&self, touched: Touched) {
         if self.cursor.is_empty() {

@@ -138,26 +138,51 @@ pub fn respond(
 /// only. Any mix of circles and rectangles.
 #[inline(always)]
 pub fn collide(t: Thread, args: &CollideArgs) {
-    collide_bounds::<true, false>(t, args);
+    collide_bounds::<true, false, false>(t, args);
 }
 
 /// [`collide`] for worlds without rectangles: the rectangle tests are compiled out.
 #[inline(always)]
 pub fn collide_circles(t: Thread, args: &CollideArgs) {
-    collide_bounds::<false, false>(t, args);
+    collide_bounds::<false, false, false>(t, args);
 }
 
 /// [`collide`] for worlds with swept pairs (see [`KindInfo::swept_kinds`]): a world without
 /// any runs the kernels above, which have no swept code at all.
 #[inline(always)]
 pub fn collide_swept(t: Thread, args: &CollideArgs) {
-    collide_bounds::<true, true>(t, args);
+    collide_bounds::<true, true, false>(t, args);
 }
 
 /// [`collide_circles`] for worlds with swept pairs.
 #[inline(always)]
 pub fn collide_circles_swept(t: Thread, args: &CollideArgs) {
-    collide_bounds::<false, true>(t, args);
+    collide_bounds::<false, true, false>(t, args);
+}
+
+/// [`collide`] that also logs every contact it counts (see [`Contacts::log`]): audit runs
+/// only, so that the kernels above carry no log's code.
+#[inline(always)]
+pub fn collide_logged(t: Thread, args: &CollideArgs) {
+    collide_bounds::<true, false, true>(t, args);
+}
+
+/// [`collide_circles`] that logs its contacts.
+#[inline(always)]
+pub fn collide_circles_logged(t: Thread, args: &CollideArgs) {
+    collide_bounds::<false, false, true>(t, args);
+}
+
+/// [`collide_swept`] that logs its contacts.
+#[inline(always)]
+pub fn collide_swept_logged(t: Thread, args: &CollideArgs) {
+    collide_bounds::<true, true, true>(t, args);
+}
+
+/// [`collide_circles_swept`] that logs its contacts.
+#[inline(always)]
+pub fn collide_circles_swept_logged(t: Thread, args: &CollideArgs) {
+    collide_bounds::<false, true, true>(t, args);
 }
 
 /// The bound of a kind; with `RECTS` false every kind is taken as its circle, which is exact
@@ -243,9 +268,12 @@ impl<const SWEPT: bool> Handed for Share<SWEPT> {
 }
 
 #[inline(always)]
-fn collide_bounds<const RECTS: bool, const SWEPT: bool>(t: Thread, args: &CollideArgs) {
+fn collide_bounds<const RECTS: bool, const SWEPT: bool, const LOGGED: bool>(
+    t: Thread,
+    args: &CollideArgs,
+) {
     if let Some((slot, team)) = args.teams.member(t, &args.warps) {
-        collide_slot::<RECTS, false, SWEPT>(args, slot, team, |kind| args.kinds.get(kind));
+        collide_slot::<RECTS, false, SWEPT, LOGGED>(args, slot, team, |kind| args.kinds.get(kind));
     }
 }
 
@@ -254,9 +282,15 @@ fn collide_bounds<const RECTS: bool, const SWEPT: bool>(t: Thread, args: &Collid
 /// the bodies it overlaps, and its first lane writes them and the slot's energy loss (with
 /// `RECTS` false, every kind taken as its circle; with `MOVING`, the others' velocities
 /// read from the grid's entries: see [`CellIndex::vel_at`]; with `SWEPT`, the swept pairs'
-/// contacts found over the last motion, where the world traces paths).
+/// contacts found over the last motion, where the world traces paths; with `LOGGED`, every
+/// contact counted in the step's first substep logged: see [`Contacts::record`]).
 #[inline(always)]
-pub fn collide_slot<const RECTS: bool, const MOVING: bool, const SWEPT: bool>(
+pub fn collide_slot<
+    const RECTS: bool,
+    const MOVING: bool,
+    const SWEPT: bool,
+    const LOGGED: bool,
+>(
     args: &CollideArgs,
     slot: u32,
     team: Team,
@@ -347,7 +381,9 @@ pub fn collide_slot<const RECTS: bool, const MOVING: bool, const SWEPT: bool>(
                     (None, Some(c)) => (c.normal, c.depth, 1.0),
                     (None, None) => return None,
                 };
-                if args.substep == 0 {
+                // Only in the logged kernels: elsewhere the log's branch and atomic took
+                // the narrow phase 8 more registers (`collide_circles` 78 -> 86).
+                if LOGGED && args.substep == 0 {
                     out.record(Touched { slot, other, time });
                 }
                 let r = respond(
