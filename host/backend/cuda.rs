@@ -27,10 +27,13 @@ use gpuwars_kernels::{KernelArgs, registry};
 use serde::Serialize;
 
 mod driver;
+mod order;
 
 use super::{Element, Error, Launch};
 use crate::ptx;
 use driver::{cooperative, dependent, launch_with, load, properties};
+use order::BRANCHES;
+pub(super) use order::{Order, Sides};
 
 /// What the driver reports about the GPU.
 #[derive(Clone, Debug, Serialize)]
@@ -288,7 +291,7 @@ impl Gpu {
             stream,
             in_flight,
             capture: Mutex::new(None),
-            order: Arc::new(Mutex::new(sides)),
+            order: Order::new(sides),
             beside: Mutex::new(None),
             functions,
             cooperative: Mutex::new(None),
@@ -516,7 +519,7 @@ impl Gpu {
     /// The device's order (see [`Gpu::order`]), for as long as the guard lives: the side
     /// streams come with it.
     pub(super) fn in_order(&self) -> MutexGuard<'_, Sides> {
-        self.order.lock().unwrap_or_else(|e| e.into_inner())
+        self.order.hold()
     }
 
     /// Issues what `issue` launches beside the work that follows it, as branch `branch` of
@@ -786,14 +789,3 @@ pub(super) fn address<T>(slice: &CudaSlice<T>) -> u64 {
     let (addr, _guard) = slice.device_ptr(slice.stream());
     addr
 }
-
-/// Streams for the branches of a plan (see [`Gpu::beside`]): the autopilot's, the
-/// explosions' and the tally's.
-const BRANCHES: usize = 3;
-
-/// A device's order, shared (see [`Gpu::in_order`]).
-pub(super) type Order = Arc<Mutex<Sides>>;
-
-/// The side streams of a device, which only the holder of its order forks onto (see
-/// [`Gpu::in_order`]).
-pub(super) struct Sides(Vec<Arc<CudaStream>>);

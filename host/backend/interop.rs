@@ -105,14 +105,13 @@ impl GlBuffer {
         write: impl FnOnce(DevSlice<T>) -> Result<R, Error>,
     ) -> Result<R, Error> {
         let stream = self.stream.cu_stream();
-        // The order for the map and for the unmap, not between: the launches `write`
-        // queues take it themselves.
-        let in_order = || self.order.lock().unwrap_or_else(|e| e.into_inner());
         // SAFETY: a registered resource, mapped and unmapped on the device's stream; the
         // pointer is used only by launches queued before the unmap.
         unsafe {
+            // The order for the map and for the unmap, not between: the launches `write`
+            // queues take it themselves.
             let map = {
-                let _order = in_order();
+                let _order = self.order.hold();
                 sys::cuGraphicsMapResources(1, &mut self.resource, stream)
             };
             check(&self.in_flight, map, "mapping the GL vertex buffer")?;
@@ -126,7 +125,7 @@ impl GlBuffer {
             let len = u32::try_from(bytes / size_of::<T>()).unwrap_or(u32::MAX);
             let written = mapped.and_then(|()| write(DevSlice::from_raw_parts(addr, len)));
             let unmap = {
-                let _order = in_order();
+                let _order = self.order.hold();
                 sys::cuGraphicsUnmapResources(1, &mut self.resource, stream)
             };
             let unmapped = check(&self.in_flight, unmap, "unmapping the GL vertex buffer");
