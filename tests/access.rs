@@ -301,7 +301,41 @@ fn a_rings_buffers_are_written_through_it_only(device: &Device) {
     device.write(&mut inputs, &[7]).unwrap();
 }
 
+/// A chain runs its ops in order as one op; beside the ops to the plan's end, it is checked
+/// against every op after it (those after the branches join too), which do not wait for it.
+fn a_chain_beside_to_the_end_is_checked_to_the_end(device: &Device) {
+    let keys = device.upload(&[1u32; 256]).unwrap().named("keys");
+    let counts = device.alloc_zeroed::<u32>(4).unwrap();
+    let other = device.upload(&[5u32; 64]).unwrap();
+    let histogram = || histogram_op(&keys, &counts, 256, 2, 128).after_branches();
+    // Two touches of `other` beside the histogram: taken, each touch run once.
+    let chain = Op::chain(vec![touch(&other), touch(&other)]).unwrap();
+    let apart = vec![chain.beside_to_the_end(), histogram()];
+    device.run(&device.plan(apart, false).unwrap()).unwrap();
+    assert_eq!(device.download(&other).unwrap(), vec![7; 64]);
+    assert_eq!(device.download(&counts).unwrap(), [0, 256, 0, 0]);
+    // A chain that writes the keys the histogram reads after the join: refused to the end,
+    // and taken where the branch joins there.
+    let chain = || Op::chain(vec![touch(&other), touch(&keys)]).unwrap();
+    let racing = vec![chain().beside_to_the_end(), histogram()];
+    let text = device
+        .plan(racing, false)
+        .err()
+        .expect("a race")
+        .to_string();
+    for word in ["`touch`", "`histogram`", "writes `keys`"] {
+        assert!(text.contains(word), "{text}");
+    }
+    device
+        .plan(vec![chain().beside(), histogram()], false)
+        .unwrap();
+    // No chain of none, nor of an op beside.
+    assert!(Op::chain(Vec::new()).is_err());
+    assert!(Op::chain(vec![touch_beside(&other, false)]).is_err());
+}
+
 on_both_backends!(
+    a_chain_beside_to_the_end_is_checked_to_the_end,
     plans_of_threads_are_ordered_whole,
     a_rings_buffers_are_written_through_it_only,
     a_prefix_sum_of_one_device_is_refused_on_another,

@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use gpuwars_kernels::DevSlice;
-use gpuwars_kernels::access::Access;
+use gpuwars_kernels::access::{Access, Use};
 use gpuwars_kernels::data::{Build, Convert, Store};
 
 use super::{Device, DeviceId, Element, Error, Imp, check_len, cpu, cuda};
@@ -176,8 +176,13 @@ impl Store for Vecs {
     type Array<T: Element, A: Access> = Vec<T>;
 }
 
-/// Allocates a group's arrays, zeroed, on a device: `Group::<Buffers>::build(&mut device.zeroed(), ..)`.
-pub struct Zeroed<'d>(pub(super) &'d Device);
+/// Allocates a group's arrays, zeroed, on a device: `Group::<Buffers>::build(&mut device.zeroed(), ..)`;
+/// or, from [`Device::zeroed_used`], only the arrays the group's access uses, each other
+/// array with no element.
+pub struct Zeroed<'d> {
+    pub(super) device: &'d Device,
+    pub(super) used_only: bool,
+}
 
 impl Build<Buffers> for Zeroed<'_> {
     type Error = Error;
@@ -186,7 +191,12 @@ impl Build<Buffers> for Zeroed<'_> {
         name: &'static str,
         len: usize,
     ) -> Result<Buffer<T>, Error> {
-        Ok(self.0.alloc_zeroed(len)?.named(name))
+        let len = if self.used_only && A::USE == Use::Unused {
+            0
+        } else {
+            len
+        };
+        Ok(self.device.alloc_zeroed(len)?.named(name))
     }
 }
 

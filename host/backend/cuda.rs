@@ -544,11 +544,20 @@ impl Gpu {
     }
 
     /// Makes the work queued from now on wait for everything issued [`Gpu::beside`] in
-    /// the first `branches` branches of the holder of `sides`.
-    pub(super) fn rejoin(&self, sides: &Sides, branches: usize) -> Result<(), Error> {
+    /// the branches `branches` of the holder of `sides`.
+    pub(super) fn rejoin(
+        &self,
+        sides: &Sides,
+        branches: impl IntoIterator<Item = usize>,
+    ) -> Result<(), Error> {
         let main = self.launch_stream();
-        for side in sides.0.iter().take(branches) {
-            main.join(side).map_err(self.failed("joining a stream"))?;
+        let mut joined = [false; BRANCHES];
+        for branch in branches {
+            let stream = branch % BRANCHES;
+            if !std::mem::replace(&mut joined[stream], true) {
+                main.join(&sides.0[stream])
+                    .map_err(self.failed("joining a stream"))?;
+            }
         }
         Ok(())
     }

@@ -321,7 +321,19 @@ impl Device {
 
     /// Allocates groups of buffers, zeroed (see [`Zeroed`]).
     pub fn zeroed(&self) -> Zeroed<'_> {
-        Zeroed(self)
+        Zeroed {
+            device: self,
+            used_only: false,
+        }
+    }
+
+    /// Allocates groups of buffers, zeroed, of the arrays their access uses only (see
+    /// [`Zeroed`]): `Group::<Buffers, Access>::build(&mut device.zeroed_used(), ..)`.
+    pub fn zeroed_used(&self) -> Zeroed<'_> {
+        Zeroed {
+            device: self,
+            used_only: true,
+        }
     }
 
     /// Reads groups of buffers back (see [`Reader`]).

@@ -7,7 +7,8 @@
 //! whatever happened to the handles it was made from. The binder also notes the device of
 //! every buffer it views and how the kernel uses it (the access of the view's type): a plan refuses an op of
 //! another device, and an op run beside the others ([`Op::beside`]) that touches what the
-//! ops it runs beside write, or writes what they touch. What keeps the memory a launch uses
+//! ops it runs beside write, or writes what they touch. Several ops can run beside the
+//! others as one branch, in order ([`Op::chain`]). What keeps the memory a launch uses
 //! from being freed *while it runs* is the device's order: every launch, copy, clear and
 //! free of a device is ordered by its stream on the GPU (an op beside the others goes on a
 //! side stream that forks from it and joins it again before the plan ends; cudarc frees a
@@ -154,6 +155,8 @@ struct Home {
 enum OpKind {
     Launch,
     Clear,
+    /// Ops issued in order as one (see [`Op::chain`]).
+    Chain,
 }
 
 /// How an op is issued: on the device it runs on, in the device's order.
@@ -171,6 +174,9 @@ pub struct Op {
     issue: Issue,
     /// Whether it runs beside the plan's ops after it (see [`Op::beside`]).
     beside: bool,
+    /// Whether, run beside, it runs beside every op after it, joined at the plan's end
+    /// only (see [`Op::beside_to_the_end`]).
+    to_the_end: bool,
     /// Whether it waits for the ops before it that run beside (see [`Op::after_branches`]).
     joins: bool,
     /// The buffers the arguments view.
@@ -178,8 +184,10 @@ pub struct Op {
     /// How the kernel uses each.
     touches: Arc<[Touch]>,
     home: Home,
-    /// The launch as a persistent step's stage takes it (none for a clear).
+    /// The launch as a persistent step's stage takes it (none for a clear or a chain).
     stage: Option<Arc<StageSource>>,
+    /// A chain's ops, in order (none for a launch or a clear).
+    parts: Arc<[Op]>,
 }
 
 /// What a persistent program needs of a launch beside the op's name and grid: its block and
@@ -223,11 +231,13 @@ impl Op {
             grid: launch.grid,
             bytes,
             beside: false,
+            to_the_end: false,
             joins: false,
             _holds: holds,
             touches,
             home,
             stage: Some(Arc::new(stage)),
+            parts: Arc::new([]),
             // SAFETY: the caller's promise covers every run of the op, and the op holds the
             // buffers its views are of.
             issue: Arc::new(move |device| unsafe { device.issue(&launch) }),
@@ -246,13 +256,72 @@ impl Op {
             grid: 0,
             bytes: u64::from(view.len()) * size_of::<T>() as u64,
             beside: false,
+            to_the_end: false,
             joins: false,
             _holds: holds,
             touches,
             home,
             stage: None,
+            parts: Arc::new([]),
             // SAFETY: as in `launch`.
             issue: Arc::new(move |device| unsafe { device.clear(view) }),
+        }
+    }
+
+    /// `ops` issued in order as one op, whose views are all theirs: a branch of several
+    /// launches beside the others (see [`Op::beside`]). None of `ops` may run beside or
+    /// join branches itself, and an empty chain is refused.
+    pub fn chain(ops: Vec<Op>) -> Result<Op, Error> {
+        let Some(name) = ops.first().map(|op| op.name) else {
+            return Err(Error::Invalid("a chain of no ops".into()));
+        };
+        if let Some(op) = ops.iter().find(|op| op.beside || op.joins) {
+            return Err(Error::Invalid(format!(
+                "op `{}` of a chain runs beside or joins branches: a chain's ops run in order",
+                op.name
+            )));
+        }
+        let (mut device, mut foreign) = (None, None);
+        for home in ops.iter().map(|op| &op.home) {
+            for id in [home.device, home.foreign].into_iter().flatten() {
+                match device {
+                    None => device = Some(id),
+                    Some(first) if first != id => foreign = Some(id),
+                    Some(_) => {}
+                }
+            }
+        }
+        let parts: Arc<[Op]> = ops.into();
+        let issued = parts.clone();
+        Ok(Op {
+            name,
+            kind: OpKind::Chain,
+            grid: parts.iter().map(|op| op.grid).max().unwrap_or(0),
+            bytes: parts.iter().map(Op::bytes).sum(),
+            beside: false,
+            to_the_end: false,
+            joins: false,
+            _holds: parts
+                .iter()
+                .flat_map(|op| op._holds.iter().cloned())
+                .collect(),
+            touches: parts
+                .iter()
+                .flat_map(|op| op.touches.iter().cloned())
+                .collect(),
+            home: Home { device, foreign },
+            stage: None,
+            issue: Arc::new(move |device| issued.iter().try_for_each(|op| (op.issue)(device))),
+            parts,
+        })
+    }
+
+    /// The kernels this op launches, in order: its own, or its chain's.
+    fn launched(&self) -> Vec<&'static str> {
+        match self.kind {
+            OpKind::Chain => self.parts.iter().flat_map(Op::launched).collect(),
+            _ if self.is_launch() => vec![self.name],
+            _ => Vec::new(),
         }
     }
 
@@ -270,10 +339,22 @@ impl Op {
         }
     }
 
+    /// The same op, run beside every op after it in its plan, as [`Op::beside`] but joined
+    /// at the plan's end only: an op [`Op::after_branches`] does not wait for it. Making the
+    /// plan checks it against every op after it.
+    pub fn beside_to_the_end(self) -> Op {
+        Op {
+            beside: true,
+            to_the_end: true,
+            ..self
+        }
+    }
+
     /// The same op, run once the ops before it in its plan that run beside the others
-    /// ([`Op::beside`]) are done: on the GPU the branches join the device's stream before
-    /// it (and again at the plan's end); on the CPU, where they ran in order, it changes
-    /// nothing. So an op beside the others need only stay off what the ops up to here write.
+    /// ([`Op::beside`], not [`Op::beside_to_the_end`]) are done: on the GPU the branches
+    /// join the device's stream before it (and again at the plan's end); on the CPU, where
+    /// they ran in order, it changes nothing. So an op beside the others need only stay off
+    /// what the ops up to here write.
     pub fn after_branches(self) -> Op {
         Op {
             joins: true,
@@ -343,7 +424,8 @@ fn check_plan(ops: &[Op], on: DeviceId) -> Result<(), Error> {
         op.check_home(on)?;
     }
     for (i, op) in ops.iter().enumerate().filter(|(_, op)| op.beside) {
-        for other in ops[i + 1..].iter().take_while(|other| !other.joins) {
+        let joined = |other: &&Op| !op.to_the_end && other.joins;
+        for other in ops[i + 1..].iter().take_while(|other| !joined(other)) {
             op.check_beside(other)?;
         }
     }
@@ -378,7 +460,7 @@ impl Plan {
 
     /// The kernel of each launch of a run, in order.
     fn launched(&self) -> impl Iterator<Item = &'static str> + '_ {
-        self.ops.iter().filter(|op| op.is_launch()).map(Op::name)
+        self.ops.iter().flat_map(Op::launched)
     }
 
     /// Bytes moved per run, by the ops' counts.
@@ -461,18 +543,25 @@ impl Device {
     /// declare) then changes from run to run, on the CPU as it would on the GPU.
     fn issue_branching(&self, ops: &[Op], starts: &mut impl rand::Rng) -> Result<(), Error> {
         std::thread::scope(|scope| {
-            let mut running = Vec::new();
-            let mut waiting = Vec::new();
+            // Branches an op after the branches joins, and those joined at the end only.
+            let (mut running, mut waiting) = (Vec::new(), Vec::new());
+            let (mut running_on, mut waiting_on) = (Vec::new(), Vec::new());
             for op in ops {
                 if op.joins {
                     join_branches(scope, self, &mut running, &mut waiting)?;
                 }
+                let (running, waiting) = match op.to_the_end {
+                    true => (&mut running_on, &mut waiting_on),
+                    false => (&mut running, &mut waiting),
+                };
                 match (op.beside, starts.random::<bool>()) {
                     (true, true) => running.push(scope.spawn(move || (op.issue)(self))),
                     (true, false) => waiting.push(op),
                     (false, _) => (op.issue)(self)?,
                 }
             }
+            running.append(&mut running_on);
+            waiting.append(&mut waiting_on);
             join_branches(scope, self, &mut running, &mut waiting)
         })
     }
@@ -496,13 +585,17 @@ impl Device {
 /// marked [`Op::after_branches`] and after the last: on every path, an error's too, so that
 /// nothing queued after the plan runs beside a branch of it.
 fn issue_all(device: &Device, gpu: &Gpu, sides: &Sides, ops: &[Op]) -> Result<(), Error> {
-    let mut branches = 0;
+    // Every branch forked so far, and those an op after the branches joins.
+    let (mut branches, mut joinable) = (0, Vec::new());
     let issued = ops.iter().try_for_each(|op| {
-        if op.joins && branches > 0 {
-            gpu.rejoin(sides, branches)?;
+        if op.joins && !joinable.is_empty() {
+            gpu.rejoin(sides, joinable.iter().copied())?;
         }
         match op.beside {
             true => {
+                if !op.to_the_end {
+                    joinable.push(branches);
+                }
                 branches += 1;
                 gpu.beside(sides, branches - 1, || (op.issue)(device))
             }
@@ -511,7 +604,7 @@ fn issue_all(device: &Device, gpu: &Gpu, sides: &Sides, ops: &[Op]) -> Result<()
     });
     match branches {
         0 => issued,
-        _ => issued.and(gpu.rejoin(sides, branches)),
+        _ => issued.and(gpu.rejoin(sides, 0..branches)),
     }
 }
 

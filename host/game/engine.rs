@@ -262,7 +262,20 @@ impl<'d> Game<'d> {
     /// for it. The statuses of earlier steps that had to be read back to make room are
     /// kept for [`Game::next_status`].
     pub fn submit(&mut self, input: Option<Input>) -> Result<(), Error> {
-        self.queue(input, None)
+        self.queue(input, Queued::Step)
+    }
+
+    /// As [`Game::submit`], with the frame [`Game::render`] draws of the world before the
+    /// step drawn beside it (see [`Pipeline::render_beside_step`]): on the GPU a step and a
+    /// frame then cost about the longer of the two, not their sum.
+    pub fn submit_beside_frame(
+        &mut self,
+        input: Option<Input>,
+        (width, height): (u32, u32),
+        camera: &Camera,
+    ) -> Result<(), Error> {
+        let lens = self.lens(camera, width, height, 0.0);
+        self.queue(input, Queued::BesideFrame(&lens))
     }
 
     /// As [`Game::submit`], stage by stage, timing each stage into `profile` (waits for
@@ -272,10 +285,10 @@ impl<'d> Game<'d> {
         input: Option<Input>,
         profile: &mut Profile,
     ) -> Result<(), Error> {
-        self.queue(input, Some(profile))
+        self.queue(input, Queued::Profiled(profile))
     }
 
-    fn queue(&mut self, input: Option<Input>, profile: Option<&mut Profile>) -> Result<(), Error> {
+    fn queue(&mut self, input: Option<Input>, queued: Queued) -> Result<(), Error> {
         let command = match input {
             Some(input) => {
                 if let Some((field, allowed)) = input.problem() {
@@ -301,9 +314,13 @@ impl<'d> Game<'d> {
         }
         let device = self.pipeline.device();
         self.ring.send(device, command)?;
-        match profile {
-            Some(profile) => self.pipeline.step_profiled(profile)?,
-            None => self.pipeline.step()?,
+        match queued {
+            Queued::Step => self.pipeline.step()?,
+            Queued::Profiled(profile) => self.pipeline.step_profiled(profile)?,
+            Queued::BesideFrame(lens) => {
+                let looks = looks::looks(&self.scene);
+                self.pipeline.render_beside_step(lens, &looks)?
+            }
         }
         self.ring.receive(device)
     }
@@ -422,4 +439,14 @@ impl<'d> Game<'d> {
         h.update(bytemuck::cast_slice(&self.pipeline.spawned()?));
         Ok(h.digest())
     }
+}
+
+/// How [`Game::queue`] queues its step.
+enum Queued<'a> {
+    /// The step alone.
+    Step,
+    /// Stage by stage, timed into the profile.
+    Profiled(&'a mut Profile),
+    /// With the frame of this lens beside it.
+    BesideFrame(&'a Lens),
 }

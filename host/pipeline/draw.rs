@@ -18,6 +18,7 @@ use gpuwars_kernels::{DevSlice, registry};
 use xxhash_rust::xxh3::xxh3_64;
 
 use super::Pipeline;
+use super::still::{Source, Still};
 use crate::backend::{Binder, Buffers, Plan};
 use crate::files::FileError;
 use crate::primitives::threads;
@@ -73,6 +74,12 @@ pub(super) struct Canvas {
     /// The last frame's arguments, and its plan replayed as a CUDA graph once the same
     /// frame comes twice in a row (see [`FrameKey`]).
     last: Option<(FrameKey, Option<Plan>)>,
+    /// What frames drawn beside the step read, made by the first of them.
+    pub(super) still: Option<Still>,
+    /// The lens of the last frame drawn beside the step, and the plans of such frames:
+    /// one beside a step that does not renumber, one beside a step that does, each kept
+    /// once it replays as a graph (see `super::beside`).
+    pub(super) beside: Option<(FrameKey, [Option<Plan>; 2])>,
 }
 
 /// What a frame's launches take that can change from one frame to the next: the lens (in
@@ -82,9 +89,19 @@ pub(super) struct Canvas {
 /// whose frame time is steady) replay one graph; a lens that changes every frame runs its
 /// launches one by one, as recording a graph for one replay would cost more than it saves.
 #[derive(Clone, Copy, PartialEq)]
-struct FrameKey {
+pub(super) struct FrameKey {
     lens: [u32; std::mem::size_of::<Lens>() / 4],
     image: Option<(u64, u32)>,
+}
+
+impl FrameKey {
+    /// The key of a frame of `lens` into `image` (the canvas's own if none).
+    pub(super) fn of(lens: &Lens, image: Option<DevSlice<u32>>) -> FrameKey {
+        FrameKey {
+            lens: bytemuck::cast(*lens),
+            image: image.map(|image| (image.addr(), image.len())),
+        }
+    }
 }
 
 /// Most threads the large bodies' launch has: a group of threads each for a thousand
@@ -255,10 +272,15 @@ impl Pipeline<'_> {
         })
     }
 
-    fn canvas(&self) -> Result<&Canvas, Error> {
+    pub(super) fn canvas(&self) -> Result<&Canvas, Error> {
         self.canvas
             .as_ref()
             .ok_or_else(|| Error::Invalid("no frame has been rendered".into()))
+    }
+
+    /// The canvas, once [`Pipeline::ready`] made it.
+    pub(super) fn canvas_mut(&mut self) -> &mut Canvas {
+        self.canvas.as_mut().expect("made ready")
     }
 
     /// Queues the drawing of a frame as [`Pipeline::draw`] does, and leaves it in device
@@ -296,7 +318,7 @@ impl Pipeline<'_> {
 
     /// Checks `lens` and `looks`, makes or resizes the canvas, and writes the looks if they
     /// changed.
-    fn ready(&mut self, lens: &Lens, looks: &[Look]) -> Result<(), Error> {
+    pub(super) fn ready(&mut self, lens: &Lens, looks: &[Look]) -> Result<(), Error> {
         check_lens(lens)?;
         let kinds = self.world.spec.kinds.len();
         if looks.len() != kinds {
@@ -314,7 +336,7 @@ impl Pipeline<'_> {
                 // The camera's state outlives a change of size.
                 (c.width, c.height) = (width, height);
                 c.pixels = FramePixels::build(&mut device.zeroed(), pixels)?;
-                c.last = None;
+                (c.last, c.beside) = (None, None);
             }
             None => {
                 let slots = self.world.layout.slots as usize;
@@ -325,6 +347,8 @@ impl Pipeline<'_> {
                     pixels: FramePixels::build(&mut device.zeroed(), pixels)?,
                     looks: Vec::new(),
                     last: None,
+                    still: None,
+                    beside: None,
                 })
             }
         }
@@ -338,15 +362,13 @@ impl Pipeline<'_> {
 
     /// The camera's own launch (see `gpuwars_kernels::render::camera::camera`), once the
     /// canvas is ready.
-    fn camera_op(&self, lens: &Lens) -> Op {
+    fn camera_op(&self, lens: &Lens, source: Source) -> Op {
         let canvas = self.canvas.as_ref().expect("made ready");
-        let world = &self.world;
         // SAFETY: the views go into the op made with the binder.
         let mut b = unsafe { Binder::new() };
-        let input = world.game.as_ref().map(|g| &g.data.input);
         let camera = CameraArgs {
-            bodies: world.state.bodies(&mut b),
-            input: input.map_or(DevSlice::EMPTY, |input| b.view(input)),
+            bodies: self.drawn_bodies(source, &mut b),
+            input: self.drawn_input(source, &mut b),
             state: b.view(&canvas.data.camera),
             shown: b.view(&canvas.data.shown),
             lens: *lens,
@@ -361,7 +383,7 @@ impl Pipeline<'_> {
     fn vertex_camera_ops(&self, lens: &Lens) -> Vec<Op> {
         let canvas = self.canvas.as_ref().expect("made ready");
         let (world, slots) = (&self.world, self.world.layout.slots);
-        let mut ops = vec![self.camera_op(lens)];
+        let mut ops = vec![self.camera_op(lens, Source::World)];
         // A frame without a radar (the whole field) has nothing to count.
         if lens.radar != 0 {
             let stride = radar::stride(slots);
@@ -399,10 +421,7 @@ impl Pipeline<'_> {
         looks: &[Look],
         image: Option<DevSlice<u32>>,
     ) -> Result<(), Error> {
-        let key = FrameKey {
-            lens: bytemuck::cast(*lens),
-            image: image.map(|image| (image.addr(), image.len())),
-        };
+        let key = FrameKey::of(lens, image);
         self.ready(lens, looks)?;
         let device = self.device;
         let last = self.canvas.as_mut().expect("made ready").last.take();
@@ -411,7 +430,7 @@ impl Pipeline<'_> {
             last => {
                 let repeat = last.is_some_and(|(last, _)| last == key);
                 // SAFETY: forwarded from the caller.
-                let ops = unsafe { self.frame_ops(lens, image) };
+                let ops = unsafe { self.frame_ops(lens, image, Source::World) };
                 (device.plan(ops, repeat)?, repeat)
             }
         };
@@ -421,16 +440,21 @@ impl Pipeline<'_> {
     }
 
     /// A frame's launches: the splats (the first with the camera and the radar's counts)
-    /// and the resolve, into `image` if given.
+    /// and the resolve, into `image` if given, of the world as `source` holds it.
     ///
     /// # Safety
     /// As for [`Pipeline::render_into`], for `image` when given.
-    unsafe fn frame_ops(&self, lens: &Lens, image: Option<DevSlice<u32>>) -> Vec<Op> {
+    pub(super) unsafe fn frame_ops(
+        &self,
+        lens: &Lens,
+        image: Option<DevSlice<u32>>,
+        source: Source,
+    ) -> Vec<Op> {
         let mut ops = Vec::new();
         let canvas = self.canvas.as_ref().expect("made ready");
         let (world, slots) = (&self.world, self.world.layout.slots);
         let splat = |b: &mut Binder| SplatArgs {
-            bodies: world.state.bodies(b),
+            bodies: self.drawn_bodies(source, b),
             kinds: b.view(&world.state.tables.info),
             looks: b.view(&canvas.data.looks),
             shown: b.view(&canvas.data.shown),
@@ -446,13 +470,12 @@ impl Pipeline<'_> {
             // launch of its own does.
             let camera_ready = slots > render::FOLD_CAMERA_SLOTS;
             if camera_ready {
-                ops.push(self.camera_op(lens));
+                ops.push(self.camera_op(lens, source));
             }
             let mut b = Binder::new();
-            let input = world.game.as_ref().map(|g| &g.data.input);
             let args = FirstSplatArgs {
                 splat: splat(&mut b),
-                input: input.map_or(DevSlice::EMPTY, |input| b.view(input)),
+                input: self.drawn_input(source, &mut b),
                 camera: b.view(&canvas.data.camera),
                 radar: made(canvas.data.radar.convert(&mut b)),
                 lens: *lens,
@@ -473,7 +496,7 @@ impl Pipeline<'_> {
             let args = splat(&mut b);
             ops.push(threads(registry::SPLAT_LARGE, large, args, b, 0));
             let mut b = Binder::new();
-            if let Some((particles, lifetime)) = world.particles(&mut b) {
+            if let Some((particles, lifetime)) = self.drawn_particles(source, &mut b) {
                 let args = ParticleSplatArgs {
                     particles,
                     shown: b.view(&canvas.data.shown),

@@ -30,6 +30,7 @@
 //! step's plans, whose ops hold the buffers they view. Each stage's ops are made in its own
 //! file under `stages/`.
 
+mod beside;
 pub mod draw;
 mod handmade;
 mod persistent;
@@ -37,6 +38,7 @@ mod profile;
 mod simulation;
 mod stage;
 mod stages;
+mod still;
 mod teams;
 pub(crate) mod world;
 

@@ -7,10 +7,10 @@
 //! relies on.
 
 use gpuwars_kernels::access::Access;
-use gpuwars_kernels::data::{Sizes, Unmade};
+use gpuwars_kernels::data::{Sizes, Unmade, View};
 use gpuwars_kernels::game::GameData;
 use gpuwars_kernels::game::control::{Mailbox, Order, Status};
-use gpuwars_kernels::game::effects::{Burst, Particles};
+use gpuwars_kernels::game::effects::{Burst, Particles, ParticlesAccess};
 use gpuwars_kernels::game::master::{BirthArgs, MasterArgs, TallyArgs};
 use gpuwars_kernels::registry;
 use gpuwars_kernels::sim::broad::CellIndex;
@@ -468,7 +468,10 @@ impl World {
 
     /// The kernels' view of the explosions' particles, made by `b`, and their lifetime in
     /// steps, if the world has any particles.
-    pub fn particles(&self, b: &mut Binder) -> Option<(Particles, u32)> {
+    pub fn particles<M: ParticlesAccess>(
+        &self,
+        b: &mut Binder,
+    ) -> Option<(Particles<View, M>, u32)> {
         let (p, burst) = self.game.as_ref()?.effects.as_ref()?;
         (burst.particles() > 0).then(|| (made(p.convert(b)), burst.lifetime))
     }

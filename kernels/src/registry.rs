@@ -10,7 +10,7 @@ use crate::game::{ai, autopilot, effects, master};
 use crate::math;
 use crate::persistent::{self, ProgramArgs, Runner, Stage};
 use crate::primitives::{histogram, scan, sort, touch};
-use crate::render::{self, camera, particles, radar};
+use crate::render::{self, camera, particles, radar, still};
 use crate::rng::streams;
 use crate::sim::{broad, contact, free_list, integrate, narrow, renumber, scatter};
 use crate::{DevSlice, Kernel, KernelInfo};
@@ -190,6 +190,9 @@ kernels! {
     SPLAT_PARTICLES = splat_particles(particles::ParticleSplatArgs) => particles::splat_particles;
     /// Turns each pixel's key into its colour (or the backdrop's) and clears the key.
     RESOLVE_PIXELS = resolve_pixels(render::ResolveArgs) => render::resolve_pixels;
+    /// Copies what the renderers read of the world into the still a frame beside the next
+    /// step draws from.
+    KEEP_STILL = keep_still(still::StillArgs) => still::keep_still;
     /// Writes every slot's vertex for the GL renderer (into its mapped vertex buffer).
     WRITE_VERTICES = write_vertices(render::VertexArgs) => render::write_vertices;
     /// Writes every particle's vertex for the GL renderer, after the bodies'.

@@ -6,8 +6,8 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use cudarc::driver::CudaStream;
 
 /// Streams for the branches of a plan (see `Gpu::beside`): the autopilot's, the
-/// explosions' and the tally's.
-pub(super) const BRANCHES: usize = 3;
+/// explosions', the tally's and a frame's drawn beside the step.
+pub(super) const BRANCHES: usize = 4;
 
 /// A device's order, shared by the GPU and the GL buffers registered with it (see
 /// `Gpu::in_order`).

@@ -110,11 +110,13 @@ impl Device {
             grid,
             bytes,
             beside: false,
+            to_the_end: false,
             joins: false,
             _holds: holds.cloned().collect(),
             touches: touches.cloned().collect(),
             home,
             stage: None,
+            parts: Arc::new([]),
             // SAFETY: every stage's views are its op's (held above, with their buffers),
             // valid for the launches the ops stand for, which the program runs in their
             // order with a barrier between them: each as it would run alone.

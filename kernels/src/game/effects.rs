@@ -16,7 +16,7 @@ use core::f32::consts::TAU;
 use glam::Vec2;
 
 use super::rules::Brain;
-use crate::access::{Read, Unused};
+use crate::access::{Read, Readable, Unused};
 use crate::data::View;
 use crate::math::Divisor;
 use crate::sim::{Bodies, BodiesAccess};
@@ -44,7 +44,10 @@ device_data! {
     }
 }
 
-impl Particles {
+impl<M: ParticlesAccess> Particles<View, M>
+where
+    M::life: Readable,
+{
     /// Number of particles.
     #[inline(always)]
     pub fn len(&self) -> u32 {

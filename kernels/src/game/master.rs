@@ -505,7 +505,7 @@ kernel_args! {
         /// The bodies.
         pub bodies: Bodies,
         /// Kind table (birth energies).
-        pub kinds: DevSlice<KindInfo>,
+        pub kinds: DevSlice<KindInfo, Read>,
         /// Slot range of each kind.
         pub ranges: DevSlice<SlotRange>,
         /// The free lists the master thread counted from.

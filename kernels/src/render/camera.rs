@@ -10,10 +10,11 @@
 
 use glam::Vec2;
 
+use super::DrawnBodies;
 use super::radar::{self, RadarBox};
 use super::{Framing, NO_SHIP, Shown};
+use crate::access::Read;
 use crate::game::control::Input;
-use crate::sim::Bodies;
 use crate::{DevSlice, Thread, kernel_args};
 
 /// [`Lens::mode`]: the view follows the ship (the field when there is none).
@@ -161,10 +162,10 @@ kernel_args! {
     /// Arguments of [`camera`].
     pub struct CameraArgs {
         /// The bodies (read only: the ship's position).
-        pub bodies: Bodies,
+        pub bodies: DrawnBodies,
         /// The last step's input (the ship's aim), one element; empty in a world without a
         /// game.
-        pub input: DevSlice<Input>,
+        pub input: DevSlice<Input, Read>,
         /// The camera before the frame (element 0, read and advanced) and after it (element
         /// 1, written too).
         pub state: DevSlice<CameraState>,
@@ -196,8 +197,8 @@ pub fn camera(t: Thread, args: &CameraArgs) {
 /// frame drawn by the kernel renderer needs no launch of its own for it.
 #[inline(always)]
 pub fn frame(
-    bodies: &Bodies,
-    input: &DevSlice<Input>,
+    bodies: &DrawnBodies,
+    input: &DevSlice<Input, Read>,
     lens: &Lens,
     state: CameraState,
 ) -> (CameraState, Shown) {
@@ -209,7 +210,7 @@ pub fn frame(
 
 /// The ship's aim from the last step's input (`+x` without a game).
 #[inline(always)]
-fn aim(input: &DevSlice<Input>) -> Vec2 {
+fn aim(input: &DevSlice<Input, Read>) -> Vec2 {
     if input.is_empty() {
         Vec2::X
     } else {

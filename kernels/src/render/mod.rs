@@ -37,17 +37,33 @@ pub mod camera;
 pub mod particles;
 pub mod radar;
 pub mod shapes;
+pub mod still;
 
 use glam::Vec2;
 
+use crate::access::{Read, Unused};
+use crate::data::View;
 use crate::game::control::Input;
 use crate::sim::kinds::SHAPE_RECT;
-use crate::sim::{Bodies, KindInfo};
+use crate::sim::{Bodies, BodiesAccess, KindInfo};
 use crate::warp::WARP;
-use crate::{DevSlice, Thread, kernel_args};
+use crate::{DevSlice, Thread, access, kernel_args};
 use camera::{CameraState, Lens};
 use radar::{RadarBox, RadarCounts};
 use shapes::{DISC, RECT};
+
+access! {
+    /// What the renderers read of the bodies: where each is and faces, its kind, its
+    /// energy (the hurt shade) and whether it lives.
+    pub struct Drawing: BodiesAccess {
+        pos: Read, vel: Unused, force: Unused, dir: Read, kind: Read, energy: Read,
+        mass: Unused, alive: Read, state: Unused, age: Unused, prev: Unused, frozen: Unused,
+        rng: Unused,
+    }
+}
+
+/// The bodies as the renderers read them.
+pub type DrawnBodies = Bodies<View, Drawing>;
 
 /// Largest radius, in pixels, a body is drawn with: bounds the work of one thread.
 pub const MAX_RADIUS_PX: f32 = 48.0;
@@ -192,7 +208,7 @@ pub fn fade(colour: u32, background: u32, level: u32) -> u32 {
 
 /// Whether the body in `slot` is drawn hurt: it has lost energy, and its kind has any.
 #[inline(always)]
-pub fn is_hurt(b: &Bodies, info: &KindInfo, slot: u32) -> bool {
+pub fn is_hurt(b: &DrawnBodies, info: &KindInfo, slot: u32) -> bool {
     b.energy.get(slot) < info.energy
 }
 
@@ -251,8 +267,8 @@ pub struct Sprite {
 /// How the body in live `slot` is drawn in `shown`'s view.
 #[inline(always)]
 pub fn sprite(
-    b: &Bodies,
-    kinds: &DevSlice<KindInfo>,
+    b: &DrawnBodies,
+    kinds: &DevSlice<KindInfo, Read>,
     look: &Look,
     shown: &Shown,
     slot: u32,
@@ -265,7 +281,7 @@ pub fn sprite(
 /// position and kind alone: enough to skip a body off the image before reading more of
 /// it. Its facing and shade are left for [`Sprite::dressed`].
 #[inline(always)]
-fn outline(b: &Bodies, info: &KindInfo, look: &Look, shown: &Shown, slot: u32) -> Sprite {
+fn outline(b: &DrawnBodies, info: &KindInfo, look: &Look, shown: &Shown, slot: u32) -> Sprite {
     let view = &shown.view;
     let reach = (info.reach * view.scale).min(MAX_RADIUS_PX);
     let (silhouette, half) = if info.shape == SHAPE_RECT {
@@ -298,7 +314,7 @@ impl Sprite {
     /// This outline of the body in `slot` (of kind `info`) with its facing (the ship's: its
     /// aim) and its shade.
     #[inline(always)]
-    fn dressed(self, b: &Bodies, info: &KindInfo, shown: &Shown, slot: u32) -> Sprite {
+    fn dressed(self, b: &DrawnBodies, info: &KindInfo, shown: &Shown, slot: u32) -> Sprite {
         let heading = if slot == shown.ship {
             shown.ship_aim
         } else {
@@ -341,9 +357,9 @@ kernel_args! {
     /// Arguments of [`splat_bodies`] and [`splat_large`].
     pub struct SplatArgs {
         /// The bodies (read only).
-        pub bodies: Bodies,
+        pub bodies: DrawnBodies,
         /// Kind table (shapes and sizes).
-        pub kinds: DevSlice<KindInfo>,
+        pub kinds: DevSlice<KindInfo, Read>,
         /// Each kind's look.
         pub looks: DevSlice<Look>,
         /// What the image shows (one element, from the camera).
@@ -366,7 +382,7 @@ kernel_args! {
         pub splat: SplatArgs,
         /// The last step's input (the ship's aim), one element; empty in a world without a
         /// game.
-        pub input: DevSlice<Input>,
+        pub input: DevSlice<Input, Read>,
         /// The camera: element 0 between frames (read), element 1 after this frame
         /// (written by thread 0; [`resolve_pixels`] moves it to element 0, once no thread
         /// of this frame reads it).
@@ -745,9 +761,9 @@ kernel_args! {
     /// Arguments of [`write_vertices`].
     pub struct VertexArgs {
         /// The bodies (read only).
-        pub bodies: Bodies,
+        pub bodies: DrawnBodies,
         /// Kind table (sizes and energies at birth).
-        pub kinds: DevSlice<KindInfo>,
+        pub kinds: DevSlice<KindInfo, Read>,
         /// Each kind's look (silhouettes).
         pub looks: DevSlice<Look>,
         /// What the image shows (one element, from the camera).

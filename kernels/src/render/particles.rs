@@ -11,8 +11,21 @@ use super::{
     BodyVertex, Framing, Shown, VERTEX_ALIVE, VERTEX_LEVEL_SHIFT, VERTEX_PARTICLE, cover,
     particle_key,
 };
-use crate::game::effects::{Particles, fade_level};
-use crate::{DevSlice, Thread, kernel_args};
+use crate::access::{Read, Unused};
+use crate::data::View;
+use crate::game::effects::{Particles, ParticlesAccess, fade_level};
+use crate::{DevSlice, Thread, access, kernel_args};
+
+access! {
+    /// What the renderers read of the particles: where each is, how long it has left, and
+    /// whose kind it shows.
+    pub struct Glowing: ParticlesAccess {
+        pos: Read, vel: Unused, life: Read, kind: Read, seen: Unused,
+    }
+}
+
+/// The particles as the renderers read them.
+pub type DrawnParticles = Particles<View, Glowing>;
 
 /// A particle's radius in world units (times the view's scale: its radius in pixels).
 pub const SIZE: f32 = 1.5;
@@ -23,7 +36,7 @@ pub const MAX_RADIUS_PX: f32 = 3.0;
 /// pixels ([`SIZE`] at the view's scale, at most [`MAX_RADIUS_PX`]; the pixel under its
 /// centre is drawn however small).
 #[inline(always)]
-pub fn disc(particles: &Particles, view: &Framing, p: u32) -> Option<(Vec2, f32)> {
+pub fn disc(particles: &DrawnParticles, view: &Framing, p: u32) -> Option<(Vec2, f32)> {
     if particles.life.get(p) == 0 {
         return None;
     }
@@ -33,7 +46,7 @@ pub fn disc(particles: &Particles, view: &Framing, p: u32) -> Option<(Vec2, f32)
 
 /// Fade level of particle `p` (see [`fade_level`]), of at most `lifetime` steps.
 #[inline(always)]
-fn level(particles: &Particles, lifetime: u32, p: u32) -> u32 {
+fn level(particles: &DrawnParticles, lifetime: u32, p: u32) -> u32 {
     fade_level(particles.life.get(p), lifetime, super::PARTICLE_LEVELS)
 }
 
@@ -41,7 +54,7 @@ kernel_args! {
     /// Arguments of [`splat_particles`].
     pub struct ParticleSplatArgs {
         /// The particles (read only).
-        pub particles: Particles,
+        pub particles: DrawnParticles,
         /// What the image shows (one element, from the camera).
         pub shown: DevSlice<Shown>,
         /// One key per pixel, row-major (see `splat_bodies`).
@@ -78,7 +91,7 @@ kernel_args! {
     /// Arguments of [`write_particle_vertices`].
     pub struct ParticleVertexArgs {
         /// The particles (read only).
-        pub particles: Particles,
+        pub particles: DrawnParticles,
         /// What the image shows (one element, from the camera).
         pub shown: DevSlice<Shown>,
         /// Output: one vertex per particle (after the bodies' in the GL vertex buffer).

@@ -16,8 +16,8 @@
 
 use glam::Vec2;
 
+use super::DrawnBodies;
 use super::{Look, NO_SHIP, Shown, key, unkey};
-use crate::sim::Bodies;
 use crate::{DevSlice, Thread, kernel_args};
 
 /// Most slots sampled per frame (see [`stride`]).
@@ -128,7 +128,7 @@ kernel_args! {
     /// Arguments of [`radar_bodies`].
     pub struct RadarArgs {
         /// The bodies (read only).
-        pub bodies: Bodies,
+        pub bodies: DrawnBodies,
         /// Each kind's look (which kinds the radar shows).
         pub looks: DevSlice<Look>,
         /// What the frame shows (the radar's box, the field, the ship), from the camera.
@@ -157,7 +157,13 @@ pub fn radar_bodies(t: Thread, args: &RadarArgs) {
 /// the highest layer's kind there (nothing without a radar, for the ship, or for a kind the
 /// radar does not show).
 #[inline(always)]
-pub fn count(b: &Bodies, looks: &DevSlice<Look>, shown: &Shown, radar: &RadarCounts, slot: u32) {
+pub fn count(
+    b: &DrawnBodies,
+    looks: &DevSlice<Look>,
+    shown: &Shown,
+    radar: &RadarCounts,
+    slot: u32,
+) {
     if shown.radar.width == 0 || slot >= b.slots() || !b.is_alive(slot) || slot == shown.ship {
         return;
     }
