@@ -46,9 +46,8 @@ use super::{Buffer, Buffers, Device, DeviceId, Element, Error, Hold, Imp, Launch
 pub struct Binder {
     holds: Vec<Hold>,
     touches: Vec<Touch>,
-    /// The device of the first buffer viewed, and of a second one if any was another's.
-    device: Option<DeviceId>,
-    foreign: Option<DeviceId>,
+    /// The devices of the buffers viewed.
+    home: Home,
 }
 
 /// One buffer an op views, and how its kernel may use it (never [`Use::Unused`]: an unused
@@ -89,8 +88,7 @@ impl Binder {
         Binder {
             holds: Vec::new(),
             touches: Vec::new(),
-            device: None,
-            foreign: None,
+            home: Home::default(),
         }
     }
 
@@ -111,10 +109,7 @@ impl Binder {
         buffer: &Buffer<T>,
         len: u32,
     ) -> DevSlice<T, A> {
-        let device = *self.device.get_or_insert(buffer.device());
-        if buffer.device() != device {
-            self.foreign = Some(buffer.device());
-        }
+        self.home.note(buffer.device());
         if A::USE == Use::Unused {
             return DevSlice::EMPTY;
         }
@@ -142,12 +137,21 @@ impl Convert<Buffers, View> for Binder {
 }
 
 /// Where an op's buffers are: checked when a plan is made.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 struct Home {
     /// The device of its first view (none if it views nothing).
     device: Option<DeviceId>,
     /// Another device, if a view was of another's buffer.
     foreign: Option<DeviceId>,
+}
+
+impl Home {
+    /// Notes a view of a buffer of device `id`.
+    fn note(&mut self, id: DeviceId) {
+        if *self.device.get_or_insert(id) != id {
+            self.foreign = Some(id);
+        }
+    }
 }
 
 /// What an [`Op`] does.
@@ -199,11 +203,7 @@ struct StageSource {
 
 /// An op's holds, touches and home, taken from the binder that made its views.
 fn bound(binder: Binder) -> (Arc<[Hold]>, Arc<[Touch]>, Home) {
-    let home = Home {
-        device: binder.device,
-        foreign: binder.foreign,
-    };
-    (binder.holds.into(), binder.touches.into(), home)
+    (binder.holds.into(), binder.touches.into(), binder.home)
 }
 
 impl Op {
@@ -281,15 +281,9 @@ impl Op {
                 op.name
             )));
         }
-        let (mut device, mut foreign) = (None, None);
-        for home in ops.iter().map(|op| &op.home) {
-            for id in [home.device, home.foreign].into_iter().flatten() {
-                match device {
-                    None => device = Some(id),
-                    Some(first) if first != id => foreign = Some(id),
-                    Some(_) => {}
-                }
-            }
+        let mut home = Home::default();
+        for id in ops.iter().flat_map(|op| [op.home.device, op.home.foreign]) {
+            id.into_iter().for_each(|id| home.note(id));
         }
         let parts: Arc<[Op]> = ops.into();
         let issued = parts.clone();
@@ -309,7 +303,7 @@ impl Op {
                 .iter()
                 .flat_map(|op| op.touches.iter().cloned())
                 .collect(),
-            home: Home { device, foreign },
+            home,
             stage: None,
             issue: Arc::new(move |device| issued.iter().try_for_each(|op| (op.issue)(device))),
             parts,

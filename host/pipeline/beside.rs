@@ -88,10 +88,7 @@ impl Pipeline<'_> {
     /// beside the step's (the renumbering step's if `renumbers`), as a graph if `graph` and
     /// the step replays as one.
     fn beside_plan(&self, lens: &Lens, renumbers: bool, graph: bool) -> Result<Plan, Error> {
-        let step = match &self.plans.renumbering {
-            Some(plan) if renumbers => plan,
-            _ => &self.plans.step,
-        };
+        let step = self.step_plan(renumbers);
         let still = self.canvas()?.still.as_ref().expect("made first");
         // SAFETY: no outside image.
         let frame = unsafe { self.frame_ops(lens, None, Source::Still(still)) };

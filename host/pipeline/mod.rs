@@ -214,13 +214,17 @@ impl<'d> Pipeline<'d> {
         every != 0 && self.steps.is_multiple_of(every)
     }
 
+    /// The plan of a step: the renumbering one's if `renumbers` (and the world renumbers).
+    fn step_plan(&self, renumbers: bool) -> &Plan {
+        match &self.plans.renumbering {
+            Some(plan) if renumbers => plan,
+            _ => &self.plans.step,
+        }
+    }
+
     /// Queues one step, without waiting for it.
     pub fn step(&mut self) -> Result<(), Error> {
-        let plan = match &self.plans.renumbering {
-            Some(plan) if self.renumbers_next() => plan,
-            _ => &self.plans.step,
-        };
-        self.device.run(plan)?;
+        self.device.run(self.step_plan(self.renumbers_next()))?;
         self.steps += 1;
         Ok(())
     }
