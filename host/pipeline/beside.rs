@@ -11,7 +11,7 @@ use gpuwars_kernels::render::camera::Lens;
 use gpuwars_kernels::render::still::{StillArgs, still_threads};
 
 use super::Pipeline;
-use super::draw::FrameKey;
+use super::draw::{FrameKey, KeptFrames};
 use super::still::{Source, Still};
 use crate::backend::{Binder, Plan};
 use crate::primitives::threads;
@@ -64,21 +64,11 @@ impl Pipeline<'_> {
             let still = Still::new(device, &self.world)?;
             self.canvas_mut().still = Some(still);
         }
-        let canvas = self.canvas_mut();
-        let again = canvas.beside.as_ref().is_some_and(|(last, _)| *last == key);
-        let mut plans = match canvas.beside.take() {
-            Some((last, plans)) if last == key => plans,
-            _ => [None, None],
-        };
-        let plan = match plans[usize::from(renumbers)].take() {
-            Some(plan) => plan,
-            None => self.beside_plan(lens, renumbers, again)?,
-        };
-        let ran = device.run(&plan);
-        if plan.is_graph() {
-            plans[usize::from(renumbers)] = Some(plan);
-        }
-        self.canvas_mut().beside = Some((key, plans));
+        let kept = self.canvas_mut().beside.take();
+        let (kept, ran) = KeptFrames::run(kept, key, usize::from(renumbers), device, |graph| {
+            self.beside_plan(lens, renumbers, graph)
+        });
+        self.canvas_mut().beside = kept;
         ran?;
         self.steps += 1;
         Ok(())

@@ -23,7 +23,7 @@ use crate::backend::{Binder, Buffers, Plan};
 use crate::files::FileError;
 use crate::primitives::threads;
 use crate::sim::state::made;
-use crate::{Buffer, Error, Op};
+use crate::{Buffer, Device, Error, Op};
 
 /// Largest image side, in pixels.
 pub const MAX_SIDE: u32 = 16384;
@@ -71,15 +71,14 @@ pub(super) struct Canvas {
     pixels: FramePixels<Buffers>,
     /// The looks last written to the device, so that they travel only when they change.
     looks: Vec<Look>,
-    /// The last frame's arguments, and its plan replayed as a CUDA graph once the same
-    /// frame comes twice in a row (see [`FrameKey`]).
-    last: Option<(FrameKey, Option<Plan>)>,
+    /// The last frame's arguments, and its plan.
+    last: Option<KeptFrames<1>>,
     /// What frames drawn beside the step read, made by the first of them.
     pub(super) still: Option<Still>,
     /// The lens of the last frame drawn beside the step, and the plans of such frames:
-    /// one beside a step that does not renumber, one beside a step that does, each kept
-    /// once it replays as a graph (see `super::beside`).
-    pub(super) beside: Option<(FrameKey, [Option<Plan>; 2])>,
+    /// one beside a step that does not renumber, one beside a step that does (see
+    /// `super::beside`).
+    pub(super) beside: Option<KeptFrames<2>>,
 }
 
 /// What a frame's launches take that can change from one frame to the next: the lens (in
@@ -101,6 +100,45 @@ impl FrameKey {
             lens: bytemuck::cast(*lens),
             image: image.map(|image| (image.addr(), image.len())),
         }
+    }
+}
+
+/// The plans of the frames of the last [`FrameKey`], kept from frame to frame: `N` of
+/// them, for frames of one key whose launches differ otherwise (beside a step that
+/// renumbers and one that does not). A key that comes twice in a row has its plans made as
+/// CUDA graphs and kept; the first frame of a key runs its launches one by one.
+pub(super) struct KeptFrames<const N: usize> {
+    key: FrameKey,
+    plans: [Option<Plan>; N],
+}
+
+impl<const N: usize> KeptFrames<N> {
+    /// Runs plan `index` of a frame of `key` on `device`: the one in `kept` if `kept` is of
+    /// `key`, else the one `make` makes, told whether to make a graph. Returns what to keep
+    /// for the next frame (nothing where `make` failed) and how the run went.
+    pub(super) fn run(
+        kept: Option<Self>,
+        key: FrameKey,
+        index: usize,
+        device: &Device,
+        make: impl FnOnce(bool) -> Result<Plan, Error>,
+    ) -> (Option<Self>, Result<(), Error>) {
+        let (again, mut plans) = match kept {
+            Some(kept) if kept.key == key => (true, kept.plans),
+            _ => (false, std::array::from_fn(|_| None)),
+        };
+        let plan = match plans[index].take() {
+            Some(plan) => plan,
+            None => match make(again) {
+                Ok(plan) => plan,
+                Err(e) => return (None, Err(e)),
+            },
+        };
+        let ran = device.run(&plan);
+        if again {
+            plans[index] = Some(plan);
+        }
+        (Some(Self { key, plans }), ran)
     }
 }
 
@@ -424,18 +462,13 @@ impl Pipeline<'_> {
         let key = FrameKey::of(lens, image);
         self.ready(lens, looks)?;
         let device = self.device;
-        let last = self.canvas.as_mut().expect("made ready").last.take();
-        let (plan, graph) = match last {
-            Some((last, Some(plan))) if last == key => (plan, true),
-            last => {
-                let repeat = last.is_some_and(|(last, _)| last == key);
-                // SAFETY: forwarded from the caller.
-                let ops = unsafe { self.frame_ops(lens, image, Source::World) };
-                (device.plan(ops, repeat)?, repeat)
-            }
-        };
-        let ran = device.run(&plan);
-        self.canvas.as_mut().expect("made ready").last = Some((key, graph.then_some(plan)));
+        let kept = self.canvas_mut().last.take();
+        let (kept, ran) = KeptFrames::run(kept, key, 0, device, |graph| {
+            // SAFETY: forwarded from the caller.
+            let ops = unsafe { self.frame_ops(lens, image, Source::World) };
+            device.plan(ops, graph)
+        });
+        self.canvas_mut().last = kept;
         ran
     }
 
