@@ -282,9 +282,8 @@ impl Op {
             )));
         }
         let mut home = Home::default();
-        for id in ops.iter().flat_map(|op| [op.home.device, op.home.foreign]) {
-            id.into_iter().for_each(|id| home.note(id));
-        }
+        let ids = ops.iter().flat_map(|op| [op.home.device, op.home.foreign]);
+        ids.flatten().for_each(|id| home.note(id));
         let parts: Arc<[Op]> = ops.into();
         let issued = parts.clone();
         Ok(Op {

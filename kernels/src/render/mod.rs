@@ -687,7 +687,9 @@ pub fn resolve_pixels(t: Thread, args: &ResolveArgs) {
     let mut row = (u32::MAX, backdrop::Row::OUT);
     for _ in 0..RESOLVED_A_THREAD {
         let key = args.keys.get(pixel);
-        let radar = (shown.radar.contains(x, y))
+        let radar = shown
+            .radar
+            .contains(x, y)
             .then(|| radar::radar_colour(&shown, &args.radar, &args.looks, args.stride, x, y));
         let colour = match radar {
             Some(colour) => colour,
