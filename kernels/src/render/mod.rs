@@ -706,7 +706,10 @@ pub fn resolve_pixels(t: Thread, args: &ResolveArgs) {
             }
         };
         args.image.set(pixel, colour);
-        args.keys.set(pixel, EMPTY);
+        // Most pixels of a frame are empty: their keys stay as they are, not written again.
+        if key != EMPTY {
+            args.keys.set(pixel, EMPTY);
+        }
         if pixels - pixel <= WARP {
             return;
         }
