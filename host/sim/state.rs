@@ -196,8 +196,8 @@ pub struct Extras {
     /// Records a slot of the narrow phase's log of every contact it counts, for an audit
     /// (see [`Contacts::log`]); 0 for no log.
     pub logs: usize,
-    /// The grid's count keeps the sums of its counts' tiles for the scan (see
-    /// [`grid_sums`]).
+    /// The grid's count keeps the sums of its counts' tiles for the scan (`Grid::sums`,
+    /// none where the buckets are a single tile).
     pub grid_sums: bool,
 }
 
