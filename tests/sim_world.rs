@@ -253,8 +253,6 @@ fn a_world_takes_the_bytes_its_memory_check_counts() {
             moving: false,
             traces: spec.traces(),
             logs: spec.physics.logged_per_slot(),
-            // The CPU's own launches: the scan sums the grid's tiles itself.
-            grid_sums: false,
         };
         let expected = state::bytes_needed(layout, sim.space(), kinds, extras);
         assert_eq!(device.allocated_bytes(), expected);

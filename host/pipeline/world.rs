@@ -88,18 +88,6 @@ pub(crate) struct Config {
 /// registers the narrow phase and the integrator would crowd.
 pub const ONE_LAUNCH_SLOTS: u32 = 1 << 18;
 
-/// Whether the grid's count of a world of this layout adds each body to its tile of
-/// buckets' sum as well (`CountArgs::sums`), so that the scan of the counts takes one launch
-/// fewer on the step's chain: in worlds of at most [`ONE_LAUNCH_SLOTS`] slots, whose step
-/// the launches bound, where the launches take the GPU's shape (`gpu_shaped`: on the GPU,
-/// or on the CPU with fixed teams of several lanes, as the tests that compare the two
-/// shapes ask). In larger worlds the sums' atomic adds would cost more than the launch; on
-/// the CPU emulation, whose workers contend for the few sums' cache lines, they cost more
-/// than its launch at any size (`paper` 630–650 → 586–598 steps/s on 2 threads).
-fn sums_in_count(layout: &Layout, gpu_shaped: bool) -> bool {
-    gpu_shaped && layout.slots <= ONE_LAUNCH_SLOTS
-}
-
 /// The most slots of a world whose free lists the CPU emulation rebuilds in one launch (see
 /// `Config::free_in_one_launch`): a few warps, whose redundant counts cost less than two
 /// more launches.
@@ -197,8 +185,6 @@ pub fn bytes_needed(spec: &WorldSpec, game: Option<(u32, usize)>) -> u64 {
         moving: moves_in_one_launch(spec, &layout, plays),
         traces: spec.traces(),
         logs: spec.physics.logged_per_slot(),
-        // The GPU's: the larger.
-        grid_sums: sums_in_count(&layout, true),
     };
     state::bytes_needed(&layout, &layout::space(spec), kinds, extras) + sizes.bytes
 }
@@ -331,10 +317,6 @@ impl World {
             moving,
             traces: spec.traces(),
             logs: spec.physics.logged_per_slot(),
-            grid_sums: sums_in_count(
-                &layout,
-                resident.is_some() || matches!(lanes, Lanes::Fixed(n) if n > 1),
-            ),
         };
         let scratch = Scratch::new(device, &layout, &space, kinds, extras)?;
         let warps = TeamWarps::new(device, &config, &layout)?;

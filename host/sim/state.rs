@@ -9,7 +9,6 @@ use glam::Vec2;
 use gpuwars_kernels::DevSlice;
 use gpuwars_kernels::access::{Access, Write};
 use gpuwars_kernels::data::{Build, Sizes, Unmade, View};
-use gpuwars_kernels::primitives::scan;
 use gpuwars_kernels::registry;
 use gpuwars_kernels::rng::Mt607Params;
 use gpuwars_kernels::rng::streams::SeedArgs;
@@ -73,7 +72,6 @@ pub fn bytes_needed(
         moving,
         traces,
         logs,
-        grid_sums: keeps,
     }: Extras,
 ) -> u64 {
     let (slots, buckets) = (layout.slots as usize, buckets(space, kinds));
@@ -89,7 +87,6 @@ pub fn bytes_needed(
         s,
         slots,
         buckets,
-        grid_sums(buckets, keeps),
         per_slot(slots, moving),
         per_slot(slots, moving && traces),
         2 * kinds,
@@ -196,18 +193,6 @@ pub struct Extras {
     /// Records a slot of the narrow phase's log of every contact it counts, for an audit
     /// (see [`Contacts::log`]); 0 for no log.
     pub logs: usize,
-    /// The grid's count keeps the sums of its counts' tiles for the scan (`Grid::sums`,
-    /// none where the buckets are a single tile).
-    pub grid_sums: bool,
-}
-
-/// Elements of the grid's sums of its counts' tiles (`Grid::sums`) for `buckets` buckets
-/// where the count `keeps` them: one a tile, none where a single tile needs no sum.
-fn grid_sums(buckets: usize, keeps: bool) -> usize {
-    match keeps && buckets > scan::TILE as usize {
-        true => scan::tiles(buckets as u32) as usize,
-        false => 0,
-    }
 }
 
 impl Scratch {
@@ -223,7 +208,6 @@ impl Scratch {
             moving,
             traces,
             logs,
-            grid_sums: keeps,
         }: Extras,
     ) -> Result<Self, Error> {
         let slots = layout.slots as usize;
@@ -239,7 +223,6 @@ impl Scratch {
                 &mut device.zeroed(),
                 slots,
                 buckets,
-                grid_sums(buckets, keeps),
                 per_slot(slots, moving),
                 per_slot(slots, moving && traces),
                 2 * kinds,

@@ -34,7 +34,6 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         keys: b.view(&g.keys),
         ranks: b.view(&g.ranks),
         counts: b.view(&g.counts),
-        sums: b.view(&g.sums),
     };
     // SAFETY (every op below): the world's buffers, sized as the kernels ask (see `World`);
     // the counts are zero before the first build (allocated zeroed) and after every other
@@ -59,15 +58,12 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
             )
         },
     }];
-    // The count keeps the sums of the counts' tiles where the grid has room for them.
-    let n = g.start.len() as u32;
-    let scan = &world.scratch.grid_scan;
     ops.extend(
-        match g.sums.is_empty() {
-            true => scan.ops(&g.counts, &g.start, n),
-            false => scan.ops_with_sums(&g.counts, &g.start, n, (&g.sums, true)),
-        }
-        .expect("the scan was made for the buckets"),
+        world
+            .scratch
+            .grid_scan
+            .ops(&g.counts, &g.start, g.start.len() as u32)
+            .expect("the scan was made for the buckets"),
     );
     let mut b = unsafe { Binder::new() };
     let place = PlaceArgs {
@@ -76,7 +72,6 @@ pub(in crate::pipeline) fn ops(world: &World, substep: u32) -> Vec<Op> {
         start: b.view(&g.start),
         unordered: b.view(&g.unordered),
         counts: b.view(&g.counts),
-        sums: b.view(&g.sums),
         rows: b.view(&g.rows),
         space: world.space,
     };

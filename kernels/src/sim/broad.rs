@@ -11,9 +11,7 @@
 //! Build, with no sort and work that grows with the live bodies:
 //! 1. [`count_cells`]: each live body adds itself to its bucket's count with an atomic add,
 //!    which hands out ranks in whatever order threads arrive (the counts do not depend on it);
-//! 2. the exclusive prefix sum of the counts: each bucket's first entry (in small worlds the
-//!    count also adds each body to its tile of buckets' sum, which spares the scan the
-//!    launch that sums the tiles);
+//! 2. the exclusive prefix sum of the counts: each bucket's first entry;
 //! 3. [`place_in_cells`]: each body writes its slot at its bucket's start plus its rank, a
 //!    scheduling-dependent order inside the bucket (in a small bucket, with its rank and the
 //!    bucket's size beside it), and the counts go back to zero for the next build (so no
@@ -30,13 +28,12 @@ use super::bodies::Bodies;
 use super::space::{Space, Span};
 use crate::access::{Read, Readable};
 use crate::exec::follow_previous_launch;
-use crate::primitives::scan::TILE;
 use crate::warp::{Handed, Team};
 use crate::{DevSlice, Thread, asked, device_data, kernel_args};
 
 device_data! {
     /// The grid's arrays: what the broad phase builds each step and [`CellIndex`] queries.
-    pub struct Grid(slots, buckets, summed, moving, traced, kind_rows): GridAccess {
+    pub struct Grid(slots, buckets, moving, traced, kind_rows): GridAccess {
         /// Each slot's bucket, or [`NO_BUCKET`].
         keys: [u32; slots],
         /// Each slot's arrival rank in its bucket; the merge passes' runs afterwards.
@@ -47,9 +44,6 @@ device_data! {
         /// Each bucket's first entry (the counts' exclusive prefix sums); the last element is
         /// the number of entries.
         start: [u32; buckets],
-        /// The counts summed [`TILE`] buckets at a time, where the count keeps them for the
-        /// scan (`summed` = the counts' tiles; else none), zero between builds.
-        sums: [u32; summed],
         /// Slots by bucket, in arrival order (with their places in small buckets: see
         /// [`place_in_cells`]); the merge passes' runs afterwards.
         unordered: [u32; slots],
@@ -87,10 +81,6 @@ kernel_args! {
         /// Bodies per bucket, zero before (as [`place_in_cells`] leaves them); `kinds ·
         /// cells` buckets.
         pub counts: DevSlice<u32>,
-        /// The counts summed [`TILE`] buckets at a time, zero before (as
-        /// [`place_in_cells`] leaves them), so that the scan need not add them up again;
-        /// empty where the scan adds them up itself.
-        pub sums: DevSlice<u32>,
     }
 }
 
@@ -119,9 +109,6 @@ pub fn count_slot(args: &CountArgs, slot: u32, (alive, kind, pos): (bool, u32, V
     let key = kind * args.space.cells() + args.space.cell_of(pos);
     args.keys.set(slot, key);
     args.ranks.set(slot, args.counts.atomic_add(key, 1));
-    if !args.sums.is_empty() {
-        args.sums.atomic_add(key / TILE, 1);
-    }
 }
 
 kernel_args! {
@@ -138,9 +125,6 @@ kernel_args! {
         pub unordered: DevSlice<u32>,
         /// The counts that were scanned into `start`: set back to zero.
         pub counts: DevSlice<u32>,
-        /// The count's sums of them (see [`CountArgs::sums`]), if it kept any: set back to
-        /// zero too.
-        pub sums: DevSlice<u32>,
         /// Output: each kind's first and last row holding one of its bodies (see
         /// [`CellIndex::rows`]).
         pub rows: DevSlice<u32>,
@@ -183,8 +167,8 @@ fn slot_of(entry: u32) -> u32 {
 /// so that [`order_cells`] finds the bucket's entries without waiting for the key. The
 /// thread of a bucket's first arrival writes the bucket's row as its kind's first or last
 /// row with a body (see [`CellIndex::rows`]) where the bucket is its kind's first or last
-/// that is not empty: one writer each. The threads also zero the counts and their sums,
-/// every `threads`-th each, for the next build: nothing in this launch reads them.
+/// that is not empty: one writer each. The threads also zero the counts, every
+/// `threads`-th bucket each, for the next build: nothing in this launch reads them.
 #[inline(always)]
 pub fn place_in_cells(t: Thread, args: &PlaceArgs) {
     let slot = t.global();
@@ -198,12 +182,10 @@ pub fn place_in_cells(t: Thread, args: &PlaceArgs) {
         false => [NO_BUCKET, 0],
     };
     follow_previous_launch();
-    for counts in [&args.counts, &args.sums] {
-        let mut i = slot;
-        while i < counts.len() {
-            counts.set(i, 0);
-            i += threads;
-        }
+    let mut bucket = slot;
+    while bucket < args.counts.len() {
+        args.counts.set(bucket, 0);
+        bucket += threads;
     }
     if key == NO_BUCKET {
         return;
